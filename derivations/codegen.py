@@ -225,7 +225,9 @@ def _format(text: str) -> str:
     """Format with ``ruff format`` (pinned in the ``derive`` extra, so output is reproducible)."""
     ruff = shutil.which("ruff")
     if ruff is None:
-        raise RuntimeError("symrb derive needs ruff to format generated code: pip install 'symrb[derive]'")
+        raise RuntimeError(
+            "symrb derive needs ruff to format generated code: pip install 'symrb[derive]'"
+        )
     proc = subprocess.run(
         [ruff, "format", "--line-length", "100", "--stdin-filename", "generated.py", "-"],
         input=text,
@@ -299,13 +301,18 @@ def emit_all(check: bool = False, out=sys.stdout) -> int:
     for name in stale:
         changed += 1
         if check:
-            print(f"stale generated file symrb/_generated/{name} (no derivation writes it)", file=out)
+            print(
+                f"stale generated file symrb/_generated/{name} (no derivation writes it)", file=out
+            )
         else:
             (target / name).unlink()
             print(f"removed stale symrb/_generated/{name}", file=out)
     if check:
         if changed:
-            print(f"derive --check: {changed} generated file(s) differ from their derivations", file=out)
+            print(
+                f"derive --check: {changed} generated file(s) differ from their derivations",
+                file=out,
+            )
             return 1
         print(f"derive --check: {len(files)} generated files match their derivations", file=out)
     return 0

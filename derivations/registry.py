@@ -56,7 +56,7 @@ Outcome = Literal["holds", "holds after correction", "fails", "not checkable"]
 Form = Literal["claim", "printed", "corrected"]
 
 
-class Level(str, enum.Enum):
+class Level(enum.StrEnum):
     """Evidence levels, strongest first."""
 
     SYMBOLIC_GENERAL_N = "symbolic, general n"
@@ -120,7 +120,9 @@ class Claim:
         if not re.fullmatch(r"[DS]\d+", self.id):
             raise ValueError(f"claim id must look like D1 or S12, got {self.id!r}")
         if self.expected not in OUTCOMES:
-            raise ValueError(f"claim {self.id}: expected must be one of {OUTCOMES}, got {self.expected!r}")
+            raise ValueError(
+                f"claim {self.id}: expected must be one of {OUTCOMES}, got {self.expected!r}"
+            )
         forms = {e.form for e in self.evidence}
         if ("printed" in forms or "corrected" in forms) and not (self.printed and self.corrected):
             raise ValueError(f"claim {self.id}: printed/corrected evidence needs both texts")

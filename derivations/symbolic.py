@@ -85,7 +85,9 @@ def residual(expr: sp.Basic | sp.Matrix) -> sp.Expr:
     return total
 
 
-def _canonical(word: tuple[str, ...], sign_of_reversal: dict[str, int] | None) -> tuple[tuple[str, ...], int]:
+def _canonical(
+    word: tuple[str, ...], sign_of_reversal: dict[str, int] | None
+) -> tuple[tuple[str, ...], int]:
     """Canonical representative of a trace word under rotation (and reversal with transposes).
 
     trace(w) is invariant under cyclic rotation; if every letter X satisfies X^T = s_X X, then
@@ -109,7 +111,10 @@ def _canonical(word: tuple[str, ...], sign_of_reversal: dict[str, int] | None) -
 
 
 def trace_words(
-    letters: dict[str, sp.Expr], power: int, param: sp.Symbol, transpose_sign: dict[str, int] | None = None
+    letters: dict[str, sp.Expr],
+    power: int,
+    param: sp.Symbol,
+    transpose_sign: dict[str, int] | None = None,
 ) -> dict[int, dict[tuple[str, ...], sp.Expr]]:
     """Coefficients of ``param^j`` in trace((sum_X c_X X)^power) as sums of trace words.
 
@@ -117,7 +122,9 @@ def trace_words(
     ``{"M": 1, "A": l}`` for M + l A.  The result maps j to ``{canonical word: coefficient}``;
     words whose coefficient cancels under the rotation/reversal symmetry are dropped.
     """
-    acc: dict[int, dict[tuple[str, ...], sp.Expr]] = defaultdict(lambda: defaultdict(lambda: sp.Integer(0)))
+    acc: dict[int, dict[tuple[str, ...], sp.Expr]] = defaultdict(
+        lambda: defaultdict(lambda: sp.Integer(0))
+    )
     for word in itertools.product(sorted(letters), repeat=power):
         coeff = sp.expand(sp.Mul(*[letters[x] for x in word]))
         canon, sign = _canonical(word, transpose_sign)

@@ -17,7 +17,9 @@ def as_float_array(x: ArrayLike, name: str) -> Array:
     except (TypeError, ValueError) as exc:
         raise InputError(f"{name} must be a real array, got {type(x).__name__}: {exc}") from None
     if not np.all(np.isfinite(a)):
-        raise InputError(f"{name} must be finite; it has {int(np.sum(~np.isfinite(a)))} NaN/inf entries")
+        raise InputError(
+            f"{name} must be finite; it has {int(np.sum(~np.isfinite(a)))} NaN/inf entries"
+        )
     return a
 
 
@@ -50,7 +52,9 @@ def orthogonal(x: ArrayLike, name: str, n: int | None = None, atol: float = 1e-8
         raise InputError(f"{name} must be orthogonal; max |{name}^T {name} - I| = {dev:.3e}")
     det = np.linalg.det(a)
     if np.any(det < 0):
-        raise InputError(f"{name} must have det +1 (be in SO(n)); got det = {float(np.min(det)):.3f}")
+        raise InputError(
+            f"{name} must have det +1 (be in SO(n)); got det = {float(np.min(det)):.3f}"
+        )
     return a
 
 

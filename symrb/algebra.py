@@ -146,7 +146,10 @@ def lam_from_inertia(inertia: ArrayLike) -> Array:
 
 
 def random_so(
-    n: int, size: tuple[int, ...] = (), scale: float = 1.0, seed: int | np.random.Generator | None = None
+    n: int,
+    size: tuple[int, ...] = (),
+    scale: float = 1.0,
+    seed: int | np.random.Generator | None = None,
 ) -> Array:
     """Random skew-symmetric matrices of shape ``size + (n, n)`` with standard normal entries times ``scale``."""
     if n < 2:
@@ -156,7 +159,9 @@ def random_so(
     return a - np.swapaxes(a, -1, -2)
 
 
-def random_SO(n: int, size: tuple[int, ...] = (), seed: int | np.random.Generator | None = None) -> Array:
+def random_SO(
+    n: int, size: tuple[int, ...] = (), seed: int | np.random.Generator | None = None
+) -> Array:
     """Haar-random rotations of shape ``size + (n, n)`` (scipy.stats.special_ortho_group)."""
     from scipy.stats import special_ortho_group
 
@@ -168,7 +173,9 @@ def random_SO(n: int, size: tuple[int, ...] = (), seed: int | np.random.Generato
     return np.asarray(mats, dtype=float).reshape(tuple(size) + (n, n))
 
 
-def random_lam(n: int, low: float = 0.5, high: float = 2.0, seed: int | np.random.Generator | None = None) -> Array:
+def random_lam(
+    n: int, low: float = 0.5, high: float = 2.0, seed: int | np.random.Generator | None = None
+) -> Array:
     """A random positive diagonal of Lambda with distinct entries in [low, high)."""
     if not 0 < low < high:
         raise InputError(f"need 0 < low < high, got low={low}, high={high}")

@@ -54,20 +54,29 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(payload, indent=1))
     else:
-        header = f"{'ID':<4} {'label':<28} {'outcome':<24} {'ok':<3} evidence (level: residual, time)"
+        header = (
+            f"{'ID':<4} {'label':<28} {'outcome':<24} {'ok':<3} evidence (level: residual, time)"
+        )
         print(header)
         print("-" * len(header))
         for r in results:
             ev = "; ".join(
                 f"{e.level}{'' if e.form == 'claim' else ' [' + e.form + ']'}: "
-                f"{e.residual:.1e} {_fmt_seconds(e.seconds)}" + (f" ERROR {e.error}" if e.error else "")
+                f"{e.residual:.1e} {_fmt_seconds(e.seconds)}"
+                + (f" ERROR {e.error}" if e.error else "")
                 for e in r.evidence
             )
             print(f"{r.id:<4} {r.label[:28]:<28} {r.outcome:<24} {'ok' if r.ok else 'NO':<3} {ev}")
         bad = [r.id for r in results if not r.ok]
         total = sum(r.seconds for r in results)
-        print(f"\n{len(results)} claims checked in {total:.1f}s; "
-              + ("all outcomes as recorded" if not bad else f"outcome differs from the record: {', '.join(bad)}"))
+        print(
+            f"\n{len(results)} claims checked in {total:.1f}s; "
+            + (
+                "all outcomes as recorded"
+                if not bad
+                else f"outcome differs from the record: {', '.join(bad)}"
+            )
+        )
     return 0 if all(r.ok for r in results) else 1
 
 
@@ -75,7 +84,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="symrb", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     p_derive = sub.add_parser("derive", help="regenerate symrb/_generated from derivations/")
-    p_derive.add_argument("--check", action="store_true", help="only diff; exit 1 if anything would change")
+    p_derive.add_argument(
+        "--check", action="store_true", help="only diff; exit 1 if anything would change"
+    )
     p_derive.set_defaults(func=_cmd_derive)
     p_verify = sub.add_parser("verify", help="check the claims of the paper")
     p_verify.add_argument("ids", nargs="*", help="claim IDs (default: all), e.g. S1 S4 D10")

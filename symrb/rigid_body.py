@@ -17,7 +17,13 @@ from ._generated import rigid_body as _gen
 from ._validate import Array
 from .errors import InputError
 
-__all__ = ["rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals", "euler_rhs_so3"]
+__all__ = [
+    "rigid_body_rhs",
+    "kinetic_energy",
+    "casimir_traces",
+    "manakov_integrals",
+    "euler_rhs_so3",
+]
 
 
 def rigid_body_rhs(Q: ArrayLike, M: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:

@@ -257,8 +257,14 @@ CLAIMS = [
         expected="holds",
         section="3.1",
         evidence=(
-            Evidence(Level.SYMBOLIC_FIXED_N, "-1/2 tr(hat u hat v) - u.v expands to 0 (n = 3)", s1_pairing_is_dot),
-            Evidence(Level.SYMBOLIC_FIXED_N, "hat(u) v - u x v expands to 0 (n = 3)", s1_hat_is_cross),
+            Evidence(
+                Level.SYMBOLIC_FIXED_N,
+                "-1/2 tr(hat u hat v) - u.v expands to 0 (n = 3)",
+                s1_pairing_is_dot,
+            ),
+            Evidence(
+                Level.SYMBOLIC_FIXED_N, "hat(u) v - u x v expands to 0 (n = 3)", s1_hat_is_cross
+            ),
         ),
     ),
     Claim(
@@ -271,13 +277,21 @@ CLAIMS = [
         expected="holds",
         section="3.1",
         evidence=(
-            Evidence(Level.SYMBOLIC_FIXED_N, "<J a, b> = <a, J b> for symbolic skew a, b (n = 4)", s2_J_symmetric),
+            Evidence(
+                Level.SYMBOLIC_FIXED_N,
+                "<J a, b> = <a, J b> for symbolic skew a, b (n = 4)",
+                s2_J_symmetric,
+            ),
             Evidence(
                 Level.SYMBOLIC_FIXED_N,
                 "<Om, J Om> = sum_{i<j} (lam_i + lam_j) Om_ij^2 (n = 4)",
                 s2_J_quadratic_form,
             ),
-            Evidence(Level.SYMBOLIC_FIXED_N, "1/2 <Om, J Om> = 1/2 sum I_i w_i^2, I_1 = lam2 + lam3 (n = 3)", s2_moments_n3),
+            Evidence(
+                Level.SYMBOLIC_FIXED_N,
+                "1/2 <Om, J Om> = 1/2 sum I_i w_i^2, I_1 = lam2 + lam3 (n = 3)",
+                s2_moments_n3,
+            ),
             Evidence(
                 Level.SYMBOLIC_FIXED_N,
                 "J(hat w) = hat(I w) and vee[M, Om] = (I w) x w: Euler's equations (n = 3)",
@@ -302,8 +316,14 @@ CLAIMS = [
         expected="holds",
         section="3.1",
         evidence=(
-            Evidence(Level.SYMBOLIC_FIXED_N, "d/de l(Om + e eta) at 0 equals <J Om, eta> (n = 4)", s3_variational_derivative),
-            Evidence(Level.SYMBOLIC_FIXED_N, "<mu, [xi, eta]> = <[mu, xi], eta> (n = 4)", s3_coadjoint),
+            Evidence(
+                Level.SYMBOLIC_FIXED_N,
+                "d/de l(Om + e eta) at 0 equals <J Om, eta> (n = 4)",
+                s3_variational_derivative,
+            ),
+            Evidence(
+                Level.SYMBOLIC_FIXED_N, "<mu, [xi, eta]> = <[mu, xi], eta> (n = 4)", s3_coadjoint
+            ),
         ),
     ),
     Claim(
@@ -411,7 +431,10 @@ def emit() -> tuple[str, list[Kernel]]:
     kernels.append(
         Kernel(
             name="euler_rhs_so3",
-            args=[Arg("m", "(..., 3)", "body angular momentum vector, M = hat(m)"), Arg("lam", "(..., 3)", "diagonal of Lambda")],
+            args=[
+                Arg("m", "(..., 3)", "body angular momentum vector, M = hat(m)"),
+                Arg("lam", "(..., 3)", "diagonal of Lambda"),
+            ],
             outputs={f"mdot{i + 1}": sp.simplify(mdot[i]) for i in range(3)},
             stack=True,
             components={"m": m, "lam": lam},
