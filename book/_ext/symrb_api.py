@@ -1,7 +1,8 @@
 """A tiny Sphinx extension for the API reference page.
 
 ``.. symrb-api::`` (inside an ``{eval-rst}`` block) expands to one section per public module of the
-``symrb`` package, each with ``.. automodule:: <module>`` and ``:members:``.  The list of modules is
+``symrb`` package, each with ``.. automodule:: <module>`` and ``:members:`` (the package itself gets
+its docstring only: the names it re-exports are documented once, in the submodule defining them).  The list of modules is
 discovered when the book is built, so a new ``symrb/*.py`` module appears in the reference without
 an edit to the book.  Private modules (a name part starting with ``_``, e.g. ``symrb._generated``)
 are left out: they are documented through the public functions that wrap them.
@@ -38,14 +39,10 @@ class SymrbApi(SphinxDirective):
         package = self.arguments[0] if self.arguments else "symrb"
         lines: list[str] = []
         for name in public_modules(package):
-            lines += [
-                f"``{name}``",
-                "=" * (len(name) + 4),
-                "",
-                f".. automodule:: {name}",
-                "   :members:",
-                "",
-            ]
+            lines += [f"``{name}``", "=" * (len(name) + 4), "", f".. automodule:: {name}"]
+            if name != package:
+                lines.append("   :members:")
+            lines.append("")
         source = self.get_source_info()[0]
         content = StringList(lines, source=source)
         node = nodes.section()
@@ -54,6 +51,6 @@ class SymrbApi(SphinxDirective):
         return node.children
 
 
-def setup(app):  # noqa: ANN001, ANN201 - Sphinx extension entry point
+def setup(app):  # Sphinx extension entry point
     app.add_directive("symrb-api", SymrbApi)
     return {"version": "0.1", "parallel_read_safe": True, "parallel_write_safe": True}
