@@ -1,0 +1,279 @@
+r"""Optimal control on adjoint orbits and double bracket flows (paper, Section 3.5).
+
+The control system is :math:`\dot x = [x, u]` on an adjoint orbit of :math:`\mathfrak{so}(n)` (skew
+matrices; the paper also allows :math:`\mathfrak{su}(n)`), with the cost
+
+.. math::
+
+    \int_0^T \tfrac12\|u\|^2 - V(x)\,dt \;+\; \sum_a \phi(x^a_T),\qquad
+    V(x) = -\tfrac12\|[x, n]\|^2,\quad \phi(x) = \langle x, n\rangle,
+
+:math:`\langle a, b\rangle = -\tfrac12\operatorname{tr}(ab)`, :math:`\|a\|^2 = \langle a,a\rangle`.
+With :math:`H = \sum_a\langle p^a, [x^a, u]\rangle - \tfrac12\|u\|^2 + \sum_a V(x^a)` the maximum
+principle gives (claims S13-S15)
+
+.. math::
+
+    u^* = \sum_b [p^b, x^b],\qquad \dot x^a = [x^a, u^*],\qquad
+    \dot p^a = [p^a, u^*] - [n, [n, x^a]],\qquad p^a_T = -\phi_x(x^a_T) = -n.
+
+The paper prints :math:`p^a_T = +\partial\phi/\partial x^a_T` and per-sample controls
+:math:`[p^a, x^a]`; both are corrected here (see the errata).  For one sample the extremal is
+exactly :math:`p \equiv -n` and the double bracket flow :math:`\dot x = [x, [x, n]]`.
+
+Each vector field calls one kernel generated in :mod:`symrb._generated.adjoint_orbits` by
+:mod:`derivations.parts.adjoint_orbits`.  Here ``N`` is the paper's fixed element ``n``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.integrate import solve_bvp, solve_ivp
+
+from . import _validate as v
+from ._generated import adjoint_orbits as _gen
+from ._validate import Array
+from .errors import InputError, NotConvergedError
+
+__all__ = [
+    "orbit_extremal_rhs",
+    "orbit_hamiltonian",
+    "brockett_potential",
+    "double_bracket_rhs",
+    "double_bracket_flow",
+    "OrbitBVPResult",
+    "solve_orbit_bvp",
+]
+
+
+def _pair_xN(x: ArrayLike, N: ArrayLike, xname: str = "x") -> tuple[Array, Array]:
+    nn = v.skew(N, "N")
+    return v.skew(x, xname, nn.shape[-1]), nn
+
+
+def orbit_extremal_rhs(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> tuple[Array, Array]:
+    r"""The extremal vector field of the orbit problem with Brockett's potential (eq. opb):
+
+    .. math:: \dot x = [x, [p, x]],\qquad \dot p = [p, [p, x]] - [N, [N, x]].
+
+    ``x``, ``p``, ``N`` are skew arrays (..., n, n) (broadcast); returns ``(xdot, pdot)``.
+    """
+    xx, nn = _pair_xN(x, N)
+    pp = v.skew(p, "p", nn.shape[-1])
+    return _gen.orbit_extremal_rhs(xx, pp, nn)
+
+
+def orbit_hamiltonian(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> Array:
+    r"""The optimal Hamiltonian :math:`H^* = -\tfrac12\langle x,[p,[p,x]]\rangle + V(x)
+    = \tfrac12\|[p,x]\|^2 - \tfrac12\|[x,N]\|^2`, conserved along :func:`orbit_extremal_rhs`."""
+    xx, nn = _pair_xN(x, N)
+    pp = v.skew(p, "p", nn.shape[-1])
+    return _gen.orbit_hamiltonian(xx, pp, nn)
+
+
+def brockett_potential(x: ArrayLike, N: ArrayLike) -> Array:
+    r"""Brockett's potential :math:`V(x) = -\tfrac12\|[x, N]\|^2 = \tfrac12\langle x, [N,[N,x]]\rangle`."""
+    xx, nn = _pair_xN(x, N)
+    return _gen.brockett_potential(xx, nn)
+
+
+def double_bracket_rhs(x: ArrayLike, N: ArrayLike) -> Array:
+    r"""The double bracket vector field :math:`\dot x = [x, [x, N]]` (skew x, N)."""
+    xx, nn = _pair_xN(x, N)
+    return _gen.double_bracket_rhs(xx, nn)
+
+
+def double_bracket_flow(
+    x0: ArrayLike, N: ArrayLike, t: ArrayLike, rtol: float = 1e-11, atol: float = 1e-12
+) -> Array:
+    r"""Integrate :math:`\dot x = [x, [x, N]]` from ``x0`` (skew, (n, n)) and return x at the times
+    ``t`` (increasing, starting at 0 or later), shape ``(len(t), n, n)``.
+
+    The flow stays on the orbit of ``x0`` and decreases :math:`\langle x, N\rangle` at the rate
+    :math:`\|[x, N]\|^2`; it tends to a point commuting with N.  Uses ``scipy.integrate.solve_ivp``
+    (DOP853); raises :class:`NotConvergedError` if the integrator fails.
+    """
+    xx, nn = _pair_xN(x0, N, "x0")
+    if xx.ndim != 2 or nn.ndim != 2:
+        raise InputError(f"x0 and N must be single (n, n) matrices, got {xx.shape} and {nn.shape}")
+    ts = v.as_float_array(t, "t")
+    if ts.ndim != 1 or ts.size == 0 or np.any(np.diff(ts) <= 0) or ts[0] < 0:
+        raise InputError(f"t must be a non-empty increasing 1-D array of times >= 0, got {ts}")
+    k = xx.shape[-1]
+    sol = solve_ivp(
+        lambda _t, y: _gen.double_bracket_rhs(y.reshape(k, k), nn).ravel(),
+        (0.0, float(ts[-1])),
+        xx.ravel(),
+        t_eval=ts,
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+    )
+    if not sol.success:
+        raise NotConvergedError(f"double_bracket_flow: {sol.message}", float("nan"), sol.nfev)
+    return sol.y.T.reshape(-1, k, k)
+
+
+@dataclass(frozen=True)
+class OrbitBVPResult:
+    """Solution of the two-point boundary value problem of :func:`solve_orbit_bvp`.
+
+    ``t`` has shape (m,); ``x`` and ``p`` have shape (m, M, n, n) (M samples); ``u`` the shared
+    optimal control, shape (m, n, n).  ``residual`` is the largest relative collocation residual
+    reported by ``solve_bvp`` and ``bc_residual`` the largest boundary condition mismatch.
+    ``sol`` evaluates the packed solution at any time (see :meth:`at`).
+    """
+
+    t: Array
+    x: Array
+    p: Array
+    u: Array
+    success: bool
+    message: str
+    residual: float
+    bc_residual: float
+    costate: str
+    sol: object
+
+    def at(self, t: ArrayLike) -> tuple[Array, Array]:
+        """(x, p) at the times ``t`` (1-D), shapes (len(t), M, n, n), from the collocation spline."""
+        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        M, k = self.x.shape[1], self.x.shape[-1]
+        return _unpack(self.sol.sol(ts), M, k)
+
+
+def _iu(k: int) -> tuple[Array, Array]:
+    return np.triu_indices(k, 1)
+
+
+def _pack(x: Array, p: Array) -> Array:
+    """(m, M, k, k) skew x, p -> (2 M k(k-1)/2, m) upper-triangle coordinates."""
+    i, j = _iu(x.shape[-1])
+    m = x.shape[0]
+    return np.concatenate([x[..., i, j].reshape(m, -1), p[..., i, j].reshape(m, -1)], axis=1).T
+
+
+def _unpack(y: Array, M: int, k: int) -> tuple[Array, Array]:
+    i, j = _iu(k)
+    d = len(i)
+    m = y.shape[1]
+    yy = y.T.reshape(m, 2, M, d)
+    out = np.zeros((2, m, M, k, k))
+    out[..., i, j] = np.moveaxis(yy, 1, 0)
+    out[..., j, i] = -np.moveaxis(yy, 1, 0)
+    return out[0], out[1]
+
+
+def solve_orbit_bvp(
+    x0: ArrayLike,
+    N: ArrayLike,
+    T: float,
+    *,
+    costate: Literal["corrected", "printed"] = "corrected",
+    nodes: int = 41,
+    tol: float = 1e-6,
+    max_nodes: int = 20000,
+    p_guess: ArrayLike | None = None,
+    continuation_start: float = 1.0,
+    continuation_growth: float = 1.5,
+) -> OrbitBVPResult:
+    r"""Solve the maximum principle's two-point boundary value problem of the learning version (S15).
+
+    Samples :math:`x^a` (``x0`` of shape (n, n) for one sample or (M, n, n)) share the control
+    :math:`u^* = \sum_b [p^b, x^b]`;
+
+    .. math::
+
+        \dot x^a = [x^a, u^*],\quad \dot p^a = [p^a, u^*] - [N, [N, x^a]],\quad
+        x^a(0) = x^a_0,\quad p^a(T) = \mp N,
+
+    for :math:`V = \sum_a -\tfrac12\|[x^a, N]\|^2` and :math:`\phi(x) = \langle x, N\rangle`.
+    ``costate="corrected"`` imposes :math:`p^a_T = -\phi_x = -N` (what the maximum principle with
+    :math:`H = \langle p, f\rangle - L` gives); ``"printed"`` imposes the paper's
+    :math:`p^a_T = +\partial\phi/\partial x^a_T = N`.
+
+    Solved with ``scipy.integrate.solve_bvp`` on the upper-triangle coordinates of the skew
+    matrices, from the initial guess :math:`x \equiv x_0`, :math:`p \equiv` ``p_guess`` (0 by
+    default).  For ``T > continuation_start`` the horizon is grown geometrically (factor
+    ``continuation_growth``) from below ``continuation_start`` to ``T``, each solution rescaled in
+    time serving as the guess of the next: Newton's method from p = 0 does not converge on long
+    horizons.  Does not raise when the solver fails: check ``success`` and ``residual``.
+    """
+    nn = v.skew(N, "N")
+    if nn.ndim != 2:
+        raise InputError(f"N must be a single (n, n) skew matrix, got shape {nn.shape}")
+    k = nn.shape[-1]
+    xx = v.skew(x0, "x0", k)
+    if xx.ndim not in (2, 3):
+        raise InputError(f"x0 must have shape (n, n) or (M, n, n), got {xx.shape}")
+    xs0 = xx[None] if xx.ndim == 2 else xx
+    M = xs0.shape[0]
+    if M < 1:
+        raise InputError("x0 must hold at least one sample")
+    if not (np.isfinite(T) and T > 0):
+        raise InputError(f"T must be a positive finite time, got {T!r}")
+    if costate not in ("corrected", "printed"):
+        raise InputError(f"costate must be 'corrected' or 'printed', got {costate!r}")
+    if not (continuation_start > 0 and continuation_growth > 1):
+        raise InputError(
+            "continuation_start must be > 0 and continuation_growth > 1, got "
+            f"{continuation_start!r} and {continuation_growth!r}"
+        )
+    if int(nodes) < 3:
+        raise InputError(f"nodes must be >= 3, got {nodes}")
+    sign = -1.0 if costate == "corrected" else 1.0
+    pT = sign * nn
+
+    def rhs(_t, y):
+        x, p = _unpack(y, M, k)
+        u = _gen.optimal_control(x, p).sum(axis=1)
+        dx, dp = _gen.orbit_rhs_with_control(x, p, u[:, None], nn)
+        return _pack(dx, dp)
+
+    def bc(ya, yb):
+        xa, _ = _unpack(ya[:, None], M, k)
+        _, pb = _unpack(yb[:, None], M, k)
+        i, j = _iu(k)
+        return np.concatenate([(xa[0] - xs0)[..., i, j].ravel(), (pb[0] - pT)[..., i, j].ravel()])
+
+    # continuation in the horizon: solve on [0, T_j] for T_j = T0, growth * T0, ..., T and use each
+    # solution, rescaled in time, as the initial guess of the next (Newton from p = 0 fails for long
+    # horizons)
+    horizons = [float(T)]
+    while horizons[0] > continuation_start:
+        horizons.insert(0, horizons[0] / continuation_growth)
+    s = np.linspace(0.0, 1.0, int(nodes))
+    xg = np.broadcast_to(xs0, (len(s), M, k, k))
+    if p_guess is None:
+        pg = np.zeros_like(xg)
+    else:
+        pg = np.broadcast_to(v.skew(p_guess, "p_guess", k), xg.shape)
+    t, y = s * horizons[0], _pack(xg, pg)
+    for j, Tj in enumerate(horizons):
+        sol = solve_bvp(rhs, bc, t, y, tol=tol, max_nodes=int(max_nodes))
+        if not sol.success or j + 1 == len(horizons):
+            break
+        t_next = horizons[j + 1]
+        t = np.linspace(0.0, 1.0, max(int(nodes), sol.x.size)) * t_next
+        y = sol.sol(t * Tj / t_next)
+    x, p = _unpack(sol.y, M, k)
+    u = _gen.optimal_control(x, p).sum(axis=1)
+    bcr = float(np.max(np.abs(bc(sol.y[:, 0], sol.y[:, -1]))))
+    res = float(np.max(sol.rms_residuals)) if sol.rms_residuals is not None else float("inf")
+    ok = bool(sol.success) and np.all(np.isfinite(sol.y))
+    return OrbitBVPResult(
+        t=sol.x,
+        x=x,
+        p=p,
+        u=u,
+        success=bool(ok),
+        message=str(sol.message),
+        residual=res,
+        bc_residual=bcr,
+        costate=costate,
+        sol=sol,
+    )
