@@ -74,14 +74,16 @@ PAGES = _pages()
 
 
 class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
+    def log_message(self, format: str, *args: Any) -> None:
         pass
 
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[str]:
     if not PAGES:
-        _skip_or_fail(f"the book is not built ({HTML.relative_to(ROOT)} has no index.html): run bash tools/book.sh")
+        _skip_or_fail(
+            f"the book is not built ({HTML.relative_to(ROOT)} has no index.html): run bash tools/book.sh"
+        )
     handler = functools.partial(_QuietHandler, directory=str(HTML))
     httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
@@ -113,7 +115,14 @@ def browser() -> Iterator[Any]:
 def test_book_has_pages() -> None:
     if not PAGES:
         _skip_or_fail("the book is not built: run bash tools/book.sh")
-    for page in ("index.html", "intro.html", "conventions.html", "claims.html", "errata.html", "api.html"):
+    for page in (
+        "index.html",
+        "intro.html",
+        "conventions.html",
+        "claims.html",
+        "errata.html",
+        "api.html",
+    ):
         assert page in PAGES, f"{page} is missing from the built book"
 
 
@@ -141,21 +150,31 @@ def test_page(page: str, server: str, browser: Any, tmp_path: Path) -> None:
     tab.on("pageerror", lambda exc: js_errors.append(str(exc)))
     tab.on(
         "response",
-        lambda resp: http_errors.append(f"{resp.status} {resp.url}") if resp.status >= 400 else None,
+        lambda resp: (
+            http_errors.append(f"{resp.status} {resp.url}") if resp.status >= 400 else None
+        ),
     )
     try:
-        redirect = REDIRECT.search((HTML / page).read_text(encoding="utf-8", errors="replace")[:2000])
+        redirect = REDIRECT.search(
+            (HTML / page).read_text(encoding="utf-8", errors="replace")[:2000]
+        )
         if redirect:  # follow it, and check the page it leads to
             target = redirect.group(1)
-            assert (HTML / page).parent.joinpath(target).is_file(), f"{page} redirects to missing {target}"
+            assert (HTML / page).parent.joinpath(target).is_file(), (
+                f"{page} redirects to missing {target}"
+            )
             with tab.expect_navigation(url=f"**/{target}", wait_until="load", timeout=60_000):
                 tab.goto(f"{server}/{page}", wait_until="commit", timeout=60_000)
         else:
             tab.goto(f"{server}/{page}", wait_until="load", timeout=60_000)
 
         # images: make lazy ones load, then wait until every image has finished (or failed) loading
-        tab.evaluate("() => document.querySelectorAll('img').forEach(i => { i.loading = 'eager'; })")
-        tab.wait_for_function("() => Array.from(document.images).every(i => i.complete)", timeout=30_000)
+        tab.evaluate(
+            "() => document.querySelectorAll('img').forEach(i => { i.loading = 'eager'; })"
+        )
+        tab.wait_for_function(
+            "() => Array.from(document.images).every(i => i.complete)", timeout=30_000
+        )
         broken = tab.evaluate(
             "() => Array.from(document.images).filter(i => !(i.naturalWidth > 0)).map(i => i.src)"
         )

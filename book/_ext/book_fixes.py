@@ -12,7 +12,9 @@ from __future__ import annotations
 from typing import Any
 
 
-def dedupe_inline_scripts(app: Any, pagename: str, templatename: str, context: dict, doctree: Any) -> None:
+def dedupe_inline_scripts(
+    app: Any, pagename: str, templatename: str, context: dict, doctree: Any
+) -> None:
     scripts = context.get("script_files")
     if not scripts:
         return
@@ -20,7 +22,10 @@ def dedupe_inline_scripts(app: Any, pagename: str, templatename: str, context: d
     kept = []
     for js in scripts:
         attrs = getattr(js, "attributes", {}) or {}
-        key = (getattr(js, "filename", None) or "", tuple(sorted((k, str(v)) for k, v in attrs.items())))
+        key = (
+            getattr(js, "filename", None) or "",
+            tuple(sorted((k, str(v)) for k, v in attrs.items())),
+        )
         if key in seen:
             continue
         seen.add(key)
