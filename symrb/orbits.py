@@ -197,8 +197,9 @@ def solve_orbit_bvp(
     :math:`p^a_T = +\partial\phi/\partial x^a_T = N`.
 
     Solved with ``scipy.integrate.solve_bvp`` on the upper-triangle coordinates of the skew
-    matrices, from the initial guess :math:`x \equiv x_0`, :math:`p \equiv` ``p_guess`` (0 by
-    default).  For ``T > continuation_start`` the horizon is grown geometrically (factor
+    matrices, from the initial guess :math:`x \equiv x_0`, :math:`p \equiv` ``p_guess`` (by
+    default the terminal value :math:`p_T`; the guess p = 0 gives a singular collocation Jacobian
+    when x0 commutes with N).  For ``T > continuation_start`` the horizon is grown geometrically (factor
     ``continuation_growth``) from below ``continuation_start`` to ``T``, each solution rescaled in
     time serving as the guess of the next: Newton's method from p = 0 does not converge on long
     horizons.  Does not raise when the solver fails: check ``success`` and ``residual``.
@@ -249,7 +250,7 @@ def solve_orbit_bvp(
     s = np.linspace(0.0, 1.0, int(nodes))
     xg = np.broadcast_to(xs0, (len(s), M, k, k))
     if p_guess is None:
-        pg = np.zeros_like(xg)
+        pg = np.broadcast_to(pT, xg.shape)
     else:
         pg = np.broadcast_to(v.skew(p_guess, "p_guess", k), xg.shape)
     t, y = s * horizons[0], _pack(xg, pg)

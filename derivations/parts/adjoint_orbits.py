@@ -638,7 +638,9 @@ def _bvp_case(M: int, T: float, printed: bool = False):
 
     N = rs()
     x0 = np.stack([rs() for _ in range(M)])
-    res = solve_orbit_bvp(x0, N, T, costate="printed" if printed else "corrected")
+    res = solve_orbit_bvp(
+        x0, N, T, costate="printed" if printed else "corrected", p_guess=np.zeros((k, k))
+    )
     dev = max(
         float(np.max(np.abs(res.x[:, a] - double_bracket_flow(x0[a], N, res.t)))) for a in range(M)
     )

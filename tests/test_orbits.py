@@ -1,0 +1,207 @@
+"""Numerics of symrb.orbits (S13-S15): batching, validation, invariants, the boundary value problem."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import symrb
+from symrb import orbits
+from symrb.errors import InputError
+
+
+def rs(rng, k, size=()):
+    a = rng.standard_normal((*size, k, k))
+    return (a - np.swapaxes(a, -1, -2)) / 2
+
+
+def pair(a, b):
+    return -0.5 * np.trace(a @ b, axis1=-2, axis2=-1)
+
+
+def comm(a, b):
+    return a @ b - b @ a
+
+
+# ----------------------------------------------------------------------------- batching
+
+
+@pytest.mark.parametrize("k", [3, 4, 5])
+def test_batch_matches_loop(k):
+    rng = np.random.default_rng(k)
+    x, p, N = rs(rng, k, (2, 3)), rs(rng, k, (2, 3)), rs(rng, k)
+    xd, pd = orbits.orbit_extremal_rhs(x, p, N)
+    H = orbits.orbit_hamiltonian(x, p, N)
+    V = orbits.brockett_potential(x, N)
+    D = orbits.double_bracket_rhs(x, N)
+    for i in range(2):
+        for j in range(3):
+            xi, pi = x[i, j], p[i, j]
+            u = comm(pi, xi)
+            np.testing.assert_allclose(xd[i, j], comm(xi, u), atol=1e-13)
+            np.testing.assert_allclose(pd[i, j], comm(pi, u) - comm(N, comm(N, xi)), atol=1e-13)
+            c = comm(xi, N)
+            np.testing.assert_allclose(V[i, j], -0.5 * pair(c, c), atol=1e-13)
+            np.testing.assert_allclose(H[i, j], 0.5 * pair(u, u) - 0.5 * pair(c, c), atol=1e-12)
+            np.testing.assert_allclose(D[i, j], comm(xi, comm(xi, N)), atol=1e-13)
+
+
+def test_reexported():
+    for name in orbits.__all__:
+        assert getattr(symrb, name) is getattr(orbits, name)
+
+
+# ----------------------------------------------------------------------------- validation
+
+
+def test_rejects_non_skew_and_nan():
+    rng = np.random.default_rng(0)
+    x, N = rs(rng, 3), rs(rng, 3)
+    with pytest.raises(InputError, match="x must be skew"):
+        orbits.double_bracket_rhs(x + np.eye(3), N)
+    with pytest.raises(InputError, match="N must be skew"):
+        orbits.brockett_potential(x, N + np.eye(3))
+    with pytest.raises(InputError, match="p must be skew"):
+        orbits.orbit_extremal_rhs(x, np.ones((3, 3)), N)
+    bad = x.copy()
+    bad[0, 1] = np.nan
+    with pytest.raises(InputError, match="x must be finite"):
+        orbits.orbit_hamiltonian(bad, x, N)
+    with pytest.raises(InputError, match="3 x 3"):
+        orbits.double_bracket_rhs(rs(rng, 4), N)
+
+
+def test_bvp_and_flow_argument_errors():
+    rng = np.random.default_rng(1)
+    x, N = rs(rng, 3), rs(rng, 3)
+    with pytest.raises(InputError, match="T must be a positive"):
+        orbits.solve_orbit_bvp(x, N, 0.0)
+    with pytest.raises(InputError, match="costate must be"):
+        orbits.solve_orbit_bvp(x, N, 1.0, costate="plus")
+    with pytest.raises(InputError, match="x0 must have shape"):
+        orbits.solve_orbit_bvp(rs(rng, 3, (2, 2)), N, 1.0)
+    with pytest.raises(InputError, match="N must be a single"):
+        orbits.solve_orbit_bvp(x, rs(rng, 3, (2,)), 1.0)
+    with pytest.raises(InputError, match="t must be"):
+        orbits.double_bracket_flow(x, N, [0.0, 2.0, 1.0])
+    with pytest.raises(InputError, match="continuation"):
+        orbits.solve_orbit_bvp(x, N, 1.0, continuation_growth=1.0)
+
+
+def test_inputs_not_mutated():
+    rng = np.random.default_rng(2)
+    x, p, N = rs(rng, 3), rs(rng, 3), rs(rng, 3)
+    copies = [a.copy() for a in (x, p, N)]
+    orbits.orbit_extremal_rhs(x, p, N)
+    orbits.double_bracket_flow(x, N, [0.0, 0.5])
+    orbits.solve_orbit_bvp(x, N, 0.5)
+    for a, c in zip((x, p, N), copies, strict=True):
+        np.testing.assert_array_equal(a, c)
+
+
+# ----------------------------------------------------------------------------- properties
+
+skew_seeds = st.integers(0, 2**32 - 1)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=skew_seeds, k=st.integers(3, 6))
+def test_double_bracket_decreases_pairing(seed, k):
+    """d/dt <x, N> = <[x,[x,N]], N> = -||[x, N]||^2 and the field is tangent to the orbit."""
+    rng = np.random.default_rng(seed)
+    x, N = rs(rng, k), rs(rng, k)
+    d = orbits.double_bracket_rhs(x, N)
+    c = comm(x, N)
+    assert pair(d, N) == pytest.approx(-pair(c, c), abs=1e-10 * (1 + abs(pair(c, c))))
+    # tangent to the orbit: tr(x^j xdot) = 0 for j = 1, 3
+    for j in (1, 3):
+        xj = np.linalg.matrix_power(x, j)
+        assert abs(np.trace(xj @ d)) <= 1e-10 * (1 + np.abs(xj).max() * np.abs(d).max() * k)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=skew_seeds, k=st.integers(3, 5))
+def test_hamiltonian_constant_along_field(seed, k):
+    """dH*/dt along (xdot, pdot) vanishes (central difference, relative to the terms' size)."""
+    rng = np.random.default_rng(seed)
+    x, p, N = rs(rng, k), rs(rng, k), rs(rng, k)
+    xd, pd = orbits.orbit_extremal_rhs(x, p, N)
+    h = 1e-5
+    dH = (
+        orbits.orbit_hamiltonian(x + h * xd, p + h * pd, N)
+        - orbits.orbit_hamiltonian(x - h * xd, p - h * pd, N)
+    ) / (2 * h)
+    scale = 1 + np.abs(xd).max() ** 2 + np.abs(pd).max() ** 2 + np.abs(x).max() ** 4
+    assert abs(dH) <= 1e-6 * scale
+
+
+# ----------------------------------------------------------------------------- the BVP
+
+
+def test_single_sample_bvp_is_double_bracket_flow():
+    rng = np.random.default_rng(3)
+    x0, N = rs(rng, 3), rs(rng, 3)
+    res = orbits.solve_orbit_bvp(x0, N, 3.0)
+    assert res.success, res.message
+    assert res.x.shape == (res.t.size, 1, 3, 3) and res.p.shape == res.x.shape
+    assert res.u.shape == (res.t.size, 3, 3)
+    np.testing.assert_allclose(res.p[:, 0], np.broadcast_to(-N, res.p[:, 0].shape), atol=1e-8)
+    ref = orbits.double_bracket_flow(x0, N, res.t)
+    assert np.max(np.abs(res.x[:, 0] - ref)) < 1e-5
+    # the optimal control is [x, N]
+    np.testing.assert_allclose(res.u, comm(res.x[:, 0], N), atol=1e-8)
+    xs, ps = res.at([0.0, 3.0])
+    np.testing.assert_allclose(xs[0, 0], x0, atol=1e-10)
+    np.testing.assert_allclose(ps[1, 0], -N, atol=1e-10)
+
+
+def test_printed_costate_gives_reverse_flow():
+    """With p_T = +N the extremal is p = N and x follows xdot = [x,[x,-N]]: <x_T, N> increases."""
+    rng = np.random.default_rng(4)
+    x0, N = rs(rng, 3), rs(rng, 3)
+    res = orbits.solve_orbit_bvp(x0, N, 2.0, costate="printed")
+    assert res.success, res.message
+    ref = orbits.double_bracket_flow(x0, -N, res.t)
+    assert np.max(np.abs(res.x[:, 0] - ref)) < 1e-5
+    good = orbits.solve_orbit_bvp(x0, N, 2.0)
+    assert pair(good.x[-1, 0], N) < pair(x0, N) < pair(res.x[-1, 0], N)
+
+
+def test_critical_point_is_stationary():
+    """x0 commuting with N (a critical point of <x, N> on its orbit): x stays at x0."""
+    rng = np.random.default_rng(6)
+    N = rs(rng, 3)
+    res = orbits.solve_orbit_bvp(2.0 * N, N, 5.0)
+    assert res.success, res.message
+    assert np.max(np.abs(res.x[:, 0] - 2.0 * N)) < 1e-10
+
+
+def test_degenerate_critical_point_so4_is_reported():
+    """so(4), x0 and N in the same Cartan subalgebra: the collocation Jacobian is singular there.
+    The solver must then say so (success False), never return a silent wrong answer."""
+    N = np.zeros((4, 4))
+    N[0, 1], N[1, 0], N[2, 3], N[3, 2] = 1.0, -1.0, 2.0, -2.0
+    x0 = 0.5 * N.copy()
+    x0[0, 1], x0[1, 0] = 3.0, -3.0
+    res = orbits.solve_orbit_bvp(x0, N, 5.0)
+    if res.success:
+        assert np.max(np.abs(res.x[:, 0] - x0)) < 1e-10
+    else:
+        assert "singular" in res.message.lower()
+
+
+def test_two_samples_share_control_and_leave_double_bracket():
+    rng = np.random.default_rng(5)
+    x0, N = rs(rng, 3, (2,)), rs(rng, 3)
+    res = orbits.solve_orbit_bvp(x0, N, 1.0)
+    assert res.success, res.message
+    u = comm(res.p[:, 0], res.x[:, 0]) + comm(res.p[:, 1], res.x[:, 1])
+    np.testing.assert_allclose(res.u, u, atol=1e-12)
+    np.testing.assert_allclose(res.x[0], x0, atol=1e-9)
+    np.testing.assert_allclose(res.p[-1], np.broadcast_to(-N, (2, 3, 3)), atol=1e-9)
+    dev = max(
+        np.max(np.abs(res.x[:, a] - orbits.double_bracket_flow(x0[a], N, res.t))) for a in (0, 1)
+    )
+    assert dev > 1e-2
