@@ -1,0 +1,467 @@
+r"""The Moser-Veselov equation :math:`U\Lambda - \Lambda U^T = M` on :math:`SO(n)` (paper, eqs. Ukdef1, mv2).
+
+Given a skew :math:`M` and a positive diagonal :math:`\Lambda`, the discrete rigid body needs the
+:math:`U\in SO(n)` with :math:`J_D(U) = U\Lambda - \Lambda U^T = M` *on the branch through the
+identity* (:math:`J_D(I) = 0`, and :math:`J_D` is a local diffeomorphism there, claim D8).
+
+How it is solved (derived in the book, page "The Moser-Veselov solver")
+-----------------------------------------------------------------------
+Put :math:`X = U\Lambda`.  Then :math:`X - X^T = M` and :math:`X^TX = \Lambda^2`.  Writing
+:math:`X = S + M/2` with :math:`S` symmetric, the second equation becomes the algebraic Riccati
+equation
+
+.. math::
+
+    \tfrac12 M S - \tfrac12 S M - S^2 + \bigl(\Lambda^2 + \tfrac14 M^2\bigr) = 0,
+
+i.e. ``scipy.linalg.solve_continuous_are(a=-M/2, b=I, q=Lambda^2 + M^2/4, r=I)`` (Cardoso and
+Leite's reformulation).  Its closed-loop matrix is :math:`-M/2 - S = -X`, so the *stabilizing*
+solution is the one with every eigenvalue of :math:`X = U\Lambda` in the open right half-plane.
+At :math:`M = 0` it is :math:`S = \Lambda`, :math:`U = I`; it depends continuously on :math:`M`
+and is unique when it exists.  This is the branch through the identity.  It ends where an
+eigenvalue of :math:`U\Lambda` reaches the imaginary axis: there the linearisation
+
+.. math::
+
+    \xi \mapsto U\xi\Lambda + \Lambda\xi U^T \quad(\xi\in\mathfrak{so}(n)),
+
+which after :math:`Z = U\xi\Lambda = R/2 + T` becomes the Sylvester equation
+:math:`X^TT + TX = (RX - X^TR)/2` for a symmetric :math:`T`, turns singular (eigenvalues
+:math:`\mu_i + \mu_j = 0`): the fold.  Past it the branch has no solution.
+
+The Riccati solution is a starting guess (or the previous :math:`U` of a time stepper is); Newton's
+method on :math:`U \mapsto U\,\mathrm{cay}(\xi)` with the Sylvester step above polishes it to a
+residual :math:`\|J_D(U) - M\|_F \le 10\,\varepsilon\,\|M\|_F`, keeping :math:`U` orthogonal to
+rounding.  The branch is checked on the result (:math:`\min\operatorname{Re}\sigma(U\Lambda) > 0`).
+
+Along a ray :math:`t \mapsto tM` the fold is where the Hamiltonian matrix
+:math:`\begin{pmatrix}-M/2 & -I\\ -\Lambda^2 - M^2/4 & -M/2\end{pmatrix}` (whose spectrum is
+:math:`\sigma(X)\cup\sigma(-X)` on the branch) first has an eigenvalue on the imaginary axis;
+:func:`fold_scale` locates it by a scan and bisection.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.typing import ArrayLike, NDArray
+
+from . import _validate as v
+from ._validate import Array
+from .errors import InputError, NotConvergedError, OutOfDomainError
+
+__all__ = ["MVSolveInfo", "solve_moser_veselov", "fold_scale"]
+
+_EPS = float(np.finfo(float).eps)
+#: Largest n for which the Newton step is solved as one batched dense (n^2 x n^2) system.
+_KRON_MAX_N = 8
+
+
+@dataclass(frozen=True)
+class MVSolveInfo:
+    """What :func:`solve_moser_veselov` did, per item of the batch (arrays of the batch shape).
+
+    Attributes
+    ----------
+    iterations : Newton iterations used after the starting guess.
+    residual : :math:`\\|U\\Lambda - \\Lambda U^T - M\\|_F`.
+    tol : the tolerance the residual met.
+    orthogonality : :math:`\\|U^TU - I\\|_F`.
+    margin : :math:`\\min\\operatorname{Re}\\sigma(U\\Lambda) > 0`, which tends to 0 at the fold.
+    start : ``"riccati"`` (cold start) or ``"warm"`` (given ``U0``), or ``"mixed"``.
+    """
+
+    iterations: NDArray[np.int64]
+    residual: Array
+    tol: Array
+    orthogonality: Array
+    margin: Array
+    start: str
+
+
+# ---------------------------------------------------------------------------------------------
+# batched building blocks (no validation: callers pass (b, n, n) and (b, n) float arrays)
+
+
+def _jd(U: Array, lam: Array) -> Array:
+    """J_D(U) = U Lam - Lam U^T for U (b, n, n), lam (b, n)."""
+    return U * lam[:, None, :] - lam[:, :, None] * np.swapaxes(U, -1, -2)
+
+
+def _fro(a: Array) -> Array:
+    return np.sqrt(np.einsum("...ij,...ij->...", a, a))
+
+
+def _sylvester_sym(X: Array, C: Array) -> Array:
+    """Solve X^T T + T X = C for every item (T symmetric when C is and the solution is unique)."""
+    b, nn, _ = X.shape
+    if nn <= _KRON_MAX_N:
+        eye = np.eye(nn)
+        # row-major vec: vec(X^T T) = (X^T kron I) vec T, vec(T X) = (I kron X^T) vec T
+        K = np.einsum("bki,jl->bijkl", X, eye) + np.einsum("ik,blj->bijkl", eye, X)
+        K = K.reshape(b, nn * nn, nn * nn)
+        T = np.linalg.solve(K, C.reshape(b, nn * nn, 1)).reshape(b, nn, nn)
+    else:
+        T = np.empty_like(C)
+        for i in range(b):
+            T[i] = sla.solve_sylvester(X[i].T, X[i], C[i])
+    return 0.5 * (T + np.swapaxes(T, -1, -2))
+
+
+def _times_cayley(U: Array, xi: Array) -> Array:
+    """U cay(xi) with cay(xi) = (I - xi/2)^{-1}(I + xi/2) = I + (I - xi/2)^{-1} xi (orthogonal for
+    skew xi), computed as U + U (I - xi/2)^{-1} xi so the increment keeps its relative accuracy."""
+    eye = np.eye(xi.shape[-1])
+    return U + U @ np.linalg.solve(eye - 0.5 * xi, xi)
+
+
+def _newton_step(U: Array, M: Array, lam: Array, R: Array) -> Array:
+    """One Newton step for J_D(U cay(xi)) = M, where R = M - J_D(U) (see the module docstring)."""
+    X = U * lam[:, None, :]
+    Xt = np.swapaxes(X, -1, -2)
+    C = 0.5 * (R @ X - Xt @ R)
+    T = _sylvester_sym(X, C)
+    xi = np.swapaxes(U, -1, -2) @ (0.5 * R + T) / lam[:, None, :]
+    xi = 0.5 * (xi - np.swapaxes(xi, -1, -2))
+    return _times_cayley(U, xi)
+
+
+def _polar(U: Array) -> Array:
+    """The orthogonal factor of U (closest orthogonal matrix)."""
+    W, _, Vt = np.linalg.svd(U)
+    return W @ Vt
+
+
+def _margin(U: Array, lam: Array) -> Array:
+    """min Re of the eigenvalues of U Lam: positive exactly on the branch through the identity."""
+    return np.linalg.eigvals(U * lam[:, None, :]).real.min(axis=-1)
+
+
+def _riccati_guess(M: Array, lam: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """U = (S + M/2) Lam^{-1} from the stabilizing Riccati solution S, item by item.
+
+    Returns the guesses and a mask of the items where scipy found no stabilizing solution.
+    """
+    b, nn, _ = M.shape
+    U = np.tile(np.eye(nn), (b, 1, 1))
+    failed = np.zeros(b, dtype=bool)
+    eye = np.eye(nn)
+    for i in range(b):
+        Mi = M[i]
+        q = np.diag(lam[i] ** 2) + 0.25 * (Mi @ Mi)
+        q = 0.5 * (q + q.T)
+        try:
+            S = sla.solve_continuous_are(-0.5 * Mi, eye, q, eye)
+        except (np.linalg.LinAlgError, ValueError):
+            failed[i] = True
+            continue
+        if not np.all(np.isfinite(S)):
+            failed[i] = True
+            continue
+        S = 0.5 * (S + S.T)
+        U[i] = (S + 0.5 * Mi) / lam[i][None, :]
+    U[~failed] = _polar(U[~failed]) if np.any(~failed) else U[~failed]
+    return U, failed
+
+
+def _newton(
+    U: Array, M: Array, lam: Array, tol: Array, maxiter: int
+) -> tuple[Array, NDArray[np.int64], Array, NDArray[np.bool_]]:
+    """Newton iterations on every item until ||J_D(U) - M||_F <= tol (per item).
+
+    Returns (U, iterations, residual, converged).
+    """
+    U = U.copy()
+    b = U.shape[0]
+    iters = np.zeros(b, dtype=np.int64)
+    slow = np.zeros(b, dtype=np.int64)
+    R = M - _jd(U, lam)
+    res = _fro(R)
+    active = res > tol
+    for _ in range(maxiter):
+        if not active.any():
+            break
+        # the whole batch is stepped (cheap for the small batches of time steppers); only the
+        # active items take the new values
+        Unew = _newton_step(U, M, lam, R)
+        Rnew = M - _jd(Unew, lam)
+        rnew = _fro(Rnew)
+        ok = active & np.isfinite(rnew)
+        if not ok.all():
+            ok &= np.isfinite(Unew).all(axis=(-2, -1))
+        old = res
+        U = np.where(ok[:, None, None], Unew, U)
+        R = np.where(ok[:, None, None], Rnew, R)
+        res = np.where(ok, rnew, res)
+        iters += active
+        # an item stops when it meets tol, when a step is not finite, or after four steps in a
+        # row that did not halve the residual (rounding floor or divergence)
+        slow = np.where(ok & (rnew > 0.5 * old), slow + 1, 0)
+        active = ok & (res > tol) & (slow < 4)
+    return U, iters, res, res <= tol
+
+
+def _warm_single(
+    U: Array, M: Array, lam: Array, tol: float, maxiter: int
+) -> tuple[Array, int, float] | None:
+    """Newton from a nearby U for one (n, n) matrix, with 2-D arrays (lower call overhead for time
+    steppers).  Returns (U, iterations, residual) when it converges on the branch, else None (the
+    caller then falls back to the batched solver with its Riccati start)."""
+    nn = lam.shape[0]
+    eye = np.eye(nn)
+    lam_row, lam_col = lam[None, :], lam[:, None]
+    R = M - (U * lam_row - lam_col * U.T)
+    r = float(np.sqrt(np.vdot(R, R)))
+    it = 0
+    slow = 0
+    while r > tol:
+        if it >= maxiter or slow >= 4:
+            return None
+        X = U * lam_row
+        C = 0.5 * (R @ X - X.T @ R)
+        if nn <= _KRON_MAX_N:
+            Xt = X.T
+            K = (Xt[:, None, :, None] * eye[None, :, None, :]) + (
+                eye[:, None, :, None] * Xt[None, :, None, :]
+            )
+            T = np.linalg.solve(K.reshape(nn * nn, nn * nn), C.reshape(-1)).reshape(nn, nn)
+        else:
+            T = sla.solve_sylvester(X.T, X, C)
+        xi = U.T @ (0.5 * R + 0.5 * (T + T.T)) / lam_row
+        xi = 0.5 * (xi - xi.T)
+        Unew = U + U @ np.linalg.solve(eye - 0.5 * xi, xi)
+        Rnew = M - (Unew * lam_row - lam_col * Unew.T)
+        rnew = float(np.sqrt(np.vdot(Rnew, Rnew)))
+        it += 1
+        if not np.isfinite(rnew):
+            return None
+        slow = slow + 1 if rnew > 0.5 * r else 0
+        U, R, r = Unew, Rnew, rnew
+    # branch certificate: a positive definite symmetric part of X = U Lam puts every eigenvalue of
+    # X in the right half-plane (Cholesky is cheap); otherwise look at the eigenvalues
+    X = U * lam_row
+    try:
+        np.linalg.cholesky(0.5 * (X + X.T))
+    except np.linalg.LinAlgError:
+        if not np.linalg.eigvals(X).real.min() > 0:
+            return None
+    return U, it, r
+
+
+# ---------------------------------------------------------------------------------------------
+# fold location
+
+
+def _has_imaginary_eigenvalue(M: Array, lam: Array, s: float, rtol: float) -> bool:
+    nn = lam.shape[-1]
+    A = s * M
+    eye = np.eye(nn)
+    H = np.block([[-0.5 * A, -eye], [-(np.diag(lam**2) + 0.25 * (A @ A)), -0.5 * A]])
+    ev = np.linalg.eigvals(H)
+    return bool(np.min(np.abs(ev.real)) <= rtol * np.linalg.norm(H, 2))
+
+
+def _fold_scale_one(M: Array, lam: Array, rtol: float = 1e-13) -> float:
+    opn = float(np.linalg.norm(M, 2))
+    if opn == 0.0:
+        return float("inf")
+    # ||J_D(U)||_op <= 2 max(lam) for orthogonal U, so no solution exists beyond s_max
+    s_max = 2.0 * float(lam.max()) / opn * (1 + 1e-9)
+    thresh = 1e-7
+    grid = np.linspace(0.0, s_max, 65)[1:]
+    lo, hi = 0.0, None
+    for s in grid:
+        if _has_imaginary_eigenvalue(M, lam, float(s), thresh):
+            hi = float(s)
+            break
+        lo = float(s)
+    if hi is None:
+        s = s_max
+        while hi is None:
+            s *= 1.5
+            if s > 1e3 * s_max:  # pragma: no cover - no solution can exist there
+                raise RuntimeError("fold_scale: no fold found along the ray")
+            if _has_imaginary_eigenvalue(M, lam, s, thresh):
+                hi = s
+            else:
+                lo = s
+    while hi - lo > rtol * hi:
+        mid = 0.5 * (lo + hi)
+        if _has_imaginary_eigenvalue(M, lam, mid, thresh):
+            hi = mid
+        else:
+            lo = mid
+    return 0.5 * (lo + hi)
+
+
+def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
+    r"""The scale :math:`t^*` at which the ray :math:`t\mapsto tM` meets the fold of :math:`J_D`.
+
+    :math:`J_D(U) = tM` has a solution on the branch through the identity for :math:`0\le t<t^*`
+    and none just past :math:`t^*`; so ``M`` itself is solvable when ``fold_scale(M, lam) > 1``,
+    and :math:`t^* - 1` is its relative distance to the fold (negative: past it).  For n = 2,
+    :math:`t^* = (\lambda_1+\lambda_2)/|M_{12}|`.  ``inf`` for ``M = 0``.
+
+    Computed as the first :math:`t` where the Hamiltonian matrix of the Riccati form (module
+    docstring) has an eigenvalue on the imaginary axis: a scan of :math:`(0, t_{\max}]` with
+    :math:`t_{\max}\|M\|_{op} = 2\max\lambda` (beyond which :math:`\|J_D(U)\|_{op}\le 2\max\lambda`
+    rules out any solution), then bisection to a relative accuracy of about 1e-13.
+
+    Parameters
+    ----------
+    M : array (..., n, n), skew-symmetric
+    lam : array (..., n), positive diagonal of :math:`\Lambda`
+
+    Returns
+    -------
+    array of the broadcast batch shape.
+    """
+    L = v.inertia(lam, positive=True)
+    nn = L.shape[-1]
+    A = v.skew(M, "M", nn)
+    batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
+    Ab = np.broadcast_to(A, batch + (nn, nn)).reshape(-1, nn, nn)
+    Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
+    out = np.array([_fold_scale_one(Ab[i], Lb[i]) for i in range(Ab.shape[0])])
+    return out.reshape(batch)
+
+
+# ---------------------------------------------------------------------------------------------
+# the solver
+
+
+def _out_of_domain(M: Array, lam: Array) -> OutOfDomainError:
+    t = _fold_scale_one(M, lam)
+    past = (1.0 / t - 1.0) * 100.0
+    return OutOfDomainError(
+        "U Lam - Lam U^T = M has no solution on the branch through the identity: M is past the "
+        f"fold of J_D. ||M||_F = {np.linalg.norm(M):.6g}, ||M||_op = {np.linalg.norm(M, 2):.6g}, "
+        f"lam = {np.array2string(lam, precision=6)}; along the ray t*M the fold is at "
+        f"t = {t:.10g} (||M||_F = {t * np.linalg.norm(M):.6g} there), so M is {past:.4g} % past "
+        "the fold"
+    )
+
+
+def _solve_batch(
+    M: Array,
+    lam: Array,
+    tol: Array,
+    maxiter: int,
+    U0: Array | None = None,
+) -> tuple[Array, NDArray[np.int64], Array, Array, str]:
+    """Core solver on flat batches (b, n, n), (b, n); raises on failure.
+
+    Returns (U, iterations, residual, margin, start).
+    """
+    b = M.shape[0]
+    start = "warm" if U0 is not None else "riccati"
+    if U0 is not None:
+        U, iters, res, conv = _newton(U0, M, lam, tol, maxiter)
+        margin = _margin(U, lam)
+        bad = ~conv | ~(margin > 0)
+    else:
+        U = np.empty_like(M)
+        iters = np.zeros(b, dtype=np.int64)
+        res = np.full(b, np.inf)
+        margin = np.full(b, np.nan)
+        bad = np.ones(b, dtype=bool)
+    if np.any(bad):
+        if U0 is not None:
+            start = "mixed"
+        idx = np.nonzero(bad)[0]
+        G, failed = _riccati_guess(M[idx], lam[idx])
+        U2, it2, res2, conv2 = _newton(G, M[idx], lam[idx], tol[idx], maxiter)
+        m2 = _margin(U2, lam[idx])
+        U[idx], iters[idx], res[idx], margin[idx] = U2, it2, res2, m2
+        still = failed | ~conv2 | ~(m2 > 0)
+        for j in np.nonzero(still)[0]:
+            i = idx[j]
+            t = _fold_scale_one(M[i], lam[i])
+            if t <= 1.0:
+                raise _out_of_domain(M[i], lam[i])
+            raise NotConvergedError(
+                f"solve_moser_veselov: Newton did not reach tol = {tol[i]:.3e} for batch item {i} "
+                f"(residual {res[i]:.3e} after {iters[i]} iterations, branch margin "
+                f"{margin[i]:.3e}); M is inside the domain (fold at t = {t:.10g} along t*M)",
+                residual=float(res[i]),
+                iterations=int(iters[i]),
+            )
+    return U, iters, res, margin, start
+
+
+def solve_moser_veselov(
+    M: ArrayLike,
+    lam: ArrayLike,
+    *,
+    tol: float | None = None,
+    maxiter: int = 30,
+    U0: ArrayLike | None = None,
+    return_info: bool = False,
+) -> Array | tuple[Array, MVSolveInfo]:
+    r"""Solve :math:`U\Lambda - \Lambda U^T = M` for :math:`U\in SO(n)` on the branch through the identity.
+
+    This is eq. Ukdef1 (:math:`J_D(U_k) = Q_k^TP_k - P_k^TQ_k`) and, with :math:`U = \Omega^T`,
+    eq. mv2 (:math:`M = \Omega^T\Lambda - \Lambda\Omega`) of the paper.  The returned :math:`U` is
+    the unique solution with every eigenvalue of :math:`U\Lambda` in the open right half-plane
+    (equal to :math:`I` at :math:`M = 0`, continuous in :math:`M`); see the module docstring for
+    the method (Riccati start, Sylvester-Newton polish).
+
+    Parameters
+    ----------
+    M : array (..., n, n), skew-symmetric, 2 <= n
+    lam : array (..., n), the diagonal of :math:`\Lambda`, all entries > 0
+    tol : residual tolerance on :math:`\|U\Lambda-\Lambda U^T-M\|_F`; default
+        :math:`10\,\varepsilon\,\|M\|_F` per item
+    maxiter : most Newton iterations
+    U0 : optional starting guess in SO(n) (..., n, n), e.g. the previous step's solution; when
+        Newton from it fails or lands off the branch, the Riccati start is used instead
+    return_info : also return an :class:`MVSolveInfo`
+
+    Returns
+    -------
+    U : array of the broadcast shape (..., n, n); with ``return_info``, ``(U, info)``.
+
+    Raises
+    ------
+    InputError
+        ``M`` not skew, ``lam`` not positive, shapes that do not match, ``tol < 0``, ``maxiter < 1``.
+    OutOfDomainError
+        ``M`` is past the fold (no solution on the branch); the message gives
+        :math:`\|M\|`, ``lam`` and how far past the fold ``M`` is (see :func:`fold_scale`).
+    NotConvergedError
+        Newton failed inside the domain (carries the residual and the iteration count).
+    """
+    L = v.inertia(lam, positive=True)
+    nn = L.shape[-1]
+    A = v.skew(M, "M", nn)
+    if tol is not None and not (np.isfinite(tol) and tol >= 0):
+        raise InputError(f"tol must be a finite number >= 0, got {tol!r}")
+    if int(maxiter) < 1:
+        raise InputError(f"maxiter must be >= 1, got {maxiter!r}")
+    batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
+    G = None
+    if U0 is not None:
+        G0 = v.orthogonal(U0, "U0", nn)
+        batch = np.broadcast_shapes(batch, G0.shape[:-2])
+        G = np.broadcast_to(G0, batch + (nn, nn)).reshape(-1, nn, nn).copy()
+    Ab = np.broadcast_to(A, batch + (nn, nn)).reshape(-1, nn, nn)
+    Ab = 0.5 * (Ab - np.swapaxes(Ab, -1, -2))  # exactly skew
+    Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
+    normM = _fro(Ab)
+    tolb = np.full(Ab.shape[0], float(tol)) if tol is not None else 10.0 * _EPS * normM
+    U, iters, res, margin, start = _solve_batch(Ab, Lb, tolb, int(maxiter), G)
+    U = U.reshape(batch + (nn, nn))
+    if not return_info:
+        return U
+    orth = _fro(np.swapaxes(U, -1, -2) @ U - np.eye(nn))
+    info = MVSolveInfo(
+        iterations=iters.reshape(batch),
+        residual=res.reshape(batch),
+        tol=tolb.reshape(batch),
+        orthogonality=np.asarray(orth).reshape(batch),
+        margin=margin.reshape(batch),
+        start=start,
+    )
+    return U, info
