@@ -7,17 +7,23 @@ Each submodule lists its public names in ``__all__``; they are re-exported here.
 
 from __future__ import annotations
 
-from . import algebra, errors, orbits, rigid_body
+from . import algebra, continuous, discrete, errors, orbits, rigid_body, solvers
 from .algebra import *  # noqa: F403
+from .continuous import *  # noqa: F403
+from .discrete import *  # noqa: F403
 from .errors import *  # noqa: F403
 from .orbits import *  # noqa: F403
 from .rigid_body import *  # noqa: F403
+from .solvers import *  # noqa: F403
 
 __version__ = "0.1.0"
 
 __all__ = [
     *algebra.__all__,
+    *continuous.__all__,
+    *discrete.__all__,
     *errors.__all__,
     *orbits.__all__,
     *rigid_body.__all__,
+    *solvers.__all__,
 ]
