@@ -338,7 +338,7 @@ def _out_of_domain(M: Array, lam: Array) -> OutOfDomainError:
     return OutOfDomainError(
         "U Lam - Lam U^T = M has no solution on the branch through the identity: M is past the "
         f"fold of J_D. ||M||_F = {np.linalg.norm(M):.6g}, ||M||_op = {np.linalg.norm(M, 2):.6g}, "
-        f"lam = {np.array2string(lam, precision=6)}; along the ray t*M the fold is at "
+        f"lam = {np.array2string(lam, precision=6, threshold=12)}; along the ray t*M the fold is at "
         f"t = {t:.10g} (||M||_F = {t * np.linalg.norm(M):.6g} there), so M is {past:.4g} % past "
         "the fold"
     )

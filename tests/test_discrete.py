@@ -1,0 +1,171 @@
+"""Tests of symrb.discrete: symmetric representation, MV-Algorithms 1 and 2, time-step scaling."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
+
+from symrb import (
+    InputError,
+    discrete_rigid_body_flow,
+    jd_residual,
+    mv_algorithm1,
+    mv_algorithm2,
+    random_SO,
+    random_so,
+    rigid_body_rhs,
+    solve_moser_veselov,
+    symmetric_flow,
+    symmetric_step,
+)
+
+EPS = np.finfo(float).eps
+LAM3 = np.array([0.7, 1.1, 1.6])
+
+
+def _start(seed=0, scale=0.05, nn=3):
+    rng = np.random.default_rng(seed)
+    return random_SO(nn, seed=rng), random_so(nn, seed=rng, scale=scale), rng
+
+
+def test_three_algorithms_agree_over_ten_thousand_steps():
+    """Symmetric representation from (Q_0, P_0), MV-Algorithm 2 from (Q_1, M_1 = Q_0^T P_0 -
+    P_0^T Q_0) (claim D12) and MV-Algorithm 1 from (Q_0, Q_1) give the same Q_k (n = 3, 10^4 steps).
+
+    The symmetric representation and MV-Algorithm 2 agree to within ten times the spread of the
+    symmetric algorithm's own rounding (the same run in a rotated frame R Q, R P, which the
+    equations leave invariant).  MV-Algorithm 1 computes M from Q_{k+1}^T Q_k, a difference of
+    nearly equal matrices, so its rounding errors grow fast (about N^3 here); it must still agree
+    to 1e-6, far below the O(h^2) discretisation error (1e-3) that a wrong index would expose."""
+    Q0, M, rng = _start()
+    steps = 10_000
+    P0 = Q0 @ (0.5 * M)
+    Qs, Ps = symmetric_flow(Q0, P0, LAM3, 1.0, steps)
+    M1 = Q0.T @ P0 - P0.T @ Q0
+    QB, MB = mv_algorithm2(Qs[1], M1, LAM3, steps - 1)
+    QA = mv_algorithm1(Q0, Qs[1], LAM3, steps - 1)
+    Msym = np.swapaxes(Qs, -1, -2) @ Ps - np.swapaxes(Ps, -1, -2) @ Qs
+    R = random_SO(3, seed=rng)
+    QsR, _PsR = symmetric_flow(R @ Q0, R @ P0, LAM3, 1.0, steps)
+    spread = np.max(np.abs(R.T @ QsR - Qs))
+    assert 0 < spread < 1e-10
+    assert np.max(np.abs(QB - Qs[1:])) <= 10 * spread
+    assert np.max(np.abs(MB - Msym[:-1])) <= 10 * spread * np.max(np.abs(M1))
+    assert np.max(np.abs(QA[1:] - QB)) < 1e-6
+    # Casimirs: spectrum of the MV momentum conserved
+    ev0 = np.sort(np.linalg.eigvals(M1).imag)
+    assert np.allclose(np.sort(np.linalg.eigvals(MB).imag, axis=-1), ev0, atol=1e-13)
+
+
+def _reference(Q0, M0, lam, T):
+    nn = lam.shape[0]
+
+    def f(_t, y):
+        Q, M = y[: nn * nn].reshape(nn, nn), y[nn * nn :].reshape(nn, nn)
+        dQ, dM = rigid_body_rhs(Q, M, lam)
+        return np.concatenate([dQ.ravel(), dM.ravel()])
+
+    y0 = np.concatenate([Q0.ravel(), M0.ravel()])
+    sol = solve_ivp(f, (0, T), y0, method="DOP853", rtol=1e-13, atol=1e-13)
+    return sol.y[: nn * nn, -1].reshape(nn, nn), sol.y[nn * nn :, -1].reshape(nn, nn)
+
+
+def test_second_order():
+    rng = np.random.default_rng(3)
+    lam = np.array([0.6, 0.9, 1.3, 1.7])
+    M0, Q0 = random_so(4, seed=rng, scale=0.5), random_SO(4, seed=rng)
+    T = 2.0
+    QT, MT = _reference(Q0, M0, lam, T)
+    errs = []
+    for h in (0.1, 0.05, 0.025):
+        N = round(T / h)
+        t, Q, M = discrete_rigid_body_flow(Q0, M0, lam, h, N, save_every=N)
+        assert t[-1] == pytest.approx(T)
+        errs.append((np.abs(Q[-1] - QT).max(), np.abs(M[-1] - MT).max()))
+    for a, b in zip(errs, errs[1:], strict=False):
+        assert 3.8 < a[0] / b[0] < 4.2 and 3.8 < a[1] / b[1] < 4.2
+
+
+def test_mv2_momentum_scaling():
+    """M^{MV}_{k+1} = h M(t_k): MV-Algorithm 2 started at (Q_1, h M(0)) tracks h M(t_k) to O(h^2)."""
+    rng = np.random.default_rng(4)
+    M0, Q0 = random_so(3, seed=rng, scale=0.5), random_SO(3, seed=rng)
+    h, T = 0.01, 1.0
+    N = round(T / h)
+    U0 = solve_moser_veselov(h * M0, LAM3)
+    _Q, Ms = mv_algorithm2(Q0 @ U0, h * M0, LAM3, N - 1)
+    _QT, MT = _reference(Q0, M0, LAM3, (N - 1) * h)
+    assert np.abs(Ms[-1] / h - MT).max() < 20 * h**2 * np.abs(M0).max()
+
+
+def test_batch_equals_loop():
+    rng = np.random.default_rng(5)
+    Q0 = random_SO(3, size=(2,), seed=rng)
+    M0 = random_so(3, size=(2,), seed=rng, scale=0.3)
+    t, Q, M = discrete_rigid_body_flow(Q0, M0, LAM3, 0.1, 20, save_every=5)
+    assert Q.shape == (5, 2, 3, 3) and M.shape == (5, 2, 3, 3) and t.shape == (5,)
+    for i in range(2):
+        _, Qi, Mi = discrete_rigid_body_flow(Q0[i], M0[i], LAM3, 0.1, 20, save_every=5)
+        assert np.allclose(Q[:, i], Qi, atol=1e-13) and np.allclose(M[:, i], Mi, atol=1e-13)
+    QB, MB = mv_algorithm2(Q0, 0.1 * M0, LAM3, 10)
+    for i in range(2):
+        Qi, Mi = mv_algorithm2(Q0[i], 0.1 * M0[i], LAM3, 10)
+        assert np.allclose(QB[:, i], Qi, atol=1e-13) and np.allclose(MB[:, i], Mi, atol=1e-13)
+
+
+def test_save_every_subsamples_the_full_run():
+    Q0, M, _ = _start(6)
+    Qf, Pf = symmetric_flow(Q0, Q0 @ M, LAM3, 1.0, 12)
+    Qs, Ps = symmetric_flow(Q0, Q0 @ M, LAM3, 1.0, 12, save_every=4)
+    assert Qs.shape == (4, 3, 3)
+    assert np.array_equal(Qs, Qf[::4]) and np.array_equal(Ps, Pf[::4])
+    QA = mv_algorithm1(Q0, Qf[1], LAM3, 11, save_every=3)
+    QA1 = mv_algorithm1(Q0, Qf[1], LAM3, 11)
+    assert np.array_equal(QA, QA1[::3])
+
+
+def test_symmetric_step_matches_definition():
+    Q0, M, _ = _start(7, scale=0.2)
+    P0 = random_so(3, seed=1) + Q0  # any costate
+    Q1, P1, U = symmetric_step(Q0, P0, LAM3, 0.5)
+    target = 0.5 * (Q0.T @ P0 - P0.T @ Q0)
+    assert np.linalg.norm(jd_residual(U, target, LAM3)) <= 10 * EPS * np.linalg.norm(target)
+    assert np.allclose(Q1, Q0 @ U, atol=0) and np.allclose(P1, P0 @ U, atol=0)
+
+
+def test_validation_and_no_mutation():
+    Q0, M, _ = _start(8)
+    P0 = Q0 @ M
+    copies = [Q0.copy(), P0.copy(), LAM3.copy()]
+    symmetric_flow(Q0, P0, LAM3, 0.1, 3)
+    mv_algorithm2(Q0, M, LAM3, 3)
+    assert all(np.array_equal(a, b) for a, b in zip(copies, [Q0, P0, LAM3], strict=True))
+    with pytest.raises(InputError, match="h must be"):
+        symmetric_flow(Q0, P0, LAM3, 0.0, 3)
+    with pytest.raises(InputError, match="steps must be"):
+        symmetric_flow(Q0, P0, LAM3, 0.1, -1)
+    with pytest.raises(InputError, match="save_every must be"):
+        mv_algorithm2(Q0, M, LAM3, 3, save_every=0)
+    with pytest.raises(InputError, match="Q0 must be orthogonal"):
+        symmetric_flow(2 * Q0, P0, LAM3, 0.1, 3)
+    with pytest.raises(InputError, match="M must be skew"):
+        mv_algorithm2(Q0, M + np.eye(3), LAM3, 3)
+    with pytest.raises(InputError, match="lam must be positive"):
+        mv_algorithm1(Q0, Q0, -LAM3, 3)
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), scale=st.floats(0.01, 0.5), h=st.floats(0.01, 0.5))
+def test_symmetric_step_properties(seed, scale, h):
+    rng = np.random.default_rng(seed)
+    Q0 = random_SO(4, seed=rng)
+    P0 = rng.standard_normal((4, 4)) * scale
+    Q1, P1, U = symmetric_step(Q0, P0, np.array([0.6, 0.9, 1.3, 1.7]), h)
+    # Q stays in SO(n), and the momentum is transported: M_1 = U^T M_0 U (claim D8)
+    assert np.abs(Q1.T @ Q1 - np.eye(4)).max() < 1e-14
+    M0 = Q0.T @ P0 - P0.T @ Q0
+    M1 = Q1.T @ P1 - P1.T @ Q1
+    assert np.allclose(M1, U.T @ M0 @ U, atol=1e-13 * (1 + np.abs(M0).max()))
