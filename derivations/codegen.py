@@ -132,6 +132,14 @@ class MatrixPrinter(NumPyPrinter):
             return "(" + " @ ".join([b] * int(exp)) + ")"
         raise NotImplementedError(f"matrix power {expr}")
 
+    def _print_ElementwiseApplyFunction(self, expr) -> str:
+        """A scalar function applied entrywise, ``X.applyfunc(f)``: print f's body on the array."""
+        lam = expr.function
+        (var,) = lam.variables
+        hole = sp.Symbol("__entrywise_arg__")
+        body = self._print(lam.expr.xreplace({var: hole}))
+        return "(" + body.replace(str(hole), f"({self._print(expr.expr)})") + ")"
+
     def parenthesize(self, item: sp.Basic, level: int, strict: bool = False) -> str:
         s = self._print(item)
         if s.startswith("(") or s.replace("_", "").isalnum() or s.startswith("numpy."):

@@ -7,11 +7,12 @@ Each submodule lists its public names in ``__all__``; they are re-exported here.
 
 from __future__ import annotations
 
-from . import algebra, continuous, discrete, errors, orbits, rigid_body, solvers
+from . import algebra, continuous, discrete, errors, learning, orbits, rigid_body, solvers
 from .algebra import *  # noqa: F403
 from .continuous import *  # noqa: F403
 from .discrete import *  # noqa: F403
 from .errors import *  # noqa: F403
+from .learning import *  # noqa: F403
 from .orbits import *  # noqa: F403
 from .rigid_body import *  # noqa: F403
 from .solvers import *  # noqa: F403
@@ -23,6 +24,7 @@ __all__ = [
     *continuous.__all__,
     *discrete.__all__,
     *errors.__all__,
+    *learning.__all__,
     *orbits.__all__,
     *rigid_body.__all__,
     *solvers.__all__,

@@ -1,0 +1,265 @@
+r"""Deep learning as discrete optimal control (paper, Section 2, Remarks 1-2; claims D5, D6).
+
+A network of N layers is the control system :math:`x_{k+1} = f(x_k, u_k)` with
+:math:`u_k = (K_k, \beta_k)` and one of the layers
+
+.. math::
+
+    f(x, u) = x + \sigma(Kx + \beta) \quad(\text{residual}),\qquad
+    f(x, u) = \sigma(Kx + \beta) \quad(\text{plain, the paper's Remark 1}),
+
+with :math:`\sigma = \tanh` or the logistic function :math:`(1 + \tanh(z/2))/2 = 1/(1 + e^{-z})`,
+applied entrywise.  The samples :math:`x^a_0` share the controls.  The loss is the terminal cost
+:math:`\Phi = \sum_a \phi(x^a_N)`, :math:`\phi(x) = \tfrac12|x - y^a|^2` (running cost g = 0).
+
+Sign conventions (derived in :mod:`derivations.parts.discrete_control`, claims D5 and D6):
+the Hamiltonian is :math:`H(p, x, u) = \langle p, f(x, u)\rangle` and the problem a minimisation,
+so the costates are
+
+.. math::
+
+    p^a_N = -\nabla\phi(x^a_N) = -(x^a_N - y^a),\qquad
+    p^a_k = \partial_x H(p^a_{k+1}, x^a_k, u_k) = (\partial_x f)^T p^a_{k+1},
+
+and they are *minus* the back-propagated gradients: :math:`p^a_k = -\partial\Phi/\partial x^a_k`.
+The weight gradients are :math:`\partial\Phi/\partial u_k = -\sum_a \partial_u H(p^a_{k+1}, x^a_k,
+u_k)`, i.e. :math:`\partial\Phi/\partial K_k = -\sum_a (\sigma'(z^a_k)\odot p^a_{k+1})
+(x^a_k)^T` and :math:`\partial\Phi/\partial\beta_k = -\sum_a \sigma'(z^a_k)\odot p^a_{k+1}`,
+:math:`z^a_k = K_k x^a_k + \beta_k`.
+
+Every layer and adjoint step is a kernel generated in :mod:`symrb._generated.discrete_control`.
+Arrays: states have shape ``(N + 1, ..., n)`` (layer first, then any sample axes, then the state);
+``K`` has shape ``(N, n, n)`` and ``beta`` ``(N, n)``.  Inputs are never mutated.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _validate as v
+from ._generated import discrete_control as _gen
+from ._validate import Array
+from .errors import InputError
+
+__all__ = [
+    "resnet_forward",
+    "squared_error",
+    "costate_sweep",
+    "loss_gradients",
+    "train",
+    "TrainResult",
+    "toy_classification",
+]
+
+_ACTIVATIONS = ("tanh", "logistic")
+
+
+def _kernels(activation: str, residual: bool) -> tuple[Callable, Callable]:
+    if activation not in _ACTIVATIONS:
+        raise InputError(f"activation must be one of {_ACTIVATIONS}, got {activation!r}")
+    if not isinstance(residual, bool | np.bool_):
+        raise InputError(f"residual must be True or False, got {residual!r}")
+    suffix = activation + ("" if residual else "_plain")
+    return getattr(_gen, f"resnet_step_{suffix}"), getattr(_gen, f"resnet_adjoint_{suffix}")
+
+
+def _weights(K: ArrayLike, beta: ArrayLike) -> tuple[Array, Array]:
+    KK = v.as_float_array(K, "K")
+    bb = v.as_float_array(beta, "beta")
+    if KK.ndim != 3 or KK.shape[1] != KK.shape[2] or KK.shape[0] < 1:
+        raise InputError(f"K must have shape (N, n, n) with N >= 1 layers, got {KK.shape}")
+    if bb.shape != KK.shape[:2]:
+        raise InputError(f"beta must have shape (N, n) = {KK.shape[:2]} to match K, got {bb.shape}")
+    return KK, bb
+
+
+def _states_like(x: ArrayLike, name: str, n: int) -> Array:
+    a = v.as_float_array(x, name)
+    if a.ndim < 1 or a.shape[-1] != n:
+        raise InputError(f"{name} must have shape (..., n) with n = {n} (from K), got {a.shape}")
+    return a
+
+
+def resnet_forward(
+    x0: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    activation: str = "tanh",
+    residual: bool = True,
+) -> Array:
+    r"""All states :math:`x_0, \dots, x_N` of :math:`x_{k+1} = f(x_k, (K_k, \beta_k))`.
+
+    Parameters
+    ----------
+    x0 : array (..., n), initial states (one per sample; any leading sample axes)
+    K : array (N, n, n), layer weights
+    beta : array (N, n), layer biases
+    activation : ``"tanh"`` or ``"logistic"``
+    residual : ``True`` for :math:`x + \sigma(Kx + \beta)`, ``False`` for :math:`\sigma(Kx + \beta)`
+
+    Returns
+    -------
+    array (N + 1, ..., n): ``states[k]`` is :math:`x_k`.
+    """
+    step, _ = _kernels(activation, residual)
+    KK, bb = _weights(K, beta)
+    x = _states_like(x0, "x0", KK.shape[1])
+    out = np.empty((KK.shape[0] + 1, *x.shape))
+    out[0] = x
+    for k in range(KK.shape[0]):
+        out[k + 1] = step(KK[k], bb[k][:, None], out[k][..., None])[..., 0]
+    return out
+
+
+def squared_error(xN: ArrayLike, targets: ArrayLike) -> float:
+    r"""The terminal loss :math:`\Phi = \sum_a \tfrac12 |x^a_N - y^a|^2` (summed, not averaged)."""
+    a = v.as_float_array(xN, "xN")
+    y = v.as_float_array(targets, "targets")
+    if a.shape != y.shape:
+        raise InputError(
+            f"targets must have the shape of the final states {a.shape}, got {y.shape}"
+        )
+    return float(0.5 * np.sum((a - y) ** 2))
+
+
+def _sweep(
+    states: Array, KK: Array, bb: Array, y: Array, activation: str, residual: bool
+) -> tuple[Array, Array, Array]:
+    _, adjoint = _kernels(activation, residual)
+    N = KK.shape[0]
+    p = np.empty_like(states)
+    p[N] = -(states[N] - y)
+    gK = np.empty_like(KK)
+    gb = np.empty_like(bb)
+    sample_axes = tuple(range(states.ndim - 2))
+    for k in range(N - 1, -1, -1):
+        p_prev, dK, db = adjoint(KK[k], bb[k][:, None], states[k][..., None], p[k + 1][..., None])
+        p[k] = p_prev[..., 0]
+        # dPhi/du_k = -sum_a dH/du_k(p^a_{k+1}, x^a_k, u_k)
+        gK[k] = -np.sum(dK, axis=sample_axes) if sample_axes else -dK
+        gb[k] = -(np.sum(db[..., 0], axis=sample_axes) if sample_axes else db[..., 0])
+    return p, gK, gb
+
+
+def _check_sweep_inputs(states, K, beta, targets):
+    KK, bb = _weights(K, beta)
+    st = v.as_float_array(states, "states")
+    N, n = KK.shape[0], KK.shape[1]
+    if st.ndim < 2 or st.shape[0] != N + 1 or st.shape[-1] != n:
+        raise InputError(
+            f"states must have shape (N + 1, ..., n) = ({N + 1}, ..., {n}) to match K, got {st.shape}"
+        )
+    y = v.as_float_array(targets, "targets")
+    if y.shape != st.shape[1:]:
+        raise InputError(f"targets must have shape {st.shape[1:]} (one per sample), got {y.shape}")
+    return st, KK, bb, y
+
+
+def costate_sweep(
+    states: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    targets: ArrayLike,
+    activation: str = "tanh",
+    residual: bool = True,
+) -> Array:
+    r"""The costates :math:`p^a_k`, shape (N + 1, ..., n), of the squared-error problem.
+
+    :math:`p^a_N = -(x^a_N - y^a)` and :math:`p^a_k = \partial_x H(p^a_{k+1}, x^a_k, u_k)`; they
+    equal :math:`-\partial\Phi/\partial x^a_k` (back-propagation with the opposite sign).
+    ``states`` comes from :func:`resnet_forward` with the same weights and layer type.
+    """
+    st, KK, bb, y = _check_sweep_inputs(states, K, beta, targets)
+    return _sweep(st, KK, bb, y, activation, residual)[0]
+
+
+def loss_gradients(
+    x0: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    targets: ArrayLike,
+    activation: str = "tanh",
+    residual: bool = True,
+) -> tuple[float, Array, Array]:
+    r"""Loss and weight gradients through the maximum principle.
+
+    Returns ``(Phi, dPhi/dK, dPhi/dbeta)`` with :math:`\partial\Phi/\partial u_k = -\sum_a
+    \partial_u H(p^a_{k+1}, x^a_k, u_k)` (shapes (N, n, n) and (N, n)).
+    """
+    states = resnet_forward(x0, K, beta, activation, residual)
+    st, KK, bb, y = _check_sweep_inputs(states, K, beta, targets)
+    _p, gK, gb = _sweep(st, KK, bb, y, activation, residual)
+    return squared_error(st[-1], y), gK, gb
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    """Outcome of :func:`train`: final weights and the loss before each step and at the end."""
+
+    K: Array
+    beta: Array
+    losses: Array
+
+
+def train(
+    x0: ArrayLike,
+    targets: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    steps: int = 200,
+    lr: float = 0.01,
+    activation: str = "tanh",
+    residual: bool = True,
+    progress: bool = False,
+) -> TrainResult:
+    r"""Plain gradient descent :math:`u_k \leftarrow u_k - \eta\,\partial\Phi/\partial u_k`.
+
+    The gradients come from :func:`loss_gradients` (costates and :math:`\partial H/\partial u`).
+    ``losses`` has ``steps + 1`` entries.  With ``progress=True`` a tqdm bar is shown when tqdm is
+    installed (it is optional).  The initial ``K`` and ``beta`` are copied, never modified.
+    """
+    if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
+        raise InputError(f"steps must be a non-negative integer, got {steps!r}")
+    if not np.isfinite(lr) or lr <= 0:
+        raise InputError(f"lr must be a positive finite number, got {lr!r}")
+    KK, bb = _weights(K, beta)
+    KK, bb = KK.copy(), bb.copy()
+    rng = range(int(steps))
+    if progress:
+        try:
+            from tqdm.auto import tqdm
+
+            rng = tqdm(rng, desc="train")
+        except ImportError:  # tqdm is optional
+            pass
+    losses = np.empty(int(steps) + 1)
+    for i in rng:
+        loss, gK, gb = loss_gradients(x0, KK, bb, targets, activation, residual)
+        if not np.isfinite(loss):
+            raise InputError(f"loss became non-finite at step {i} (lr = {lr} too large?)")
+        losses[i] = loss
+        KK -= lr * gK
+        bb -= lr * gb
+    losses[-1] = loss_gradients(x0, KK, bb, targets, activation, residual)[0]
+    return TrainResult(K=KK, beta=bb, losses=losses)
+
+
+def toy_classification(num: int = 200, seed: int | np.random.Generator | None = 0):
+    r"""A 2-D toy problem: points uniform in :math:`[-1, 1]^2`, label
+    :math:`c = \operatorname{sign}(x_2 - \tfrac12\sin(\pi x_1))`, target :math:`y = (x_1, c)`.
+
+    A residual network must bend the sine boundary flat and push the classes to
+    :math:`x_2 = \pm1` (a deformation of the plane, which residual layers can approximate).
+    Returns ``(x0, targets, labels)`` with shapes (num, 2), (num, 2), (num,).
+    """
+    if isinstance(num, bool) or not isinstance(num, int | np.integer) or num < 1:
+        raise InputError(f"num must be a positive integer, got {num!r}")
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    x = rng.uniform(-1.0, 1.0, size=(int(num), 2))
+    c = np.where(x[:, 1] - 0.5 * np.sin(np.pi * x[:, 0]) >= 0, 1.0, -1.0)
+    targets = np.stack([x[:, 0], c], axis=-1)
+    return x, targets, c
