@@ -4,9 +4,7 @@ Given a skew :math:`M` and a positive diagonal :math:`\Lambda`, the discrete rig
 :math:`U\in SO(n)` with :math:`J_D(U) = U\Lambda - \Lambda U^T = M` *on the branch through the
 identity* (:math:`J_D(I) = 0`, and :math:`J_D` is a local diffeomorphism there, claim D8).
 
-How it is solved (derived in the book, page "The Moser-Veselov solver")
------------------------------------------------------------------------
-Put :math:`X = U\Lambda`.  Then :math:`X - X^T = M` and :math:`X^TX = \Lambda^2`.  Writing
+**How it is solved** (derived in the book, page "The Moser-Veselov solver").  Put :math:`X = U\Lambda`.  Then :math:`X - X^T = M` and :math:`X^TX = \Lambda^2`.  Writing
 :math:`X = S + M/2` with :math:`S` symmetric, the second equation becomes the algebraic Riccati
 equation
 
