@@ -28,10 +28,10 @@ Each vector field calls one kernel generated in :mod:`symrb._generated.adjoint_o
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_bvp, solve_ivp
 
 from . import _validate as v
@@ -137,7 +137,7 @@ class OrbitBVPResult:
     residual: float
     bc_residual: float
     costate: str
-    sol: object
+    sol: Any
 
     def at(self, t: ArrayLike) -> tuple[Array, Array]:
         """(x, p) at the times ``t`` (1-D), shapes (len(t), M, n, n), from the collocation spline."""
@@ -146,7 +146,7 @@ class OrbitBVPResult:
         return _unpack(self.sol.sol(ts), M, k)
 
 
-def _iu(k: int) -> tuple[Array, Array]:
+def _iu(k: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     return np.triu_indices(k, 1)
 
 
