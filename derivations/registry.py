@@ -141,7 +141,7 @@ class EvidenceResult:
     @property
     def passed(self) -> bool:
         """True when the residual is within tolerance (and the evidence ran)."""
-        return self.error is None and self.residual <= self.tol
+        return bool(self.error is None and self.residual <= self.tol)
 
     @property
     def as_expected(self) -> bool:
@@ -228,7 +228,7 @@ def _run_evidence(ev: Evidence) -> EvidenceResult:
     error = None
     try:
         value = ev.func()
-        residual = float(abs(complex(value))) if not isinstance(value, float) else abs(value)
+        residual = float(abs(complex(value)))
         if residual != residual:  # NaN
             error = "residual is NaN"
             residual = float("inf")

@@ -62,3 +62,13 @@ def test_bad_claims_are_rejected() -> None:
 def test_unknown_id() -> None:
     with pytest.raises(KeyError, match="unknown claim"):
         get_claim("S999")
+
+
+def test_numpy_residuals_serialise_to_json() -> None:
+    import json
+
+    import numpy as np
+
+    r = verify_claim(_claim(Evidence(Level.FLOAT64, "numpy", lambda: np.float64(1e-20), tol=1e-12)))
+    text = json.dumps(r.to_dict())
+    assert json.loads(text)["evidence"][0]["passed"] is True
