@@ -212,9 +212,24 @@ def test_multi_sample_flow_shapes_and_control() -> None:
     )
     assert sol.y.Q.shape == (2, 4, 3, 3) and sol.y.U.shape == (2, 3, 3)
     np.testing.assert_allclose(sol.y.U[0], symrb.multi_sample_control(Q0, P0, lam), atol=1e-14)
-    # the shared control is constant in time? no: but every Q^a stays orthogonal
+    # every Q^a stays orthogonal
     eye = np.eye(3)
     assert np.abs(np.swapaxes(sol.y.Q, -1, -2) @ sol.y.Q - eye).max() < 1e-8
+
+
+def test_multi_sample_total_momentum_is_a_rigid_body() -> None:
+    """Each M^a = Q^aT P^a - P^aT Q^a obeys Mdot^a = [M^a, U], so the total M = sum_a M^a obeys
+    the rigid body equation with Omega = U = J^{-1}(M)."""
+    lam = np.array([0.7, 1.1, 1.6])
+    Q0 = symrb.random_SO(3, (5,), seed=30)
+    P0 = 0.3 * np.random.default_rng(31).standard_normal((5, 3, 3))
+    ts = np.linspace(0, 4, 9)
+    kw = dict(lam=lam, rtol=1e-12, atol=1e-12, t_eval=ts)
+    ms = symrb.integrate(symrb.MultiSampleSymmetricRigidBody, (0, 4), (Q0, P0), **kw)
+    Mtot = symrb.symmetric_momentum(ms.y.Q, ms.y.P).sum(axis=-3)
+    rb = symrb.integrate(symrb.RigidBody, (0, 4), (np.eye(3), Mtot[0]), **kw)
+    np.testing.assert_allclose(Mtot, rb.y.M, atol=1e-9)
+    np.testing.assert_allclose(ms.y.U, rb.y.Omega, atol=1e-9)
 
 
 def test_integrate_validation() -> None:
