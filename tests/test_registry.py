@@ -72,3 +72,20 @@ def test_numpy_residuals_serialise_to_json() -> None:
     r = verify_claim(_claim(Evidence(Level.FLOAT64, "numpy", lambda: np.float64(1e-20), tol=1e-12)))
     text = json.dumps(r.to_dict())
     assert json.loads(text)["evidence"][0]["passed"] is True
+
+
+def test_report_escapes_markdown_but_not_math() -> None:
+    from derivations.report import plain
+
+    assert plain("u*_k and ||M||_op") == r"u\*\_k and \|\|M\|\|\_op"
+    assert plain("keep $x_k^*$ as is") == "keep $x_k^*$ as is"
+
+
+def test_report_check_fails_on_unexpected_outcome(monkeypatch: pytest.MonkeyPatch) -> None:
+    from derivations import report
+
+    assert report.check("S1", show=False).ok
+    bad = _claim(_ev(1.0), expected="holds")
+    monkeypatch.setattr(report, "get_claim", lambda cid: bad)
+    with pytest.raises(AssertionError, match="outcome 'fails', recorded 'holds'"):
+        report.check("S99", show=False)
