@@ -22,6 +22,7 @@ from __future__ import annotations
 import difflib
 import importlib
 import pkgutil
+import re
 import shutil
 import subprocess
 import sys
@@ -60,6 +61,10 @@ AUXILIARIES: dict[str, str] = {
     "Lam2": "(lam * lam)[..., :, None] * numpy.eye(lam.shape[-1])",
     "W": "1.0 / (lam[..., :, None] + lam[..., None, :])",
 }
+
+#: Diagonal auxiliaries and their diagonals: a product with one is printed as a row or column
+#: scaling, ``lam[..., :, None] * X`` or ``X * lam[..., None, :]``, never as a dense matmul.
+DIAGONAL: dict[str, str] = {"Lam": "lam", "Lam2": "(lam * lam)"}
 
 
 @dataclass(frozen=True)
@@ -103,14 +108,47 @@ class MatrixPrinter(NumPyPrinter):
     def _print_MatrixSymbol(self, expr: sp.MatrixSymbol) -> str:
         return str(expr.name)
 
+    def _diag_vector(self, m: sp.Basic) -> str | None:
+        """The 1-D diagonal (as code) of a diagonal auxiliary factor, or None."""
+        if isinstance(m, sp.MatrixSymbol) and str(m.name) in DIAGONAL:
+            return DIAGONAL[str(m.name)]
+        if (
+            isinstance(m, sp.MatPow)
+            and isinstance(m.base, sp.MatrixSymbol)
+            and str(m.base.name) in DIAGONAL
+            and m.exp.is_Integer
+            and m.exp > 0
+        ):
+            return f"({DIAGONAL[str(m.base.name)]} ** {int(m.exp)})"
+        return None
+
+    def _product(self, mats: Sequence[sp.Basic]) -> str:
+        """A matrix product; a diagonal factor scales rows or columns instead of a matmul (O(n^2))."""
+        diags = [self._diag_vector(m) for m in mats]
+        lead = 0
+        while lead < len(mats) - 1 and diags[lead] is not None:
+            lead += 1
+        if lead:
+            vec = " * ".join(str(d) for d in diags[:lead])
+            vec = vec if lead == 1 else f"({vec})"
+            return f"({vec}[..., :, None] * {self._product(mats[lead:])})"
+        acc = self.parenthesize(mats[0], 100)
+        for m, d in zip(mats[1:], diags[1:], strict=True):
+            acc = (
+                f"({acc} * {d}[..., None, :])"
+                if d is not None
+                else f"({acc} @ {self.parenthesize(m, 100)})"
+            )
+        return acc
+
     def _print_MatMul(self, expr: sp.MatMul) -> str:
         coeff, mats = expr.as_coeff_matrices()
-        body = " @ ".join(self.parenthesize(m, 100) for m in mats)
+        body = self._product(mats)
         if coeff == 1:
-            return f"({body})"
+            return body
         if coeff == -1:
-            return f"(-({body}))"
-        return f"({self._print(coeff)} * ({body}))"
+            return f"(-{body})"
+        return f"({self._print(coeff)} * {body})"
 
     def _print_MatAdd(self, expr: sp.MatAdd) -> str:
         terms = [self._print(a) for a in expr.args]
@@ -180,13 +218,9 @@ def _render_kernel(k: Kernel, printer: MatrixPrinter) -> str:
     for name in argnames:
         out.append(f"    {name} = numpy.asarray({name}, dtype=float)\n")
     exprs = list(k.outputs.values())
-    free: set[str] = set()
-    for e in [*exprs, *k.intermediates.values()]:
-        free |= {str(s.name) for s in e.atoms(sp.MatrixSymbol)}
-    for name in sorted(free & set(AUXILIARIES)):
-        out.append(f"    {name} = {AUXILIARIES[name]}\n")
+    body: list[str] = []
     for name, e in k.intermediates.items():
-        out.append(f"    {name} = {printer.doprint(e)}\n")
+        body.append(f"    {name} = {printer.doprint(e)}\n")
     if k.components:
         # unpack components of arguments into scalars, then CSE
         for argname in sorted(k.components):
@@ -202,18 +236,23 @@ def _render_kernel(k: Kernel, printer: MatrixPrinter) -> str:
             exprs, symbols=sp.numbered_symbols("x"), order="canonical", optimizations="basic"
         )
         for sym, sub in replacements:
-            out.append(f"    {sym} = {printer.doprint(sub)}\n")
+            body.append(f"    {sym} = {printer.doprint(sub)}\n")
         exprs = reduced
     printed = [printer.doprint(e) for e in exprs]
     if k.stack:
-        out.append(
+        body.append(
             "    return numpy.stack(numpy.broadcast_arrays(" + ", ".join(printed) + "), axis=-1)\n"
         )
     elif len(printed) == 1:
-        out.append(f"    return {printed[0]}\n")
+        body.append(f"    return {printed[0]}\n")
     else:
-        out.append("    return (" + ", ".join(printed) + ")\n")
-    return "".join(out)
+        body.append("    return (" + ", ".join(printed) + ")\n")
+    # auxiliary matrices are computed only when the printed code still refers to them
+    text = "".join(body)
+    for name in sorted(AUXILIARIES):
+        if re.search(rf"\b{name}\b", text):
+            out.append(f"    {name} = {AUXILIARIES[name]}\n")
+    return "".join(out) + text
 
 
 def render_module(source: str, kernels: Sequence[Kernel]) -> str:

@@ -47,6 +47,7 @@ import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
 from . import _validate as v
+from ._generated import discrete_rigid_body as _gen
 from ._validate import Array
 from .errors import InputError, NotConvergedError, OutOfDomainError
 
@@ -84,8 +85,8 @@ class MVSolveInfo:
 
 
 def _jd(U: Array, lam: Array) -> Array:
-    """J_D(U) = U Lam - Lam U^T for U (b, n, n), lam (b, n)."""
-    return U * lam[:, None, :] - lam[:, :, None] * np.swapaxes(U, -1, -2)
+    """J_D(U) = U Lam - Lam U^T for U (b, n, n), lam (b, n): the generated kernel, inputs validated."""
+    return _gen.jd(U, lam)
 
 
 def _fro(a: Array) -> Array:

@@ -26,8 +26,7 @@ def jd(U, lam):
     """
     U = numpy.asarray(U, dtype=float)
     lam = numpy.asarray(lam, dtype=float)
-    Lam = lam[..., :, None] * numpy.eye(lam.shape[-1])
-    return (-(Lam @ numpy.swapaxes(U, -1, -2))) + (U @ Lam)
+    return (-(lam[..., :, None] * numpy.swapaxes(U, -1, -2))) + (U * lam[..., None, :])
 
 
 def sym_momentum(Q, P):
@@ -65,8 +64,7 @@ def mv_momentum(Omega, lam):
     """
     Omega = numpy.asarray(Omega, dtype=float)
     lam = numpy.asarray(lam, dtype=float)
-    Lam = lam[..., :, None] * numpy.eye(lam.shape[-1])
-    return (-(Lam @ Omega)) + (numpy.swapaxes(Omega, -1, -2) @ Lam)
+    return (-(lam[..., :, None] * Omega)) + (numpy.swapaxes(Omega, -1, -2) * lam[..., None, :])
 
 
 def mv_transport(Omega, M):
@@ -85,7 +83,7 @@ def mv_transport(Omega, M):
     """
     Omega = numpy.asarray(Omega, dtype=float)
     M = numpy.asarray(M, dtype=float)
-    return Omega @ M @ numpy.swapaxes(Omega, -1, -2)
+    return (Omega @ M) @ numpy.swapaxes(Omega, -1, -2)
 
 
 def mv_action_term(Q, Q1, lam):
@@ -107,5 +105,4 @@ def mv_action_term(Q, Q1, lam):
     Q = numpy.asarray(Q, dtype=float)
     Q1 = numpy.asarray(Q1, dtype=float)
     lam = numpy.asarray(lam, dtype=float)
-    Lam = lam[..., :, None] * numpy.eye(lam.shape[-1])
-    return numpy.trace((Q @ Lam @ numpy.swapaxes(Q1, -1, -2)), axis1=-2, axis2=-1)
+    return numpy.trace(((Q * lam[..., None, :]) @ numpy.swapaxes(Q1, -1, -2)), axis1=-2, axis2=-1)

@@ -106,17 +106,32 @@ def manakov_integrals(M, lam):
     """
     M = numpy.asarray(M, dtype=float)
     lam = numpy.asarray(lam, dtype=float)
-    Lam2 = (lam * lam)[..., :, None] * numpy.eye(lam.shape[-1])
     return numpy.stack(
         numpy.broadcast_arrays(
             numpy.trace((M @ M), axis1=-2, axis2=-1),
-            3 * numpy.trace((Lam2 @ M @ M), axis1=-2, axis2=-1),
-            numpy.trace((M @ M @ M @ M), axis1=-2, axis2=-1),
-            4 * numpy.trace((Lam2 @ Lam2 @ M @ M), axis1=-2, axis2=-1)
-            + 2 * numpy.trace((Lam2 @ M @ Lam2 @ M), axis1=-2, axis2=-1),
-            5 * numpy.trace((Lam2 @ M @ M @ M @ M), axis1=-2, axis2=-1),
-            5 * numpy.trace((Lam2 @ Lam2 @ Lam2 @ M @ M), axis1=-2, axis2=-1)
-            + 5 * numpy.trace((Lam2 @ Lam2 @ M @ Lam2 @ M), axis1=-2, axis2=-1),
+            3 * numpy.trace(((lam * lam)[..., :, None] * (M @ M)), axis1=-2, axis2=-1),
+            numpy.trace((((M @ M) @ M) @ M), axis1=-2, axis2=-1),
+            4
+            * numpy.trace((((lam * lam) * (lam * lam))[..., :, None] * (M @ M)), axis1=-2, axis2=-1)
+            + 2
+            * numpy.trace(
+                ((lam * lam)[..., :, None] * ((M * (lam * lam)[..., None, :]) @ M)),
+                axis1=-2,
+                axis2=-1,
+            ),
+            5 * numpy.trace(((lam * lam)[..., :, None] * (((M @ M) @ M) @ M)), axis1=-2, axis2=-1),
+            5
+            * numpy.trace(
+                (((lam * lam) * (lam * lam) * (lam * lam))[..., :, None] * (M @ M)),
+                axis1=-2,
+                axis2=-1,
+            )
+            + 5
+            * numpy.trace(
+                (((lam * lam) * (lam * lam))[..., :, None] * ((M * (lam * lam)[..., None, :]) @ M)),
+                axis1=-2,
+                axis2=-1,
+            ),
         ),
         axis=-1,
     )
