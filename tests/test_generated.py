@@ -137,3 +137,32 @@ def test_generated_files_have_header() -> None:
 def test_symrb_does_not_import_sympy() -> None:
     code = "import sys, symrb, symrb._generated.rigid_body; assert 'sympy' not in sys.modules, 'sympy imported'"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_generation_does_not_depend_on_hash_seed() -> None:
+    """Regenerating under two different PYTHONHASHSEEDs gives byte-identical files."""
+    import hashlib
+    import os
+
+    code = (
+        "import hashlib; from derivations.codegen import collect; f = collect(); "
+        "print(hashlib.sha256(''.join(k + f[k] for k in sorted(f)).encode()).hexdigest())"
+    )
+    digests = set()
+    for seed in ("1", "12345"):
+        env = dict(os.environ, PYTHONHASHSEED=seed)
+        out = subprocess.run(
+            [sys.executable, "-c", code],
+            env=env,
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+            check=True,
+        )
+        digests.add(out.stdout.strip())
+    assert len(digests) == 1
+    committed = {p.name: p.read_text() for p in codegen.generated_dir().glob("*.py")}
+    expect = hashlib.sha256(
+        "".join(k + committed[k] for k in sorted(committed)).encode()
+    ).hexdigest()
+    assert digests == {expect}
