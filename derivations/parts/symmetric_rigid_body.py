@@ -43,6 +43,7 @@ McLachlan-Scovel field, the momentum map :math:`M = Q^TP - P^TQ`, the control fl
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
@@ -505,6 +506,54 @@ def s10_reading_half_inside(reading: str = "asinh(M/2)", seed: int = 10) -> floa
     return worst
 
 
+@functools.cache
+def _s10_near_boundary(dps: int = 60) -> tuple[float, float]:
+    """60 digits, n = 4, ||M||_op = 2(1 - delta) for delta = 1e-4, 1e-8, 1e-12.
+
+    Returns (worst residual of the corrected formula in 60-digit arithmetic, worst float64 error
+    of symrb.P_from_M measured in units of eps / sqrt(delta), the conditioning of asinh near 1).
+    The reference is P = Q (M/2 + sqrt(I + M^2/4)), the square root through mpmath's symmetric
+    eigen-decomposition (symrb uses a real Schur form instead), checked for
+    Q^T P - P^T Q = M and P^T P = I in 60 digits.
+    """
+    import mpmath as mp
+
+    from symrb.algebra import random_SO, random_so
+    from symrb.continuous import P_from_M
+
+    rng = np.random.default_rng(1010)
+    Q = random_SO(4, seed=rng)
+    D = random_so(4, seed=rng)
+    D = D / np.linalg.norm(D, 2)
+    worst_identity, worst_ratio = 0.0, 0.0
+    with mp.workdps(dps):
+        for delta in (1e-4, 1e-8, 1e-12):
+            M = 2.0 * (1.0 - delta) * D  # exactly representable up to rounding of the product
+            Mm = mp.matrix(M.tolist())
+            Qm, Rm = mp.qr(mp.matrix(Q.tolist()))  # orthogonal to 60 digits, not just to rounding
+            Qm = Qm * mp.diag([mp.sign(Rm[i, i]) for i in range(4)])
+            X = Mm / 2
+            E, V = mp.eigsy(mp.eye(4) + X * X)  # symmetric positive semidefinite
+            P = Qm * (X + V * mp.diag([mp.sqrt(max(e, 0)) for e in E]) * V.T)
+            r1 = mp.mnorm(Qm.T * P - P.T * Qm - Mm, 1)
+            r2 = mp.mnorm(P.T * P - mp.eye(4), 1)
+            worst_identity = max(worst_identity, float(max(r1, r2)))
+            Pf = P_from_M(Q, M)
+            err = float(mp.mnorm(mp.matrix(Pf.tolist()) - P, 1))
+            worst_ratio = max(worst_ratio, err * np.sqrt(delta) / np.finfo(float).eps)
+    return worst_identity, worst_ratio
+
+
+def s10_high_precision_identity() -> float:
+    """60 digits: Q^T P - P^T Q - M and P^T P - I for P = Q(M/2 + sqrt(I + M^2/4)) near ||M|| = 2."""
+    return _s10_near_boundary()[0]
+
+
+def s10_float64_conditioning() -> float:
+    """symrb.P_from_M error against the 60-digit P, in units of eps/sqrt(1 - ||M||_op/2)."""
+    return _s10_near_boundary()[1]
+
+
 def s10_closed_form_matches() -> float:
     """float64: Q expm(asinh(M/2)) (Hermitian eigen + expm) equals Q (M/2 + sqrt(I + M^2/4))
     (symmetric eigen) and symrb.P_from_M (real Schur), ||M||_op up to 1.99, n = 3..6; P in SO(n)."""
@@ -927,6 +976,22 @@ CLAIMS = [
                 "Q expm(asinh(M/2)) = Q(M/2 + sqrt(I + M^2/4)) = symrb.P_from_M, in SO(n), ||M||_op <= 1.99, n = 3..6",
                 s10_closed_form_matches,
                 tol=1e-11,
+                form="corrected",
+            ),
+            Evidence(
+                Level.MPMATH,
+                "60 digits: P = Q(M/2 + sqrt(I + M^2/4)) solves M = Q^TP - P^TQ with P^TP = I at "
+                "||M||_op = 2(1 - delta), delta = 1e-4, 1e-8, 1e-12 (n = 4)",
+                s10_high_precision_identity,
+                tol=1e-50,
+                form="corrected",
+            ),
+            Evidence(
+                Level.MPMATH,
+                "symrb.P_from_M against that 60-digit P: error in units of eps/sqrt(delta) "
+                "(the conditioning of asinh at the boundary)",
+                s10_float64_conditioning,
+                tol=10.0,
                 form="corrected",
             ),
         ),
