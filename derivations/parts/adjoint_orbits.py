@@ -546,6 +546,20 @@ def s15_single_sample_exact() -> sp.Integer:
     return sp.Integer(int(r1 != 0) + int(r2 != 0))
 
 
+def s15_shared_control_invariant() -> sp.Integer:
+    """Why two samples cannot both follow their own double bracket flows: under one shared control,
+    xdot^a = [x^a, u], the pairing tr(x^1 x^2) is constant (d/dt tr(x1 x2) = tr([x1,u] x2 +
+    x1 [x2,u]) = 0 by cyclicity), for any u and any n.  Their own double bracket flows change it, so
+    the two limits (each x^a commuting with n) are generally out of reach.  Also checked: the
+    residual of the same derivative under *separate* controls u1, u2 is non-zero (the check can
+    fail).  Returns the number of non-vanishing trace words of the shared-control derivative, plus
+    1 if the separate-control derivative vanishes."""
+    x1, x2, u, u2 = _nc("x1 x2 u u2")
+    shared = _c(x1, u) * x2 + x1 * _c(x2, u)
+    separate = _c(x1, u) * x2 + x1 * _c(x2, u2)
+    return trace_residual(shared) + sp.Integer(int(trace_residual(separate) == 0))
+
+
 def s15_printed_sign_other_flow() -> sp.Integer:
     """With the printed p_T = +n, p = +n is the extremal and xdot = -[x,[x,n]]: not the claimed flow."""
     x, N = _nc("x N")
@@ -907,6 +921,13 @@ CLAIMS = [
                 Level.SYMBOLIC_GENERAL_N,
                 "one sample: p = -n solves the costate equation for every x and gives xdot = [x,[x,n]]",
                 s15_single_sample_exact,
+                form="corrected",
+            ),
+            Evidence(
+                Level.SYMBOLIC_GENERAL_N,
+                "several samples: a shared control keeps tr(x^1 x^2) constant (any u, any n), which "
+                "their own double bracket flows do not",
+                s15_shared_control_invariant,
                 form="corrected",
             ),
             Evidence(

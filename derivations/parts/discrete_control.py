@@ -19,7 +19,7 @@ Derived here (each claim's evidence is a function below):
 * D1: the stationarity conditions of the augmented functional (undefined smooth f, g, h; n = 2,
   m = 2, l = 1, N = 3) and three errata: the proof's rewriting with :math:`\sum_{k=0}^{N}` and
   :math:`p_{N+1}=0` adds a phantom term; the costate equation at k = N does not hold (p_N is free
-  for a fixed endpoint); one multiplier :math:`\sigma` for all k must be :math:`\sigma_k`;
+  for a fixed endpoint); the proof's functional V needs one multiplier :math:`\sigma_k` per step;
 * D2: the implicit step needs the mixed second derivative of the *reduced* Hamiltonian H*
   invertible; the printed condition on H at fixed u is not sufficient (exact counterexample);
 * D3: the linearised equations hold with H* (not H-hat at frozen u*) and with the transpose of the
@@ -223,7 +223,7 @@ def d1_corrected_costate_interior() -> sp.Expr:
 def example_multiplier(single_sigma: bool = False) -> list[dict[sp.Symbol, sp.Expr]]:
     """KKT system of: minimise sum_k g(x_k,u_k), x_{k+1} = x_k + u_{k,1}, h(u_k) = u_{k,1} - u_{k,2}
     = 0, g = (u_1^2 + (u_2 - x)^2)/2, N = 2, x_0 = 0, x_2 = 1.  Solved exactly (it is linear).
-    With ``single_sigma`` one multiplier is shared by both steps, as printed in eq8.5-eq8.6."""
+    With ``single_sigma`` one multiplier is shared by both steps, as in the proof's functional V."""
     x, y, s = sp.symbols("x y s", real=True)
     U = sp.symbols("U1 U2", real=True)
     f = x + U[0]
@@ -389,6 +389,22 @@ def d3_printed_same_matrix() -> sp.Expr:
     return sp.Min(as_xy, as_yx)
 
 
+def _d3_nonlinear_gap(blocks: str, seeds=range(3)) -> float:
+    """Largest |J_blocks - J_true| on the nonlinear family (u* depends on x and on p_{k+1}),
+    J_true by implicit differentiation of the advance map, J_blocks from the D3 linearisation
+    with the given second-derivative blocks ("reduced": of H*, "frozen": of Hhat at fixed u*)."""
+    worst = 0.0
+    for seed in seeds:
+        fam = NonlinearFamily(3, 2, seed=seed)
+        rng = np.random.default_rng(100 + seed)
+        xk, pk = 0.5 * rng.standard_normal(3), 0.5 * rng.standard_normal(3)
+        _, y, u = fam.advance(xk, pk)
+        get = fam.reduced_hessian_blocks if blocks == "reduced" else fam.frozen_hessian_blocks
+        J_blocks = advance_jacobian_from_blocks(*get(xk, y, u))
+        worst = max(worst, float(np.abs(J_blocks - fam.advance_jacobian(xk, pk)).max()))
+    return worst
+
+
 # ---------------------------------------------------------------------------------------------
 # D4: symplecticity of the advance map
 
@@ -482,6 +498,14 @@ class NonlinearFamily:
         S = np.linalg.solve(Huu, np.hstack([Hux, Huy]))
         Sx, Sy = S[:, : self.nx], S[:, self.nx :]
         return Hxx - Hux.T @ Sx, Hxy - Hux.T @ Sy, -Huy.T @ Sy
+
+    def frozen_hessian_blocks(self, x, y, u):
+        """Second derivatives of Hhat at the control held fixed at u* (the printed corollary's
+        reading): (H_xx, H_xy, H_yy) with H_yy = 0 since H is linear in the costate."""
+        d, dd = self._parts(x, y, u)
+        Hxx = self.tau * self.W.T @ np.diag(y * dd) @ self.W - self.alpha * np.eye(self.nx)
+        Hxy = (np.eye(self.nx) + self.tau * d[:, None] * self.W).T
+        return Hxx, Hxy, np.zeros((self.nx, self.nx))
 
     def advance(self, x, p, guess=None):
         from scipy.optimize import root
@@ -902,7 +926,9 @@ def d6_float64() -> float:
 
 _D1_PRINTED = (
     r"eq8.3 for $k=0,\dots,N$ with $p_{N+1}=0$, i.e. also $p_N=\partial H/\partial x_N(0,x_N,u_N)"
-    r"=-\partial g/\partial x(x_N,u_N)$; one multiplier $\sigma$ for every $k$ in eq8.5-eq8.6; the "
+    r"=-\partial g/\partial x(x_N,u_N)$; the proof's augmented functional $V$ carries one "
+    r"multiplier $\sigma$ for all $k$ (the proposition itself lets $\sigma=\sigma(p_{k+1},x_k)$ "
+    r"vary, but a single $\sigma$ in $V$ only yields $\sum_k h(u_k)=0$); the "
     r"proof rewrites $\sum_{k=0}^{N-1}(-\langle p_{k+1},x_{k+1}\rangle+\hat H_k)$ as "
     r"$\langle p_0,x_0\rangle+\sum_{k=0}^{N}(-\langle p_k,x_k\rangle+\hat H(p_{k+1},x_k,u_k,\sigma))$."
 )
@@ -931,9 +957,10 @@ CLAIMS = [
         "derived here for undefined f, g, h), but three details are not: (i) the costate equation "
         "at k = N with p_{N+1} = 0 would force p_N = -dg/dx(x_N, u_N) for a phantom control u_N; for "
         "a fixed endpoint p_N is free (exact example: p_2 = 1/2, the printed form gives 0); "
-        "(ii) the multiplier must depend on k: in an exact example the minimiser has "
-        "sigma_0 = -3/7, sigma_1 = -1/7, and with one shared sigma the extremal system has no "
-        "solution at all; (iii) the proof's rewriting of V with the sum up to N adds "
+        "(ii) in the proof's functional V the multiplier must depend on k (the proposition's "
+        "text, sigma = sigma(p_{k+1}, x_k), already allows that; V does not): in an exact example "
+        "the minimiser has sigma_0 = -3/7, sigma_1 = -1/7, and with one shared sigma the "
+        "extremal system has no solution at all; (iii) the proof's rewriting of V with the sum up to N adds "
         "Hhat(0, x_N, u_N, sigma) = -g(x_N, u_N) + <sigma, h(u_N)>.",
         evidence=(
             Evidence(
@@ -1039,7 +1066,10 @@ CLAIMS = [
         "(u* and sigma depend on (p_{k+1}, x_k)); at frozen u*, Hhat is linear in p, so the printed "
         "coefficient of dp_{k+1} in dx_{k+1} is always 0, while it is H*_yy = B B^T in the family "
         "f = a(x) + B u, g = |u|^2/2 + V(x). (ii) For n > 1 the two lines need transposed mixed "
-        "matrices; the printed form uses the same one.",
+        "matrices; the printed form uses the same one (if the printed symbol is read as the mixed "
+        "derivative contracted in the right slot, this second point is notation only). In the "
+        "symbolic family u* does not depend on x, so there only the H*_yy block separates H* from "
+        "frozen Hhat; the float64 family with u*(x, p_{k+1}) separates every block.",
         evidence=(
             Evidence(
                 Level.SYMBOLIC_FIXED_N,
@@ -1059,6 +1089,22 @@ CLAIMS = [
                 "same family with H*: one mixed matrix in both lines mismatches for either index "
                 "convention (min count of entries)",
                 d3_printed_same_matrix,
+                form="printed",
+            ),
+            Evidence(
+                Level.FLOAT64,
+                "f = x + 0.3 tanh(Wx + Bu + c), g = |u|^2/2 + |x|^2/4 (u* depends on x and p_{k+1}; "
+                "n = 3, m = 2, 3 random points): corrected blocks of H* give the Jacobian of the "
+                "implicit advance map",
+                lambda: _d3_nonlinear_gap("reduced"),
+                tol=1e-11,
+                form="corrected",
+            ),
+            Evidence(
+                Level.FLOAT64,
+                "same family: blocks of Hhat at frozen u* (printed reading) miss that Jacobian",
+                lambda: _d3_nonlinear_gap("frozen"),
+                tol=1e-11,
                 form="printed",
             ),
         ),
@@ -1108,7 +1154,7 @@ CLAIMS = [
         r"x_k(p^a_{k+1},x_k,u_k)$, $x^a_{k+1}=\partial H/\partial p$, $\partial\hat H/\partial u_k=0$, "
         r"and $p^a_N=\partial\phi/\partial x^a_N$.",
         printed=r"prob8.1m fixes $x^a_N=X^a_N$ and adds $\sum_a\phi(x^a_N)$; eq8.3m evaluates "
-        r"$\partial H/\partial x$ at the un-indexed $x_k$; one $\sigma$ for all $k$; "
+        r"$\partial H/\partial x$ at the un-indexed $x_k$; one $\sigma$ for all $k$ in the proof's $V$; "
         r"m8: $p^a_N=+\partial\phi/\partial x^a_N$.",
         corrected=r"free endpoint (no $x^a_N=X^a_N$); $p^a_k=\partial H/\partial x(p^a_{k+1},x^a_k,"
         r"u_k)$ for $1\le k\le N-1$; $\sum_a\partial H/\partial u(p^a_{k+1},x^a_k,u_k)+h'(u_k)^T"
@@ -1120,7 +1166,7 @@ CLAIMS = [
         "dV/dx^a_N = -p^a_N - phi'(x^a_N): the endpoint sign is minus (the paper's V carries "
         "+phi and an extra -p_N x_N). If x^a_N is fixed, phi is a constant and no endpoint "
         "condition follows. eq8.3m must use x^a_k. The -phi(x^a_N) inside eq8.4m is harmless "
-        "(constant in the variables of H). sigma must be sigma_k as in D1.",
+        "(constant in the variables of H). sigma must be sigma_k in the proof's V, as in D1.",
         evidence=(
             Evidence(
                 Level.SYMBOLIC_FIXED_N,

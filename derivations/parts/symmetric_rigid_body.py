@@ -158,6 +158,21 @@ def s5_printed_stationary() -> sp.Expr:
     return residual(_subs_skew(G, U, _Jinv(M, L)))
 
 
+def s5_printed_has_no_maximum() -> sp.Expr:
+    """The printed H = <P,QU> + 1/4 <U,JU> is strictly convex in U whatever the pairing on gl(n)
+    (the <P,QU> term is linear in U): its Hessian is +1/2 diag(lam_i + lam_j), so "maximizing with
+    respect to U" has no solution.  Residual: the smallest Hessian eigenvalue at lam = (1, 2, 3),
+    positive (printed form fails) for every choice of pairing."""
+    Q, P, U, L, _M = _pm_setup()
+    us = [U[i, j] for i, j in itertools.combinations(range(3), 2)]
+    Hess = sp.hessian(pm_hamiltonian(Q, P, U, L, +1), us)
+    free = sorted(Hess.free_symbols - set(L.diagonal()), key=str)
+    if free:  # the Hessian of the linear term vanishes: nothing but Lambda may remain
+        return sp.Integer(0)
+    Hnum = Hess.subs({L[i, i]: i + 1 for i in range(3)})
+    return min(sp.Matrix(Hnum).eigenvals())
+
+
 def s5_pairing_factor() -> sp.Expr:
     """With the pairing c tr(P^T Q U), the maximiser is U = 2c J^{-1}(Q^TP - P^TQ): c = 1/2."""
     c = sp.Symbol("c", positive=True)
@@ -759,8 +774,16 @@ CLAIMS = [
         evidence=(
             Evidence(
                 Level.SYMBOLIC_FIXED_N,
-                "printed H = <P,QU> + 1/4<U,JU>: dH/dU at U = J^{-1}(Q^TP - P^TQ) is not 0 (n = 3)",
+                "printed H = <P,QU> + 1/4<U,JU>, pairing <A,B> = 1/2 tr(A^T B): dH/dU at "
+                "U = J^{-1}(Q^TP - P^TQ) is not 0 (n = 3; with the pairing -1/2 tr it would be)",
                 s5_printed_stationary,
+                form="printed",
+            ),
+            Evidence(
+                Level.SYMBOLIC_FIXED_N,
+                "printed H is strictly convex in U for any pairing (Hessian +1/2 diag(lam_i + lam_j)): "
+                "no maximum; residual = smallest Hessian eigenvalue at lam = (1, 2, 3)",
+                s5_printed_has_no_maximum,
                 form="printed",
             ),
             Evidence(
