@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _validate as v
+from . import _validate as _v
 from ._validate import Array
 from .errors import InputError
 
@@ -46,12 +46,12 @@ def as_generator(seed: int | np.random.Generator | None) -> np.random.Generator:
     return np.random.default_rng(seed)
 
 
-def hat(v_: ArrayLike) -> Array:
+def hat(v: ArrayLike) -> Array:
     r"""The hat map :math:`\mathbb R^3 \to \mathfrak{so}(3)`, :math:`\hat v w = v \times w`.
 
     ``v`` has shape (..., 3); the result has shape (..., 3, 3).
     """
-    a = v.as_float_array(v_, "v")
+    a = _v.as_float_array(v, "v")
     if a.ndim < 1 or a.shape[-1] != 3:
         raise InputError(f"v must have shape (..., 3), got {a.shape}")
     out = np.zeros(a.shape + (3,))
@@ -64,7 +64,7 @@ def hat(v_: ArrayLike) -> Array:
 
 def vee(m: ArrayLike) -> Array:
     """The inverse of :func:`hat`: a skew (..., 3, 3) array to its (..., 3) vector."""
-    a = v.skew(m, "m", 3)
+    a = _v.skew(m, "m", 3)
     return np.stack([a[..., 2, 1], a[..., 0, 2], a[..., 1, 0]], axis=-1)
 
 
@@ -73,21 +73,21 @@ def pairing(xi: ArrayLike, eta: ArrayLike) -> Array:
 
     For n = 3 it equals the dot product of the vectors :math:`\check\xi\cdot\check\eta` (claim S1).
     """
-    a = v.square(xi, "xi")
-    b = v.square(eta, "eta", a.shape[-1])
+    a = _v.square(xi, "xi")
+    b = _v.square(eta, "eta", a.shape[-1])
     return -0.5 * np.einsum("...ij,...ji->...", a, b)
 
 
 def commutator(a: ArrayLike, b: ArrayLike) -> Array:
     """The matrix commutator [a, b] = a b - b a, batched."""
-    x = v.square(a, "a")
-    y = v.square(b, "b", x.shape[-1])
+    x = _v.square(a, "a")
+    y = _v.square(b, "b", x.shape[-1])
     return x @ y - y @ x
 
 
 def skew_part(a: ArrayLike) -> Array:
     """(a - a^T)/2, batched."""
-    x = v.square(a, "a")
+    x = _v.square(a, "a")
     return 0.5 * (x - np.swapaxes(x, -1, -2))
 
 
@@ -103,8 +103,8 @@ def J(Omega: ArrayLike, lam: ArrayLike) -> Array:
     -------
     M : array (..., n, n), :math:`M_{ij} = (\lambda_i+\lambda_j)\Omega_{ij}`.
     """
-    L = v.inertia(lam)
-    W = v.skew(Omega, "Omega", L.shape[-1])
+    L = _v.inertia(lam)
+    W = _v.skew(Omega, "Omega", L.shape[-1])
     return (L[..., :, None] + L[..., None, :]) * W
 
 
@@ -113,8 +113,8 @@ def J_inv(M: ArrayLike, lam: ArrayLike) -> Array:
 
     Shapes as in :func:`J`; ``M`` must be skew-symmetric.
     """
-    L = v.inertia(lam)
-    A = v.skew(M, "M", L.shape[-1])
+    L = _v.inertia(lam)
+    A = _v.skew(M, "M", L.shape[-1])
     return A / (L[..., :, None] + L[..., None, :])
 
 
@@ -124,14 +124,14 @@ def J_D(U: ArrayLike, lam: ArrayLike) -> Array:
     ``U`` has shape (..., n, n) (any square matrix; for U in SO(n) the result is in so(n)).  Its
     derivative at the identity is :math:`J` (claim D8).
     """
-    L = v.inertia(lam)
-    A = v.square(U, "U", L.shape[-1])
+    L = _v.inertia(lam)
+    A = _v.square(U, "U", L.shape[-1])
     return A * L[..., None, :] - L[..., :, None] * np.swapaxes(A, -1, -2)
 
 
 def inertia_from_lam(lam: ArrayLike) -> Array:
     """For n = 3: the principal moments I = (lam2+lam3, lam3+lam1, lam1+lam2) (claim S2)."""
-    L = v.as_float_array(lam, "lam")
+    L = _v.as_float_array(lam, "lam")
     if L.shape[-1:] != (3,):
         raise InputError(f"lam must have shape (..., 3), got {L.shape}")
     return L.sum(axis=-1, keepdims=True) - L
@@ -139,7 +139,7 @@ def inertia_from_lam(lam: ArrayLike) -> Array:
 
 def lam_from_inertia(inertia: ArrayLike) -> Array:
     """For n = 3: the inverse of :func:`inertia_from_lam`, lam_i = (I_1+I_2+I_3)/2 - I_i."""
-    Ii = v.as_float_array(inertia, "inertia")
+    Ii = _v.as_float_array(inertia, "inertia")
     if Ii.shape[-1:] != (3,):
         raise InputError(f"inertia must have shape (..., 3), got {Ii.shape}")
     return 0.5 * Ii.sum(axis=-1, keepdims=True) - Ii
