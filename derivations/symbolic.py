@@ -24,6 +24,7 @@ __all__ = [
     "hat3",
     "vee3",
     "residual",
+    "skew_gradient",
     "trace_words",
 ]
 
@@ -66,6 +67,17 @@ def hat3(v: Sequence[sp.Expr]) -> sp.Matrix:
 
 def vee3(m: sp.Matrix) -> sp.Matrix:
     return sp.Matrix([m[2, 1], m[0, 2], m[1, 0]])
+
+
+def skew_gradient(F: sp.Expr, X: sp.Matrix) -> sp.Matrix:
+    """The skew G with <G, dX> = dF for the pairing -1/2 tr on so(n), where X is a skew matrix of
+    independent entries x_ij (i < j): G_ij = dF/dx_ij, G_ji = -G_ij."""
+    nn = X.rows
+    G = sp.zeros(nn, nn)
+    for i, j in itertools.combinations(range(nn), 2):
+        d = sp.diff(F, X[i, j])
+        G[i, j], G[j, i] = d, -d
+    return G
 
 
 def residual(expr: sp.Basic | sp.Matrix) -> sp.Expr:

@@ -108,6 +108,11 @@ def J(Omega: ArrayLike, lam: ArrayLike) -> Array:
     return (L[..., :, None] + L[..., None, :]) * W
 
 
+def _Jinv_weights(lam: Array) -> Array:
+    """W with W_ij = 1/(lam_i + lam_j), so that J^{-1}(M) = W * M (lam already validated)."""
+    return 1.0 / (lam[..., :, None] + lam[..., None, :])
+
+
 def J_inv(M: ArrayLike, lam: ArrayLike) -> Array:
     r"""The inverse inertia operator, :math:`J^{-1}(M)_{ij} = M_{ij}/(\lambda_i+\lambda_j)`.
 
@@ -115,7 +120,7 @@ def J_inv(M: ArrayLike, lam: ArrayLike) -> Array:
     """
     L = _v.inertia(lam)
     A = _v.skew(M, "M", L.shape[-1])
-    return A / (L[..., :, None] + L[..., None, :])
+    return _Jinv_weights(L) * A
 
 
 def J_D(U: ArrayLike, lam: ArrayLike) -> Array:

@@ -34,6 +34,7 @@ from . import _validate as v
 from ._generated import rigid_body as _rb
 from ._generated import symmetric_rigid_body as _gen
 from ._validate import Array
+from .algebra import _Jinv_weights
 from .errors import InputError, OutOfDomainError
 
 __all__ = [
@@ -117,8 +118,7 @@ def multi_sample_control(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     Returns U of shape (..., n, n).
     """
     a, b, L = _samples(Q, P, lam)
-    W = 1.0 / (L[..., :, None] + L[..., None, :])
-    return W * np.sum(_gen.symmetric_momentum(a, b), axis=-3)
+    return _Jinv_weights(L) * np.sum(_gen.symmetric_momentum(a, b), axis=-3)
 
 
 def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:
@@ -265,8 +265,7 @@ class RigidBody(Flow):
         v.skew(y["M"], "M")
 
     def derived(self, y, lam):
-        W = 1.0 / (lam[..., :, None] + lam[..., None, :])
-        return {"Omega": W * y["M"]}
+        return {"Omega": _Jinv_weights(lam) * y["M"]}
 
 
 class SymmetricRigidBody(Flow):
@@ -312,14 +311,15 @@ class MultiSampleSymmetricRigidBody(Flow):
     state = ("Q", "P")
     sample_axes = 1
 
+    @staticmethod
+    def _control(y, lam):
+        return _Jinv_weights(lam) * np.sum(_gen.symmetric_momentum(y["Q"], y["P"]), axis=-3)
+
     def rhs(self, y, lam):
-        W = 1.0 / (lam[..., :, None] + lam[..., None, :])
-        U = W * np.sum(_gen.symmetric_momentum(y["Q"], y["P"]), axis=-3)
-        return _gen.control_rhs(y["Q"], y["P"], U[..., None, :, :])
+        return _gen.control_rhs(y["Q"], y["P"], self._control(y, lam)[..., None, :, :])
 
     def derived(self, y, lam):
-        W = 1.0 / (lam[..., :, None] + lam[..., None, :])
-        return {"U": W * np.sum(_gen.symmetric_momentum(y["Q"], y["P"]), axis=-3)}
+        return {"U": self._control(y, lam)}
 
 
 class Trajectory(dict):

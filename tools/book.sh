@@ -3,14 +3,7 @@
 #   install, regenerate the generated code, check it is committed as generated, verify every claim,
 #   then build the book with every page executed and every warning treated as an error.
 set -euo pipefail
-cd "$(dirname "${BASH_SOURCE[0]}")/.."
-
-export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 PYTHONHASHSEED=0
-export PYDEVD_DISABLE_FILE_VALIDATION=1
-PYTHON="${PYTHON:-python}"
-
-step() { printf '\n==> %s\n' "$*"; }
-start=$(date +%s)
+source "$(dirname "${BASH_SOURCE[0]}")/_common.sh"
 
 step "install symrb with the book extra"
 "$PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[book]"

@@ -1,14 +1,7 @@
 #!/usr/bin/env bash
 # Everything CI checks, in order: install, lint, format, types, generated code, the book, the tests.
 set -euo pipefail
-cd "$(dirname "${BASH_SOURCE[0]}")/.."
-
-export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 PYTHONHASHSEED=0
-export PYDEVD_DISABLE_FILE_VALIDATION=1
-PYTHON="${PYTHON:-python}"
-
-step() { printf '\n==> %s\n' "$*"; }
-start=$(date +%s)
+source "$(dirname "${BASH_SOURCE[0]}")/_common.sh"
 
 step "install symrb with the test extra"
 "$PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[test]"

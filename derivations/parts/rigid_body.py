@@ -32,6 +32,7 @@ from derivations.symbolic import (
     hat3,
     pair,
     residual,
+    skew_gradient,
     skew_matrix,
     sym_vector,
     trace_words,
@@ -191,16 +192,6 @@ def _manakov_explicit(nn: int, kmax: int) -> tuple[sp.Matrix, sp.Matrix, list[sp
     return M, L, integrals
 
 
-def _gradient(F: sp.Expr, M: sp.Matrix) -> sp.Matrix:
-    """The skew matrix gradF with <gradF, dM> = dF for the pairing -1/2 tr (so gradF_ij = dF/dm_ij)."""
-    nn = M.rows
-    G = sp.zeros(nn, nn)
-    for i, j in itertools.combinations(range(nn), 2):
-        d = sp.diff(F, M[i, j])
-        G[i, j], G[j, i] = d, -d
-    return G
-
-
 def s4_integrals_conserved(nn: int = 4, kmax: int = 4) -> sp.Expr:
     """d/dt F(M) = <grad F, [M, J^-1 M]> = 0 for every Manakov integral F (symbolic, fixed n)."""
     M, L, integrals = _manakov_explicit(nn, kmax)
@@ -208,14 +199,14 @@ def s4_integrals_conserved(nn: int = 4, kmax: int = 4) -> sp.Expr:
     Mdot = comm(M, Om)
     total = sp.Integer(0)
     for F in integrals:
-        total += residual(sp.together(pair(_gradient(F, M), Mdot)))
+        total += residual(sp.together(pair(skew_gradient(F, M), Mdot)))
     return total
 
 
 def s4_integrals_in_involution(nn: int = 4, kmax: int = 4) -> sp.Expr:
     """Lie-Poisson brackets {F, G}(M) = -<M, [grad F, grad G]> of the Manakov integrals vanish."""
     M, _L, integrals = _manakov_explicit(nn, kmax)
-    grads = [_gradient(F, M) for F in integrals]
+    grads = [skew_gradient(F, M) for F in integrals]
     total = sp.Integer(0)
     for a, b in itertools.combinations(range(len(grads)), 2):
         total += residual(pair(M, comm(grads[a], grads[b])))

@@ -51,7 +51,15 @@ import sympy as sp
 
 from derivations.codegen import Arg, Kernel, aux, n
 from derivations.registry import Claim, Evidence, Level
-from derivations.symbolic import diag_matrix, general_matrix, pair, residual, skew_matrix
+from derivations.symbolic import (
+    diag_matrix,
+    general_matrix,
+    pair,
+    residual,
+    skew_gradient,
+    skew_matrix,
+)
+from symrb.algebra import random_SO, random_so
 
 # ---------------------------------------------------------------------------------------------
 # helpers
@@ -71,16 +79,6 @@ def _Jinv(M: sp.Matrix, L: sp.Matrix) -> sp.Matrix:
 
 def _J(Om: sp.Matrix, L: sp.Matrix) -> sp.Matrix:
     return L * Om + Om * L
-
-
-def _skew_gradient(F: sp.Expr, U: sp.Matrix) -> sp.Matrix:
-    """The skew G with <G, dU> = dF for the pairing -1/2 tr on so(n): G_ij = dF/du_ij (i < j)."""
-    nn = U.rows
-    G = sp.zeros(nn, nn)
-    for i, j in itertools.combinations(range(nn), 2):
-        d = sp.diff(F, U[i, j])
-        G[i, j], G[j, i] = d, -d
-    return G
 
 
 def _gl_gradient(F: sp.Expr, X: sp.Matrix) -> sp.Matrix:
@@ -121,7 +119,7 @@ def pm_hamiltonian(Q, P, U, L, cost_sign: int = -1, c: sp.Expr = HALF) -> sp.Exp
 def stationary_control(cost_sign: int, c: sp.Expr, nn: int = 3) -> tuple[sp.Matrix, sp.Matrix]:
     """Solve dH/dU = 0 for U (n = nn, symbolic); returns (U*, J^{-1}(Q^T P - P^T Q))."""
     Q, P, U, L, M = _pm_setup(nn)
-    G = _skew_gradient(pm_hamiltonian(Q, P, U, L, cost_sign, c), U)
+    G = skew_gradient(pm_hamiltonian(Q, P, U, L, cost_sign, c), U)
     unknowns = [U[i, j] for i, j in itertools.combinations(range(nn), 2)]
     eqs = [G[i, j] for i, j in itertools.combinations(range(nn), 2)]
     sol = sp.solve(eqs, unknowns, dict=True)[0]
@@ -135,7 +133,7 @@ def stationary_control(cost_sign: int, c: sp.Expr, nn: int = 3) -> tuple[sp.Matr
 def s5_corrected_stationary() -> sp.Expr:
     """H = <P,QU>_gl - 1/4 <U,JU>: dH/dU vanishes at U = J^{-1}(Q^T P - P^T Q) (n = 3)."""
     Q, P, U, L, M = _pm_setup()
-    G = _skew_gradient(pm_hamiltonian(Q, P, U, L, -1), U)
+    G = skew_gradient(pm_hamiltonian(Q, P, U, L, -1), U)
     return residual(_subs_skew(G, U, _Jinv(M, L)))
 
 
@@ -154,7 +152,7 @@ def s5_printed_stationary() -> sp.Expr:
     Nonzero: the stationary point of the printed H is U = -J^{-1}(Q^TP - P^TQ), and it is a
     minimum (the Hessian is +1/2 diag(lam_i + lam_j)), so "maximizing" has no solution."""
     Q, P, U, L, M = _pm_setup()
-    G = _skew_gradient(pm_hamiltonian(Q, P, U, L, +1), U)
+    G = skew_gradient(pm_hamiltonian(Q, P, U, L, +1), U)
     return residual(_subs_skew(G, U, _Jinv(M, L)))
 
 
@@ -208,9 +206,9 @@ def s5_first_variation(seed: int = 5) -> float:
     nn, T = 4, 2.0
     lam = np.array([0.6, 0.9, 1.3, 1.9])
     W = 1.0 / (lam[:, None] + lam[None, :])
-    Q0 = _random_SO(rng, nn)
+    Q0 = random_SO(nn, seed=rng)
     P0 = rng.standard_normal((nn, nn))
-    V0, V1 = _random_so(rng, nn), _random_so(rng, nn)
+    V0, V1 = random_so(nn, seed=rng), random_so(nn, seed=rng)
     k = nn * nn
 
     def dU(t):
@@ -259,19 +257,6 @@ def s6_momentum_is_skew() -> sp.Expr:
     return residual(M + M.T)
 
 
-def _random_so(rng, nn, scale=1.0):
-    a = rng.standard_normal((nn, nn)) * scale
-    return a - a.T
-
-
-def _random_SO(rng, nn):
-    q, r = np.linalg.qr(rng.standard_normal((nn, nn)))
-    q = q * np.sign(np.diag(r))
-    if np.linalg.det(q) < 0:
-        q[:, 0] = -q[:, 0]
-    return q
-
-
 def _P_from_M_float(Q, M):
     """Q (M/2 + sqrt(I + M^2/4)) via eigh (the symrb implementation is tested against this)."""
     S = np.eye(M.shape[-1]) + M @ M / 4
@@ -289,8 +274,8 @@ def s6_trajectory() -> float:
     rng = np.random.default_rng(6)
     nn = 4
     lam = np.array([0.6, 0.9, 1.3, 1.9])
-    Q0 = _random_SO(rng, nn)
-    M0 = _random_so(rng, nn, 0.4)
+    Q0 = random_SO(nn, seed=rng)
+    M0 = random_so(nn, scale=0.4, seed=rng)
     P0 = _P_from_M_float(Q0, M0)
     k = nn * nn
     ts = np.linspace(0, 5, 11)
@@ -342,8 +327,8 @@ def s7_trajectory() -> float:
     rng = np.random.default_rng(7)
     nn = 5
     lam = np.sort(rng.uniform(0.5, 2.0, nn))
-    Q0 = _random_SO(rng, nn)
-    B0 = Q0 @ _random_so(rng, nn)
+    Q0 = random_SO(nn, seed=rng)
+    B0 = Q0 @ random_so(nn, seed=rng)
     k = nn * nn
 
     def f(_t, y):
@@ -377,7 +362,7 @@ def s8_stationary_two_samples() -> sp.Expr:
     U, L = skew_matrix("u", nn), diag_matrix("lam", nn)
     H = sum(gl_pair(P, Q * U) for Q, P in zip(Qs, Ps, strict=True)) - pair(U, _J(U, L)) / 4
     Ustar = sum((_Jinv(Q.T * P - P.T * Q, L) for Q, P in zip(Qs, Ps, strict=True)), sp.zeros(nn))
-    return residual(_subs_skew(_skew_gradient(H, U), U, Ustar))
+    return residual(_subs_skew(skew_gradient(H, U), U, Ustar))
 
 
 def endpoint_gradient_check(sign: float, factor: float = 2.0, seed: int = 8) -> float:
@@ -399,9 +384,9 @@ def endpoint_gradient_check(sign: float, factor: float = 2.0, seed: int = 8) -> 
     nn, m = 3, 2
     lam = np.array([0.7, 1.1, 1.6])
     W = 1.0 / (lam[:, None] + lam[None, :])
-    U0, U1, V0, V1 = (_random_so(rng, nn, 0.7) for _ in range(4))
-    R = _random_SO(rng, nn)
-    Q0 = np.stack([_random_SO(rng, nn) for _ in range(m)])
+    U0, U1, V0, V1 = (random_so(nn, scale=0.7, seed=rng) for _ in range(4))
+    R = random_SO(nn, seed=rng)
+    Q0 = np.stack([random_SO(nn, seed=rng) for _ in range(m)])
 
     def Uf(t):
         return U0 + t * U1
@@ -511,10 +496,10 @@ def s10_reading_half_inside(reading: str = "asinh(M/2)", seed: int = 10) -> floa
     worst = 0.0
     for nn in range(3, 7):
         for _ in range(40):
-            M = _random_so(rng, nn)
+            M = random_so(nn, seed=rng)
             top = 1.9 if reading == "asinh(M/2)" else 0.9
             M *= rng.uniform(0.05, top) / np.linalg.norm(M, 2)
-            Q = _random_SO(rng, nn)
+            Q = random_SO(nn, seed=rng)
             X = _asinh_skew(M / 2) if reading == "asinh(M/2)" else _asinh_skew(M) / 2
             P = Q @ expm(X)
             worst = max(worst, float(np.abs(Q.T @ P - P.T @ Q - M).max()))
@@ -580,9 +565,9 @@ def s10_closed_form_matches() -> float:
     worst = 0.0
     for nn in range(3, 7):
         for r in np.linspace(0.1, 1.99, 12):
-            M = _random_so(rng, nn)
+            M = random_so(nn, seed=rng)
             M *= r / np.linalg.norm(M, 2)
-            Q = _random_SO(rng, nn)
+            Q = random_SO(nn, seed=rng)
             P1 = Q @ expm(_asinh_skew(M / 2))
             P2 = _P_from_M_float(Q, M)
             P3 = P_from_M(Q, M)  # the shipped implementation (real Schur form)
@@ -614,7 +599,7 @@ def s11_norm_drift() -> float:
     worst = 0.0
     kw = dict(method="DOP853", rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 10, 41))
     for r in (1.5, 2.0):
-        M0 = _random_so(rng, nn)
+        M0 = random_so(nn, seed=rng)
         M0 *= r / np.linalg.norm(M0, 2)
 
         def f(_t, y):
@@ -623,7 +608,7 @@ def s11_norm_drift() -> float:
         sol = solve_ivp(f, (0, 10), M0.ravel(), **kw)
         norms = np.linalg.norm(sol.y.T.reshape(-1, nn, nn), 2, axis=(-2, -1))
         worst = max(worst, float(np.abs(norms - r).max()))
-    Q0 = _random_SO(rng, nn)
+    Q0 = random_SO(nn, seed=rng)
     A = np.array([[0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 0.6, -0.8], [0, 0, 0.8, 0.6]])
     P0 = Q0 @ A  # Q^T P has a rotation by pi/2: ||M||_op = 2, (Q, P) in C
 
@@ -711,7 +696,7 @@ def s12_trajectory() -> float:
     rng = np.random.default_rng(13)
     nn, k = 4, 16
     lam = np.array([0.5, 0.8, 1.4, 2.0])
-    Q0, P0 = _random_SO(rng, nn), _random_SO(rng, nn)
+    Q0, P0 = random_SO(nn, seed=rng), random_SO(nn, seed=rng)
 
     def g(_t, y):
         return np.concatenate(
