@@ -1,7 +1,39 @@
-"""Derivations of the paper's statements with SymPy (development time only).
+"""Derivations of the paper's statements with SymPy (development time only; not in the wheel).
 
 * :mod:`derivations.registry`: the claim registry (IDs D1-D12, S1-S15 of CLAIMS.md);
-* :mod:`derivations.codegen`: the printer and writer that emit ``symrb/_generated``;
-* :mod:`derivations.parts`: one module per part of the paper; each defines ``CLAIMS`` and may
-  define ``emit()`` returning ``(target_module_name, [Kernel, ...])``.
+* :mod:`derivations.codegen`: :class:`~derivations.codegen.Kernel` and the printer that emits
+  ``symrb/_generated``;
+* :mod:`derivations.symbolic`: the algebra the evidence works in (explicit matrices, noncommutative
+  words, trace words) and the LaTeX of displayed formulas;
+* :mod:`derivations.reference`: independent float64 / high-precision references (never symrb);
+* :mod:`derivations.parts`: one module per part of the paper (``rigid_body`` is S1-S4, ...).
+
+How a part is written (``derivations/parts/rigid_body.py`` is the model):
+
+1. **Declare a claim above its evidence** with :func:`~derivations.registry.claim`; register its
+   evidence with the decorator ``@S2.check(level, tol=..., form=...)``.  The first paragraph of the
+   evidence function's docstring is its description (each check is described once).
+2. **Formulas shown are formulas checked.**  ``[[key]]`` in a claim's ``statement``, ``printed`` or
+   ``corrected`` text is the LaTeX of ``S2.formula(key, expr)``; the evidence evaluates that same
+   ``expr`` (``S2.formulas[key]`` or the module-level name it was bound to).  Hand-written ``$...$``
+   math may name objects but not state a relation (``=``, ``<``, ``\\le``, ...), except a parameter
+   value such as ``$n=3$``.
+3. **Emit what was verified.**  A :class:`~derivations.codegen.Kernel` holds the expressions of a
+   generated function (``target`` = the part module's name); evidence reads them with
+   ``KERNEL["output"]`` (this records that the claim checked the kernel) and evaluates them with
+   :func:`~derivations.symbolic.explicit` (fixed n) or :class:`~derivations.symbolic.Words`
+   (every n).  Never type a kernel's formula a second time in an evidence function.
+4. **Evidence that can fail for a wrong implementation.**  A float64 or high-precision check calls
+   a public ``symrb`` function (imported inside the function: no module-level ``symrb`` import
+   anywhere in ``derivations``) and compares it with an independent route
+   (:mod:`derivations.reference`, an exact solution, a higher-precision run); tolerances are
+   absolute or relative to a stated reference size, never to a spread the code under test
+   computes.  Properties every flow of the class has (skewness, isospectrality, orthogonality)
+   are tests, not evidence.
+5. **A printed-form check fails for the reason it names**: it computes its residual the same way
+   as its corrected twin (one function with a parameter), never a constant from a flag or an
+   exception handler.
+
+``python -m derivations derive`` writes ``symrb/_generated`` (``--check`` only compares);
+``python -m derivations verify`` runs every claim's evidence.
 """

@@ -1,45 +1,64 @@
-"""Code emission: one printer, one writer.
+"""Code emission: the kernels a claim's evidence checked, printed as batched NumPy functions.
 
-A derivation module declares what it emits as a list of :class:`Kernel` objects (function name,
-arguments with their shapes, the SymPy expressions of the outputs, a docstring).  The writer turns
-a list of kernels into one Python module under ``symrb/_generated/``:
+A :class:`Kernel` holds SymPy expressions (matrix expressions in :class:`~sympy.MatrixSymbol` of
+symbolic size :data:`n`, or scalars in the components of its arguments).  The same object is
+evaluated by a claim's evidence (through :mod:`derivations.symbolic`) and printed here, so what
+``symrb`` imports is what the derivations verified (SymForce's ``Codegen.function`` is the model).
 
-* matrix-level expressions (``MatrixSymbol`` of symbolic size ``n``) are printed with ``@`` for
-  products, ``numpy.swapaxes(X, -1, -2)`` for transposes and ``numpy.trace(X, axis1=-2, axis2=-1)``
-  for traces, so every kernel broadcasts over leading batch axes;
-* the inertia operators enter through *auxiliary* matrices computed from the 1-D diagonal ``lam``
-  (``Lam`` = diag(lam), ``W`` with ``W_ij = 1/(lam_i + lam_j)`` so that ``J^{-1}(M) = W o M``);
-* component-level expressions (scalars indexed out of arrays) go through :func:`sympy.cse`;
-* output is deterministic: fixed order of kernels, sorted temporaries, ``PYTHONHASHSEED``-free
-  printing (CSE symbols are numbered in order of appearance), and ``ruff format`` when available.
+Printing rules (every kernel broadcasts over leading batch axes):
 
-Every file starts with a header naming the derivation module that wrote it and the command that
-regenerates it (``symrb derive``).
+* products with ``@``, transposes with ``numpy.swapaxes(X, -1, -2)``, a batched scalar factor
+  with ``numpy.expand_dims(c, (-2, -1))`` so that it lines up with the batch axes;
+* the inertia operators enter through :data:`AUXILIARIES`: ``Lambda`` is diagonal (a product
+  with it scales rows or columns; it is never formed), ``W`` has the entries
+  :math:`1/(\\lambda_i+\\lambda_j)` so that :math:`J^{-1}(M) = W\\circ M` (:func:`Jinv`); both are
+  defined by a SymPy entry formula from which their code is printed;
+* matrix-level common subexpression elimination (:func:`sympy.cse`) after two rewrites: powers
+  :math:`X^k` by repeated squaring, and :math:`\\operatorname{tr}(X_1\\cdots X_k)` as
+  :math:`\\sum_{ij} A_{ij}B_{ji}` of the two halves of the word (no product for a trace of two
+  factors);
+* each kernel's docstring states its operation count (per batch item), the claims that checked
+  it and the derivation module that defined it;
+* output is deterministic and formatted with ``ruff format`` (run through the interpreter running
+  this code, so no ``ruff`` on ``PATH`` is needed).
 """
 
 from __future__ import annotations
 
+import contextvars
 import difflib
 import importlib
-import pkgutil
+import itertools
 import re
-import shutil
 import subprocess
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import sympy as sp
+from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 from sympy.printing.numpy import NumPyPrinter
+from sympy.printing.precedence import precedence
 
 __all__ = [
     "n",
     "Arg",
+    "Aux",
+    "AUXILIARIES",
     "Kernel",
-    "MatrixPrinter",
-    "aux",
+    "matrix",
+    "vector",
+    "Lam",
+    "W",
+    "Jinv",
+    "entrywise",
+    "kernel_source",
+    "render_kernel",
     "render_module",
+    "collect",
+    "all_kernels",
     "emit_all",
     "generated_dir",
 ]
@@ -48,197 +67,616 @@ __all__ = [
 n = sp.Symbol("n", integer=True, positive=True)
 
 
-def aux(name: str) -> sp.MatrixSymbol:
-    """An auxiliary n x n matrix computed inside the kernel from ``lam`` (see ``AUXILIARIES``)."""
-    if name not in AUXILIARIES:
-        raise KeyError(f"unknown auxiliary {name!r}; known: {sorted(AUXILIARIES)}")
+def matrix(name: str) -> sp.MatrixSymbol:
+    """An ``n x n`` matrix symbol (a kernel argument or a symbol of a displayed formula)."""
     return sp.MatrixSymbol(name, n, n)
 
 
-#: How each auxiliary matrix is computed from the 1-D diagonal ``lam`` of Lambda (shape (..., n)).
-AUXILIARIES: dict[str, str] = {
-    "Lam": "lam[..., :, None] * numpy.eye(lam.shape[-1])",
-    "Lam2": "(lam * lam)[..., :, None] * numpy.eye(lam.shape[-1])",
-    "W": "1.0 / (lam[..., :, None] + lam[..., None, :])",
-}
+def vector(name: str) -> sp.MatrixSymbol:
+    """An ``n x 1`` column vector symbol."""
+    return sp.MatrixSymbol(name, n, 1)
 
-#: Diagonal auxiliaries and their diagonals: a product with one is printed as a row or column
-#: scaling, ``lam[..., :, None] * X`` or ``X * lam[..., None, :]``, never as a dense matmul.
-DIAGONAL: dict[str, str] = {"Lam": "lam", "Lam2": "(lam * lam)"}
+
+# ---------------------------------------------------------------------------------------------
+# auxiliary matrices computed from lam
+
+
+@dataclass(frozen=True)
+class Aux:
+    """An ``n x n`` matrix computed inside a kernel from the 1-D diagonal ``lam`` of Lambda.
+
+    ``entry(li, lj, same)`` gives the (i, j) entry in terms of the scalars ``li = lam_i``,
+    ``lj = lam_j`` (``same`` is 1 on the diagonal and 0 off it).  The fixed-n evidence builds the
+    explicit matrix from it, and the printer prints its code from it.  A diagonal auxiliary is
+    never formed: a product with it is printed as a row or column scaling by ``diagonal``.
+    """
+
+    name: str
+    entry: Callable[[sp.Expr, sp.Expr, sp.Expr], sp.Expr]
+    diagonal: Callable[[sp.Expr], sp.Expr] | None = None
+    latex: str = ""
+
+    @property
+    def symbol(self) -> sp.MatrixSymbol:
+        return matrix(self.name)
+
+    def explicit(self, lam: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
+        k = len(lam)
+        return sp.ImmutableMatrix(
+            k, k, lambda i, j: self.entry(lam[i], lam[j], sp.Integer(int(i == j)))
+        )
+
+
+_LI, _LJ = sp.symbols("lam_i lam_j", real=True)
+
+#: The auxiliaries every kernel may use.  ``Lambda`` = diag(lam); ``W_ij = 1/(lam_i + lam_j)``.
+AUXILIARIES: dict[str, Aux] = {
+    "Lambda": Aux("Lambda", lambda li, lj, same: same * li, diagonal=lambda li: li, latex=r"\Lambda"),
+    "W": Aux("W", lambda li, lj, same: 1 / (li + lj), latex="W"),
+}
+Lam = AUXILIARIES["Lambda"].symbol
+W = AUXILIARIES["W"].symbol
+
+
+def Jinv(X: sp.MatrixExpr) -> sp.MatrixExpr:
+    r"""The inverse inertia operator :math:`J^{-1}(X)_{ij} = X_{ij}/(\lambda_i+\lambda_j)` as
+    the Hadamard product ``W o X`` (this is how every kernel computes it)."""
+    return sp.HadamardProduct(W, X)
+
+
+def _aux_code(aux: Aux) -> str:
+    """Code for an auxiliary from its entry formula: lam_i -> lam[..., :, None], lam_j -> ..."""
+    expr = aux.entry(_LI, _LJ, sp.Integer(0))
+    code = MatrixPrinter().doprint(expr)
+    code = re.sub(r"\blam_i\b", "lam[..., :, None]", code)
+    return re.sub(r"\blam_j\b", "lam[..., None, :]", code)
+
+
+def _diag_code(aux: Aux, power: int = 1) -> str:
+    assert aux.diagonal is not None
+    li = sp.Symbol("lam_i", real=True)
+    code = NumPyPrinter({"fully_qualified_modules": True}).doprint(aux.diagonal(li) ** power)
+    return "(" + re.sub(r"\blam_i\b", "lam", code) + ")"
+
+
+# ---------------------------------------------------------------------------------------------
+# entrywise scalar functions (activations)
+
+
+class _Entrywise(sp.MatrixExpr):
+    """A named scalar function applied entrywise (an opaque node for CSE; see :func:`entrywise`)."""
+
+    def __new__(cls, name: str, arg: sp.MatrixExpr) -> _Entrywise:
+        return super().__new__(cls, sp.Symbol(name), arg)
+
+    @property
+    def shape(self) -> tuple[sp.Expr, sp.Expr]:
+        return self.args[1].shape
+
+    def _entry(self, i: Any, j: Any, **kwargs: Any) -> sp.Expr:
+        return _ENTRYWISE[str(self.args[0])](self.args[1]._entry(i, j, **kwargs))
+
+
+_ENTRYWISE: dict[str, sp.Lambda] = {}
+
+
+def entrywise(name: str, fn: sp.Lambda, arg: sp.MatrixExpr) -> sp.MatrixExpr:
+    """``fn`` applied to every entry of ``arg`` (SymPy's :class:`ElementwiseApplyFunction`)."""
+    _ENTRYWISE[name] = fn
+    return ElementwiseApplyFunction(fn, arg)
+
+
+# ---------------------------------------------------------------------------------------------
+# kernels
 
 
 @dataclass(frozen=True)
 class Arg:
-    """A kernel argument: its name, its shape as documented (e.g. ``"(..., n, n)"``) and meaning."""
+    """A kernel argument: its name, documented shape (e.g. ``"(..., n, n)"``) and meaning."""
 
     name: str
     shape: str
     doc: str
 
 
-@dataclass
-class Kernel:
-    """A function to emit.
+_CURRENT_CLAIM: contextvars.ContextVar[str | None] = contextvars.ContextVar(
+    "symrb_current_claim", default=None
+)
+_KERNELS: list[Kernel] = []
+_counter = itertools.count()
 
-    ``outputs`` maps output names to SymPy expressions (matrix expressions, or scalars in the
-    components of the arguments).  One output is returned as is; several are returned as a tuple in
-    the given order.  ``stack`` instead stacks scalar outputs along a new last axis.
-    ``intermediates`` are named matrix-level temporaries assigned in order before the outputs
-    (an output refers to one through a ``MatrixSymbol`` of the same name).
-    ``components`` maps an argument name to a SymPy Matrix of scalar symbols standing for its
-    entries (``arg[..., i, j]`` or ``arg[..., i]``): such kernels are printed through CSE.
+
+@dataclass(eq=False)
+class Kernel:
+    """A function to emit: one object, checked by the evidence of ``claims`` and printed.
+
+    Parameters
+    ----------
+    name : the function name in ``symrb/_generated/<target>.py``
+    target : the generated module it goes to
+    args : the arguments, in order (``lam`` for kernels that use an auxiliary)
+    outputs : output name -> SymPy expression; one output is returned as is, several as a tuple
+    doc : one-line summary (plain text, math in ASCII), then optional paragraphs
+    claims : the claims whose evidence evaluates these expressions (a test checks that each of
+        them really does, see :func:`checked_by`)
+    stack : stack scalar outputs along a new last axis instead of returning a tuple
+    components : argument name -> Matrix of scalar symbols for its entries (``arg[..., i, j]`` or
+        ``arg[..., i]``); such kernels are printed through scalar CSE
+
+    Reading an output with ``kernel["name"]`` records which claim's evidence is running (the
+    registry sets it), so ``symrb verify`` can list, for every kernel, the claims that checked it.
     """
 
     name: str
+    target: str
     args: Sequence[Arg]
     outputs: dict[str, sp.Basic]
     doc: str
+    claims: tuple[str, ...]
     stack: bool = False
-    intermediates: dict[str, sp.Basic] = field(default_factory=dict)
     components: dict[str, sp.Matrix] = field(default_factory=dict)
     source: str = ""
+    checked_by: set[str] = field(default_factory=set)
+    order: int = field(default_factory=lambda: next(_counter))
+
+    def __post_init__(self) -> None:
+        if not self.claims:
+            raise ValueError(f"kernel {self.name}: name the claim(s) whose evidence checks it")
+        if not self.source:
+            frame = sys._getframe(2)
+            self.source = str(frame.f_globals.get("__name__", ""))
+        if self.source.startswith("derivations.parts.") and self.source.rsplit(".", 1)[1] != self.target:
+            raise ValueError(
+                f"kernel {self.name}: its target {self.target!r} must be the name of the part "
+                f"module that defines it ({self.source})"
+            )
+        _KERNELS.append(self)
+
+    def __getitem__(self, key: str) -> sp.Basic:
+        claim = _CURRENT_CLAIM.get()
+        if claim is not None:
+            self.checked_by.add(claim)
+        return self.outputs[key]
+
+    def __repr__(self) -> str:
+        return f"Kernel({self.target}.{self.name}, claims={self.claims})"
+
+
+def all_kernels(only: Sequence[str] | None = None) -> list[Kernel]:
+    """Every kernel defined in :mod:`derivations.parts`, by target and definition order.
+
+    With ``only``, just the kernels of those targets, importing only the part modules of the
+    same names (a kernel's target is the name of the part module that defines it).
+    """
+    from derivations.registry import import_parts
+
+    if only:
+        for name in only:
+            importlib.import_module(f"derivations.parts.{name}")
+    else:
+        import_parts()
+    kernels = [k for k in _KERNELS if not only or k.target in only]
+    return sorted(kernels, key=lambda k: (k.target, k.order))
+
+
+# ---------------------------------------------------------------------------------------------
+# rewrites before CSE
+
+
+class _Square(sp.MatrixExpr):
+    """X @ X (kept as a node so that CSE can share squares of squares)."""
+
+    def __new__(cls, arg: sp.MatrixExpr) -> _Square:
+        return super().__new__(cls, arg)
+
+    @property
+    def shape(self) -> tuple[sp.Expr, sp.Expr]:
+        return self.args[0].shape
+
+
+class _TracePair(sp.Expr):
+    """trace(A B) for two matrix expressions, printed as an einsum (no matrix product)."""
+
+    is_commutative = True
+
+    def __new__(cls, a: sp.MatrixExpr, b: sp.MatrixExpr) -> _TracePair:
+        return super().__new__(cls, a, b)
+
+
+def _is_diag(m: sp.Basic) -> Aux | None:
+    if isinstance(m, sp.MatrixSymbol) and str(m.name) in AUXILIARIES:
+        aux = AUXILIARIES[str(m.name)]
+        return aux if aux.diagonal is not None else None
+    if isinstance(m, sp.MatPow) and m.exp.is_Integer and m.exp > 0:
+        return _is_diag(m.base)
+    return None
+
+
+def _power(base: sp.MatrixExpr, k: int) -> sp.MatrixExpr:
+    """X^k by repeated squaring: X^6 = (X^2)^2 X^2."""
+    if k == 1:
+        return base
+    factors = []
+    sq = base
+    while k:
+        if k & 1:
+            factors.append(sq)
+        k >>= 1
+        if k:
+            sq = _Square(sq)
+    return factors[0] if len(factors) == 1 else sp.MatMul(*reversed(factors))
+
+
+def _word(expr: sp.Basic) -> tuple[sp.Expr, list[sp.Basic]]:
+    """A product as (scalar coefficient, list of letters): powers of dense factors spelled out,
+    powers of diagonal auxiliaries kept whole."""
+    coeff, mats = expr.as_coeff_matrices() if isinstance(expr, sp.MatMul) else (sp.Integer(1), [expr])
+    word: list[sp.Basic] = []
+    for m in mats:
+        if isinstance(m, sp.MatPow) and _is_diag(m.base) is None and m.exp.is_Integer and m.exp > 0:
+            word.extend([m.base] * int(m.exp))
+        else:
+            word.append(m)
+    return coeff, word
+
+
+def _halves(word: list[sp.Basic]) -> tuple[list[sp.Basic], list[sp.Basic]]:
+    """Cut a trace word after the ceil(d/2)-th of its d dense letters, so that tr(A M A M) is
+    tr(X X) with X = A M and tr(M^6) is tr(M^3 M^3); diagonal letters stay with the letter after
+    them."""
+    dense = [i for i, m in enumerate(word) if _is_diag(m) is None]
+    if len(dense) < 2:
+        return word, []
+    cut = dense[(len(dense) + 1) // 2 - 1] + 1
+    return word[:cut], word[cut:]
+
+
+def _rewrite(expr: sp.Basic) -> sp.Basic:
+    """Powers by repeated squaring, traces of products as trace pairs, opaque entrywise nodes."""
+    if isinstance(expr, ElementwiseApplyFunction):
+        name = next((k for k, v in _ENTRYWISE.items() if v == expr.function), None)
+        if name is None:
+            raise ValueError(f"entrywise function {expr.function} was not made with entrywise()")
+        return _Entrywise(name, _rewrite(expr.expr))
+    if isinstance(expr, sp.MatPow):
+        base = _rewrite(expr.base)
+        if _is_diag(expr.base) is not None:
+            return sp.MatPow(base, expr.exp)
+        if not (expr.exp.is_Integer and expr.exp > 0):
+            raise NotImplementedError(f"matrix power {expr}")
+        return _power(base, int(expr.exp))
+    if isinstance(expr, sp.Trace):
+        coeff, word = _word(expr.arg)
+        left, right = _halves(word)
+        if not right:
+            return _rewrite(coeff) * sp.Trace(_rewrite(sp.MatMul(*left).doit()))
+        a, b = (_rewrite(sp.MatMul(*half).doit()) for half in (left, right))
+        return _rewrite(coeff) * _TracePair(a, b)
+    if not expr.args:
+        return expr
+    new = [_rewrite(a) for a in expr.args]
+    if all(x is y for x, y in zip(new, expr.args, strict=True)):
+        return expr
+    return expr.func(*new)
+
+
+def _cheap(e: sp.Basic) -> bool:
+    """Temporaries not worth a name: views, diagonal powers, negations of a symbol."""
+    if isinstance(e, sp.Transpose) and isinstance(e.arg, sp.MatrixSymbol):
+        return True
+    if _is_diag(e) is not None:
+        return True
+    if isinstance(e, sp.MatMul):
+        coeff, mats = e.as_coeff_matrices()
+        return coeff.is_Number and len(mats) == 1 and isinstance(mats[0], sp.MatrixSymbol)
+    return False
+
+
+def _cse(exprs: list[sp.Basic]) -> tuple[list[tuple[sp.Symbol, sp.Basic]], list[sp.Basic]]:
+    """sympy.cse on the rewritten expressions, then cheap temporaries substituted back."""
+    rewritten = [_rewrite(e) for e in exprs]
+    reps, reduced = sp.cse(rewritten, symbols=sp.numbered_symbols("t"), order="none")
+    keep: list[tuple[sp.Symbol, sp.Basic]] = []
+    inline: dict[sp.Basic, sp.Basic] = {}
+    for sym, sub in reps:
+        sub = sub.xreplace(inline)
+        if _cheap(sub):
+            inline[sym] = sub
+        else:
+            keep.append((sym, sub))
+    reduced = [r.xreplace(inline) for r in reduced]
+    # renumber the kept temporaries t0, t1, ... in order
+    renum = {}
+    for idx, (sym, _sub) in enumerate(keep):
+        new = (
+            sp.MatrixSymbol(f"t{idx}", *sym.shape)
+            if isinstance(sym, sp.MatrixSymbol)
+            else sp.Symbol(f"t{idx}")
+        )
+        renum[sym] = new
+    keep = [(renum[s], e.xreplace(renum)) for s, e in keep]
+    reduced = [r.xreplace(renum) for r in reduced]
+    return keep, reduced
+
+
+# ---------------------------------------------------------------------------------------------
+# the printer
+
+
+def _is_matrix(e: sp.Basic) -> bool:
+    return isinstance(e, sp.MatrixExpr)
 
 
 class MatrixPrinter(NumPyPrinter):
-    """NumPy printer for batched matrix expressions: ``@``, swapaxes, batched trace, Hadamard."""
+    """NumPy printer for batched matrix expressions (see the module docstring)."""
 
     def __init__(self) -> None:
         super().__init__({"fully_qualified_modules": True, "inline": True, "strict": True})
 
+    # atoms
     def _print_MatrixSymbol(self, expr: sp.MatrixSymbol) -> str:
+        name = str(expr.name)
+        if name in AUXILIARIES and AUXILIARIES[name].diagonal is not None:
+            aux = AUXILIARIES[name]
+            return f"({_diag_code(aux)}[..., :, None] * numpy.eye(lam.shape[-1]))"
+        return name
+
+    def _print_Symbol(self, expr: sp.Symbol) -> str:
         return str(expr.name)
 
-    def _diag_vector(self, m: sp.Basic) -> str | None:
-        """The 1-D diagonal (as code) of a diagonal auxiliary factor, or None."""
-        if isinstance(m, sp.MatrixSymbol) and str(m.name) in DIAGONAL:
-            return DIAGONAL[str(m.name)]
-        if (
-            isinstance(m, sp.MatPow)
-            and isinstance(m.base, sp.MatrixSymbol)
-            and str(m.base.name) in DIAGONAL
-            and m.exp.is_Integer
-            and m.exp > 0
-        ):
-            return f"({DIAGONAL[str(m.base.name)]} ** {int(m.exp)})"
-        return None
+    def _print_Rational(self, expr: sp.Rational) -> str:
+        return f"({expr.p} / {expr.q})"
+
+    def _print_Half(self, expr: sp.Rational) -> str:
+        return "0.5"
+
+    # matrix operations
+    def _factor(self, m: sp.Basic) -> str:
+        s = self._print(m)
+        return s if _atomic(s) else f"({s})"
 
     def _product(self, mats: Sequence[sp.Basic]) -> str:
-        """A matrix product; a diagonal factor scales rows or columns instead of a matmul (O(n^2))."""
-        diags = [self._diag_vector(m) for m in mats]
+        """A product; diagonal factors scale rows (leading) or columns (trailing), O(n^2)."""
+        diags = [_is_diag(m) for m in mats]
         lead = 0
         while lead < len(mats) - 1 and diags[lead] is not None:
             lead += 1
         if lead:
-            vec = " * ".join(str(d) for d in diags[:lead])
+            vec = " * ".join(self._diag(m) for m in mats[:lead])
             vec = vec if lead == 1 else f"({vec})"
-            return f"({vec}[..., :, None] * {self._product(mats[lead:])})"
-        acc = self.parenthesize(mats[0], 100)
+            return f"({vec}[..., :, None] * {self._factor_product(mats[lead:])})"
+        acc = self._factor(mats[0])
         for m, d in zip(mats[1:], diags[1:], strict=True):
-            acc = (
-                f"({acc} * {d}[..., None, :])"
-                if d is not None
-                else f"({acc} @ {self.parenthesize(m, 100)})"
-            )
+            acc = f"({acc} * {self._diag(m)}[..., None, :])" if d is not None else f"({acc} @ {self._factor(m)})"
         return acc
+
+    def _factor_product(self, mats: Sequence[sp.Basic]) -> str:
+        s = self._product(mats) if len(mats) > 1 else self._factor(mats[0])
+        return s
+
+    def _diag(self, m: sp.Basic) -> str:
+        aux = _is_diag(m)
+        assert aux is not None
+        power = int(m.exp) if isinstance(m, sp.MatPow) else 1
+        return _diag_code(aux, power)
 
     def _print_MatMul(self, expr: sp.MatMul) -> str:
         coeff, mats = expr.as_coeff_matrices()
+        if not mats:
+            return self._print(coeff)
         body = self._product(mats)
         if coeff == 1:
             return body
         if coeff == -1:
             return f"(-{body})"
-        return f"({self._print(coeff)} * {body})"
+        if coeff.is_Number:
+            return f"({self._print(coeff)} * {body})"
+        # a batched scalar (a trace, a component): align it with the batch axes
+        return f"(numpy.expand_dims({self._print(coeff)}, (-2, -1)) * {body})"
 
     def _print_MatAdd(self, expr: sp.MatAdd) -> str:
-        terms = [self._print(a) for a in expr.args]
-        return "(" + " + ".join(sorted(terms)) + ")"
+        plus, minus = [], []
+        for a in expr.args:
+            if isinstance(a, sp.MatMul) and a.as_coeff_matrices()[0].is_negative:
+                minus.append(self._print(-a))
+            else:
+                plus.append(self._print(a))
+        plus.sort()
+        minus.sort()
+        text = " + ".join(plus) if plus else ""
+        for m in minus:
+            text = f"{text} - {self._factor_str(m)}" if text else f"-{self._factor_str(m)}"
+        return f"({text})"
+
+    @staticmethod
+    def _factor_str(s: str) -> str:
+        return s if _atomic(s) else f"({s})"
 
     def _print_Transpose(self, expr: sp.Transpose) -> str:
         return f"numpy.swapaxes({self._print(expr.arg)}, -1, -2)"
 
     def _print_Trace(self, expr: sp.Trace) -> str:
-        return f"numpy.trace({self._print(expr.arg)}, axis1=-2, axis2=-1)"
+        arg = expr.arg
+        aux = _is_diag(arg)
+        if aux is not None:
+            return f"numpy.sum({self._diag(arg)}, axis=-1)"
+        return f"numpy.trace({self._print(arg)}, axis1=-2, axis2=-1)"
+
+    def _print__TracePair(self, expr: _TracePair) -> str:
+        a, b = expr.args
+        if _is_diag(a) is not None:
+            return f'numpy.einsum("...i,...ii->...", {self._diag(a)}, {self._print(b)})'
+        if _is_diag(b) is not None:
+            return f'numpy.einsum("...i,...ii->...", {self._diag(b)}, {self._print(a)})'
+        return f'numpy.einsum("...ij,...ji->...", {self._print(a)}, {self._print(b)})'
+
+    def _print__Square(self, expr: _Square) -> str:
+        f = self._factor(expr.args[0])
+        return f"({f} @ {f})"
 
     def _print_HadamardProduct(self, expr: sp.HadamardProduct) -> str:
-        return "(" + " * ".join(self._print(a) for a in expr.args) + ")"
+        return "(" + " * ".join(sorted(self._factor(a) for a in expr.args)) + ")"
 
     def _print_MatPow(self, expr: sp.MatPow) -> str:
-        base, exp = expr.args
-        if exp.is_Integer and exp > 0:
-            b = self._print(base)
-            return "(" + " @ ".join([b] * int(exp)) + ")"
-        raise NotImplementedError(f"matrix power {expr}")
+        aux = _is_diag(expr.base)
+        if aux is not None:
+            return f"({self._diag(expr)}[..., :, None] * numpy.eye(lam.shape[-1]))"
+        raise NotImplementedError(f"matrix power {expr} (rewrite with _power first)")
 
-    def _print_ElementwiseApplyFunction(self, expr) -> str:
-        """A scalar function applied entrywise, ``X.applyfunc(f)``: print f's body on the array."""
-        lam = expr.function
-        (var,) = lam.variables
+    def _print__Entrywise(self, expr: _Entrywise) -> str:
+        fn = _ENTRYWISE[str(expr.args[0])]
+        (var,) = fn.variables
         hole = sp.Symbol("__entrywise_arg__")
-        body = self._print(lam.expr.xreplace({var: hole}))
-        return "(" + body.replace(str(hole), f"({self._print(expr.expr)})") + ")"
+        body = self._print(fn.expr.xreplace({var: hole}))
+        return "(" + body.replace(str(hole), self._factor(expr.args[1])) + ")"
 
-    def parenthesize(self, item: sp.Basic, level: int, strict: bool = False) -> str:
-        s = self._print(item)
-        if s.startswith("(") or s.replace("_", "").isalnum() or s.startswith("numpy."):
-            return s
-        return f"({s})"
-
-
-def _header(source: str) -> str:
-    return (
-        f'"""Generated by ``{source}``; do not edit by hand.\n\n'
-        "Regenerate with ``symrb derive`` (check with ``symrb derive --check``).\n"
-        '"""\n'
-        "from __future__ import annotations\n\n"
-        "import numpy\n"
-    )
+    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
+        if expr.exp == -1:
+            return f"1.0 / {self.parenthesize(expr.base, precedence(expr), strict=True)}"
+        return super()._print_Pow(expr, rational=rational)
 
 
-def _docstring(k: Kernel) -> str:
-    lines = [k.doc.strip(), "", "Parameters", "----------"]
+def _atomic(s: str) -> bool:
+    """True when the printed text needs no parentheses as an operand."""
+    if re.fullmatch(r"[A-Za-z_][A-Za-z_0-9]*", s) or re.fullmatch(r"\d+(\.\d*)?", s):
+        return True
+    if s.startswith("(") and _balanced_outer(s):
+        return True
+    if re.fullmatch(r"numpy\.[a-z_]+\(.*\)", s, flags=re.S) and _balanced_outer(s[s.index("(") :]):
+        return True
+    return False
+
+
+def _balanced_outer(s: str) -> bool:
+    """Does the opening parenthesis at s[0] close at the very end of s?"""
+    if not s.startswith("(") or not s.endswith(")"):
+        return False
+    depth = 0
+    for i, ch in enumerate(s):
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth == 0 and i != len(s) - 1:
+            return False
+    return depth == 0
+
+
+# ---------------------------------------------------------------------------------------------
+# operation counts
+
+
+def _count(expr: sp.Basic, acc: dict[str, int]) -> None:
+    if isinstance(expr, sp.MatMul):
+        coeff, mats = expr.as_coeff_matrices()
+        dense = [m for m in mats if _is_diag(m) is None]
+        acc["products"] += max(len(dense) - 1, 0)
+        acc["elementwise"] += len(mats) - len(dense) + (0 if coeff in (1, -1) else 1)
+        for m in mats:
+            _count(m, acc)
+        if not coeff.is_Number:
+            _count(coeff, acc)
+        return
+    if isinstance(expr, _Square):
+        acc["products"] += 1
+    elif isinstance(expr, (sp.MatAdd, sp.HadamardProduct)):
+        acc["elementwise"] += len(expr.args) - 1
+    elif isinstance(expr, _Entrywise):
+        acc["elementwise"] += 1
+    elif isinstance(expr, (sp.Trace, _TracePair)):
+        acc["traces"] += 1
+    elif isinstance(expr, (sp.Add, sp.Mul, sp.Pow)) and not isinstance(expr, sp.MatrixExpr):
+        acc["scalar"] += sp.count_ops(expr.func(*[sp.Dummy() for _ in expr.args]))
+    for a in expr.args:
+        if isinstance(a, sp.Basic):
+            _count(a, acc)
+
+
+def op_count(temps: Iterable[tuple[sp.Basic, sp.Basic]], outputs: Iterable[sp.Basic]) -> str:
+    acc = {"products": 0, "elementwise": 0, "traces": 0, "scalar": 0}
+    for _s, e in temps:
+        _count(e, acc)
+    for e in outputs:
+        _count(e, acc)
+    parts = []
+    if acc["products"]:
+        parts.append(f"{acc['products']} matrix product{'s' * (acc['products'] != 1)} (n^3)")
+    if acc["elementwise"]:
+        parts.append(f"{acc['elementwise']} elementwise (n^2)")
+    if acc["traces"]:
+        parts.append(f"{acc['traces']} trace{'s' * (acc['traces'] != 1)} (n^2)")
+    if acc["scalar"]:
+        parts.append(f"{acc['scalar']} scalar")
+    return ", ".join(parts) if parts else "none"
+
+
+# ---------------------------------------------------------------------------------------------
+# rendering
+
+
+def _docstring(k: Kernel, ops: str) -> str:
+    summary, _, rest = k.doc.strip().partition("\n\n")
+    lines = [" ".join(summary.split())]
+    if rest.strip():
+        lines += ["", *[ln.rstrip() for ln in rest.strip().splitlines()]]
+    lines += ["", "Parameters", "----------"]
     for a in k.args:
         lines.append(f"{a.name} : array, shape {a.shape}")
         lines.append(f"    {a.doc}")
-    lines.append("")
-    lines.append("Returns")
-    lines.append("-------")
+    lines += ["", "Returns", "-------"]
     if k.stack:
-        lines.append(f"array, shape (..., {len(k.outputs)}): " + ", ".join(k.outputs))
+        lines.append(f"array, shape (..., {len(k.outputs)})")
+        lines.append("    " + ", ".join(k.outputs) + ", stacked along the last axis")
     else:
         for name in k.outputs:
-            lines.append(name)
+            lines.append(f"{name} : array")
+    lines += [
+        "",
+        "Notes",
+        "-----",
+        f"Checked by claim{'s' * (len(k.claims) != 1)} {', '.join(k.claims)} "
+        f"(``symrb verify {' '.join(k.claims)}``); expressions from ``{k.source}``.",
+        "",
+        f"Total ops per batch item: {ops}.",
+    ]
     body = "\n".join(("    " + ln) if ln else "" for ln in lines)
     return '    r"""' + body.lstrip() + '\n    """\n'
 
 
-def _render_kernel(k: Kernel, printer: MatrixPrinter) -> str:
+def _component_code(k: Kernel, printer: MatrixPrinter) -> tuple[list[str], list[str], str]:
+    out = []
+    for argname in sorted(k.components):
+        mat = k.components[argname]
+        for idx in range(mat.rows):
+            for jdx in range(mat.cols):
+                sym = mat[idx, jdx]
+                if not isinstance(sym, sp.Symbol):
+                    continue
+                index = f"{idx}, {jdx}" if mat.cols > 1 else f"{idx}"
+                out.append(f"    {sym} = {argname}[..., {index}]\n")
+    reps, reduced = sp.cse(
+        list(k.outputs.values()),
+        symbols=sp.numbered_symbols("x"),
+        order="canonical",
+        optimizations="basic",
+    )
+    body = [f"    {sym} = {printer.doprint(sub)}\n" for sym, sub in reps]
+    printed = [printer.doprint(e) for e in reduced]
+    ops = sum(sp.count_ops(e) for _s, e in reps) + sum(sp.count_ops(e) for e in reduced)
+    return out + body, printed, f"{ops} scalar"
+
+
+def render_kernel(k: Kernel) -> str:
+    """The text of one generated function."""
+    printer = MatrixPrinter()
     argnames = [a.name for a in k.args]
-    out = [f"def {k.name}({', '.join(argnames)}):\n", _docstring(k)]
-    for name in argnames:
-        out.append(f"    {name} = numpy.asarray({name}, dtype=float)\n")
-    exprs = list(k.outputs.values())
-    body: list[str] = []
-    for name, e in k.intermediates.items():
-        body.append(f"    {name} = {printer.doprint(e)}\n")
+    head = [f"def {k.name}({', '.join(argnames)}):\n"]
+    conv = [f"    {name} = numpy.asarray({name}, dtype=float)\n" for name in argnames]
     if k.components:
-        # unpack components of arguments into scalars, then CSE
-        for argname in sorted(k.components):
-            mat = k.components[argname]
-            for idx in range(mat.rows):
-                for jdx in range(mat.cols):
-                    sym = mat[idx, jdx]
-                    if not isinstance(sym, sp.Symbol):
-                        continue
-                    index = f"{idx}, {jdx}" if mat.cols > 1 else f"{idx}"
-                    out.append(f"    {sym} = {argname}[..., {index}]\n")
-        replacements, reduced = sp.cse(
-            exprs, symbols=sp.numbered_symbols("x"), order="canonical", optimizations="basic"
-        )
-        for sym, sub in replacements:
-            body.append(f"    {sym} = {printer.doprint(sub)}\n")
-        exprs = reduced
-    printed = [printer.doprint(e) for e in exprs]
+        body, printed, ops = _component_code(k, printer)
+    else:
+        temps, reduced = _cse(list(k.outputs.values()))
+        body = [f"    {sym} = {printer.doprint(sub)}\n" for sym, sub in temps]
+        printed = [printer.doprint(e) for e in reduced]
+        ops = op_count(temps, reduced)
     if k.stack:
         body.append(
             "    return numpy.stack(numpy.broadcast_arrays(" + ", ".join(printed) + "), axis=-1)\n"
@@ -247,41 +685,61 @@ def _render_kernel(k: Kernel, printer: MatrixPrinter) -> str:
         body.append(f"    return {printed[0]}\n")
     else:
         body.append("    return (" + ", ".join(printed) + ")\n")
-    # auxiliary matrices are computed only when the printed code still refers to them
     text = "".join(body)
-    for name in sorted(AUXILIARIES):
-        if re.search(rf"\b{name}\b", text):
-            out.append(f"    {name} = {AUXILIARIES[name]}\n")
-    return "".join(out) + text
+    aux_lines = [
+        f"    {name} = {_aux_code(aux)}\n"
+        for name, aux in sorted(AUXILIARIES.items())
+        if aux.diagonal is None and re.search(rf"\b{name}\b", text)
+    ]
+    return "".join(head) + _docstring(k, ops) + "".join(conv) + "".join(aux_lines) + text
 
 
-def render_module(source: str, kernels: Sequence[Kernel]) -> str:
-    """The text of one generated module (deterministic)."""
-    printer = MatrixPrinter()
+def kernel_source(kernels: Sequence[Kernel]) -> str:
+    """The module docstring naming the derivation modules that define the kernels."""
+    sources = sorted({k.source for k in kernels})
+    return ", ".join(f"``{s}``" for s in sources)
+
+
+def _header(kernels: Sequence[Kernel]) -> str:
+    return (
+        f'"""Generated from {kernel_source(kernels)}; do not edit by hand.\n\n'
+        "Every function here is the expression that the evidence of the claims named in its\n"
+        "docstring evaluated.  Regenerate with ``python -m derivations derive`` (or ``symrb\n"
+        "derive``); ``--check`` only compares.\n"
+        '"""\n\n'
+        "from __future__ import annotations\n\n"
+        "import numpy\n"
+    )
+
+
+def render_module(kernels: Sequence[Kernel]) -> str:
+    """The text of one generated module (deterministic), formatted with ruff."""
     names = [k.name for k in kernels]
     if len(set(names)) != len(names):
-        raise ValueError(f"duplicate kernel names in {source}: {names}")
-    text = _header(source)
+        raise ValueError(f"duplicate kernel names: {names}")
+    text = _header(kernels)
     text += "\n__all__ = [" + ", ".join(repr(k) for k in names) + "]\n"
     for k in kernels:
-        text += "\n\n" + _render_kernel(k, printer)
+        text += "\n\n" + render_kernel(k)
     return _format(text)
 
 
 def _format(text: str) -> str:
-    """Format with ``ruff format`` (pinned in the ``derive`` extra, so output is reproducible)."""
-    ruff = shutil.which("ruff")
-    if ruff is None:
+    """``ruff format`` through this interpreter (pinned in the ``derive`` extra: reproducible)."""
+    try:
+        import ruff  # noqa: F401
+    except ImportError:
         raise RuntimeError(
-            "symrb derive needs ruff to format generated code: pip install 'symrb[derive]'"
-        )
+            "generating code needs ruff in this Python environment: pip install -e '.[derive]'"
+        ) from None
     proc = subprocess.run(
-        [ruff, "format", "--line-length", "100", "--stdin-filename", "generated.py", "-"],
+        [sys.executable, "-m", "ruff", "format", "--line-length", "100", "--stdin-filename",
+         "generated.py", "-"],
         input=text,
         capture_output=True,
         text=True,
         check=False,
-    )
+    )  # fmt: skip
     if proc.returncode != 0:
         raise RuntimeError(f"ruff format failed on generated code:\n{proc.stderr}")
     return proc.stdout
@@ -294,36 +752,38 @@ def generated_dir() -> Path:
 
 INIT_TEXT = (
     '"""Kernels generated by ``derivations`` (see ``derivations/codegen.py``); do not edit by hand.\n\n'
-    "Regenerate with ``symrb derive`` (check with ``symrb derive --check``).  Import the\n"
+    "Regenerate with ``python -m derivations derive`` (or ``symrb derive``).  Import the\n"
     "hand-written wrappers in :mod:`symrb` instead of these modules: they validate input.\n"
     '"""\n'
 )
 
 
-def collect() -> dict[str, str]:
-    """Render every generated file: ``{filename: text}`` from the ``EMITS`` of derivations.parts."""
-    from derivations import parts
-
-    files: dict[str, str] = {"__init__.py": INIT_TEXT}
-    for info in sorted(pkgutil.iter_modules(parts.__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
+def collect(only: Sequence[str] | None = None) -> dict[str, str]:
+    """Render the generated files: ``{filename: text}`` (``only``: just these target modules)."""
+    files: dict[str, str] = {} if only else {"__init__.py": INIT_TEXT}
+    by_target: dict[str, list[Kernel]] = {}
+    for k in all_kernels(only):
+        by_target.setdefault(k.target, []).append(k)
+    unknown = sorted(set(only or ()) - set(by_target))
+    if unknown:
+        raise KeyError(f"no kernels go to {unknown}; targets: {sorted(by_target)}")
+    for target, kernels in sorted(by_target.items()):
+        if only and target not in only:
             continue
-        module = importlib.import_module(f"{parts.__name__}.{info.name}")
-        emits = getattr(module, "emit", None)
-        if emits is None:
-            continue
-        target, kernels = emits()
-        fname = f"{target}.py"
-        if fname in files:
-            raise ValueError(f"two derivation modules write {fname}")
-        files[fname] = render_module(module.__name__, kernels)
+        files[f"{target}.py"] = render_module(kernels)
     return files
 
 
-def emit_all(check: bool = False, out=sys.stdout) -> int:
-    """Write (or, with ``check``, diff) every generated file.  Returns a process exit code."""
-    target = generated_dir()
-    files = collect()
+def emit_all(
+    check: bool = False,
+    out: Any = sys.stdout,
+    target: Path | None = None,
+    only: Sequence[str] | None = None,
+) -> int:
+    """Write (or, with ``check``, diff) the generated files into ``target`` (default
+    ``symrb/_generated``, created when missing).  Returns a process exit code."""
+    target = generated_dir() if target is None else target
+    files = collect(only)
     changed = 0
     for fname in sorted(files):
         path = target / fname
@@ -344,22 +804,21 @@ def emit_all(check: bool = False, out=sys.stdout) -> int:
             target.mkdir(parents=True, exist_ok=True)
             path.write_text(new)
             print(f"wrote symrb/_generated/{fname}", file=out)
-    stale = sorted(p.name for p in target.glob("*.py") if p.name not in files)
+    stale = (
+        sorted(p.name for p in target.glob("*.py") if p.name not in files)
+        if target.exists() and not only
+        else []
+    )
     for name in stale:
         changed += 1
         if check:
-            print(
-                f"stale generated file symrb/_generated/{name} (no derivation writes it)", file=out
-            )
+            print(f"stale generated file symrb/_generated/{name} (no derivation writes it)", file=out)
         else:
             (target / name).unlink()
             print(f"removed stale symrb/_generated/{name}", file=out)
     if check:
         if changed:
-            print(
-                f"derive --check: {changed} generated file(s) differ from their derivations",
-                file=out,
-            )
+            print(f"derive --check: {changed} generated file(s) differ from their derivations", file=out)
             return 1
         print(f"derive --check: {len(files)} generated files match their derivations", file=out)
     return 0

@@ -1,38 +1,46 @@
 """The claim registry: every statement of the paper that symrb reproduces, stated once.
 
-A :class:`Claim` carries our ID (``D1``..``D12``, ``S1``..``S15`` from ``CLAIMS.md``), the paper's
-``\\label``, the statement in LaTeX, the outcome we expect, and pieces of :class:`Evidence`.  Each
-piece of evidence is a function returning a non-negative *residual* that is zero (up to its
-tolerance) exactly when what it checks is true, run at one :class:`Level` (symbolic for general n,
-symbolic for fixed n, exact rational, float64, high precision).
+A claim is declared in the module of its part of the paper, right above its evidence::
 
-Evidence is tagged with the *form* it checks:
+    S6 = claim("S6", label="SRBtoRB.prop", title="...", expected="holds", section="3.2",
+               statement="If [[srb]] then [[rb]] ...")
 
-``"claim"``
-    the statement as printed, which we expect to hold;
-``"printed"``
-    the statement exactly as printed, which we expect to *fail* (an erratum): its residual must be
-    above tolerance, otherwise the erratum is not proven;
-``"corrected"``
-    our corrected statement, which must hold.
+    @S6.check(Level.SYMBOLIC_GENERAL_N)
+    def s6_momentum_general_n():
+        '''d/dt(Q^T P - P^T Q) - [M, U] vanishes on the emitted field (noncommutative, any n).'''
+        ...
 
-The outcome of a claim is computed, never typed in:
+The first paragraph of an evidence function's docstring is its description (a check is described
+once).  An evidence function returns a non-negative *residual* that is zero (up to ``tol``) exactly
+when what it checks is true, at one :class:`Level`.
+
+Formulas shown in the book come from the objects the evidence evaluates: ``[[key]]`` in a claim's
+``statement``, ``printed`` or ``corrected`` text is replaced by the LaTeX of the SymPy object
+registered with ``claim.formula(key, expr)``, which the evidence reads back with
+``claim.formulas[key]``.  Hand-written math in those texts may name objects but not state
+relations (a test enforces it), so a displayed sign cannot drift from the checked one.
+
+Evidence is tagged with the *form* it checks: ``"claim"`` (the statement as printed, expected to
+hold), ``"printed"`` (the statement as printed, expected to *fail*: an erratum) or ``"corrected"``
+(our correction, which must hold).  The outcome of a claim is computed, never typed in:
 
 * ``holds``: every ``claim`` evidence passes;
 * ``holds after correction``: every ``printed`` evidence fails and every ``corrected`` one passes;
 * ``fails``: some printed-form evidence fails and no correction is registered;
 * ``not checkable``: there is no evidence.
 
-Claims live in the modules of :mod:`derivations.parts`; each module defines a list ``CLAIMS``.
-The registry discovers them, so adding a part never edits this file.
+Claims live in the modules of :mod:`derivations.parts`; the registry discovers every
+:class:`Claim` object there, so adding a part never edits this file.
 """
 
 from __future__ import annotations
 
 import enum
 import importlib
+import inspect
 import pkgutil
 import re
+import textwrap
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -42,18 +50,23 @@ __all__ = [
     "Level",
     "Evidence",
     "Claim",
+    "claim",
     "EvidenceResult",
     "ClaimResult",
     "all_claims",
     "get_claim",
+    "import_parts",
     "verify",
     "verify_claim",
+    "kernel_report",
     "OUTCOMES",
 ]
 
 OUTCOMES = ("holds", "holds after correction", "fails", "not checkable")
 Outcome = Literal["holds", "holds after correction", "fails", "not checkable"]
 Form = Literal["claim", "printed", "corrected"]
+_FORMS = ("claim", "printed", "corrected")
+_PLACEHOLDER = re.compile(r"\[\[([A-Za-z0-9_]+)\]\]")
 
 
 class Level(enum.StrEnum):
@@ -71,38 +84,33 @@ class Level(enum.StrEnum):
 
 @dataclass(frozen=True)
 class Evidence:
-    """One check of a claim.
-
-    Parameters
-    ----------
-    level:
-        How strong the check is (see :class:`Level`).
-    description:
-        One sentence: what is computed.
-    func:
-        Called with no arguments; returns the residual (a float >= 0, or anything ``float()``
-        accepts, e.g. a SymPy zero).
-    tol:
-        The check passes when ``residual <= tol``.  Symbolic checks use ``tol=0``.
-    form:
-        ``"claim"``, ``"printed"`` (expected to fail) or ``"corrected"`` (expected to hold).
-    """
+    """One check of a claim: ``func()`` returns a residual; it passes when ``residual <= tol``."""
 
     level: Level
     description: str
     func: Callable[[], Any]
     tol: float = 0.0
     form: Form = "claim"
+    name: str = ""
 
 
-@dataclass(frozen=True)
+def _describe(func: Callable[..., Any], description: str | None) -> str:
+    if description is not None:
+        return " ".join(description.split())
+    doc = inspect.getdoc(func)
+    if not doc:
+        raise ValueError(f"evidence {func.__qualname__} needs a docstring (its description)")
+    first = textwrap.dedent(doc).strip().split("\n\n")[0]
+    return " ".join(first.split())
+
+
+@dataclass(eq=False)
 class Claim:
-    """A statement of the paper.
+    """A statement of the paper (see the module docstring for how it is declared).
 
-    ``statement`` is the statement in our words (LaTeX allowed).  For an erratum, ``printed`` is the
-    form printed in the paper and ``corrected`` the form that holds; ``note`` explains the finding.
-    ``expected`` is the outcome recorded for the claim: :func:`verify` reports a mismatch as a
-    failure, so a claim whose evidence changes behaviour is noticed.
+    ``statement`` is the statement in our words; for an erratum ``printed`` is the form printed in
+    the paper and ``corrected`` the form that holds; ``note`` says what was found.  ``expected`` is
+    the outcome recorded for the claim: :func:`verify` reports a mismatch as a failure.
     """
 
     id: str
@@ -110,11 +118,13 @@ class Claim:
     title: str
     statement: str
     expected: Outcome
-    evidence: tuple[Evidence, ...] = ()
     printed: str | None = None
     corrected: str | None = None
     note: str = ""
     section: str = ""
+    evidence: list[Evidence] = field(default_factory=list)
+    formulas: dict[str, Any] = field(default_factory=dict)
+    module: str = ""
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[DS]\d+", self.id):
@@ -123,9 +133,100 @@ class Claim:
             raise ValueError(
                 f"claim {self.id}: expected must be one of {OUTCOMES}, got {self.expected!r}"
             )
-        forms = {e.form for e in self.evidence}
-        if ("printed" in forms or "corrected" in forms) and not (self.printed and self.corrected):
-            raise ValueError(f"claim {self.id}: printed/corrected evidence needs both texts")
+        if bool(self.printed) != bool(self.corrected):
+            raise ValueError(f"claim {self.id}: give both the printed and the corrected text")
+
+    # -- declaration ------------------------------------------------------------------------
+
+    def check(
+        self,
+        level: Level,
+        *,
+        tol: float = 0.0,
+        form: Form = "claim",
+        description: str | None = None,
+    ) -> Callable[[Callable[[], Any]], Callable[[], Any]]:
+        """Decorator: register the function as a piece of evidence of this claim."""
+        if form not in _FORMS:
+            raise ValueError(f"claim {self.id}: form must be one of {_FORMS}, got {form!r}")
+        if form in ("printed", "corrected") and not self.printed:
+            raise ValueError(f"claim {self.id}: {form} evidence needs printed and corrected texts")
+
+        def register(func: Callable[[], Any]) -> Callable[[], Any]:
+            self.evidence.append(
+                Evidence(
+                    level=Level(level),
+                    description=_describe(func, description),
+                    func=func,
+                    tol=float(tol),
+                    form=form,
+                    name=func.__qualname__,
+                )
+            )
+            return func
+
+        return register
+
+    def formula(self, key: str, expr: Any) -> Any:
+        """Register ``expr`` under ``key`` for ``[[key]]`` in this claim's texts; returns it."""
+        if key in self.formulas:
+            raise ValueError(f"claim {self.id}: formula {key!r} registered twice")
+        self.formulas[key] = expr
+        return expr
+
+    # -- rendering --------------------------------------------------------------------------
+
+    def placeholders(self) -> set[str]:
+        texts = [self.statement, self.printed or "", self.corrected or ""]
+        return {m for t in texts for m in _PLACEHOLDER.findall(t)}
+
+    def render(self, which: str = "statement") -> str:
+        """The text ``which`` (statement, printed, corrected) with every ``[[key]]`` replaced by
+        ``$latex$`` of the registered formula."""
+        from derivations.symbolic import latex
+
+        text = getattr(self, which) or ""
+
+        def sub(m: re.Match[str]) -> str:
+            key = m.group(1)
+            if key not in self.formulas:
+                raise KeyError(f"claim {self.id}: [[{key}]] in its {which} has no formula")
+            return "$" + latex(self.formulas[key]) + "$"
+
+        return _PLACEHOLDER.sub(sub, text)
+
+
+def claim(
+    id: str,
+    *,
+    label: str,
+    title: str,
+    statement: str,
+    expected: Outcome,
+    printed: str | None = None,
+    corrected: str | None = None,
+    note: str = "",
+    section: str = "",
+) -> Claim:
+    """Declare a claim in the calling module (see the module docstring)."""
+    frame = inspect.currentframe()
+    module = frame.f_back.f_globals.get("__name__", "") if frame and frame.f_back else ""
+    return Claim(
+        id=id,
+        label=label,
+        title=title,
+        statement=statement,
+        expected=expected,
+        printed=printed,
+        corrected=corrected,
+        note=" ".join(note.split()),
+        section=section,
+        module=module,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# results
 
 
 @dataclass
@@ -136,6 +237,7 @@ class EvidenceResult:
     residual: float
     tol: float
     seconds: float
+    name: str = ""
     error: str | None = None
 
     @property
@@ -159,6 +261,7 @@ class EvidenceResult:
             "tol": self.tol,
             "seconds": self.seconds,
             "passed": self.passed,
+            "name": self.name,
             "error": self.error,
         }
 
@@ -194,23 +297,37 @@ class ClaimResult:
         }
 
 
+# ---------------------------------------------------------------------------------------------
+# discovery
+
+
 def _claim_key(cid: str) -> tuple[int, int]:
     return (0 if cid[0] == "D" else 1, int(cid[1:]))
 
 
-def all_claims() -> list[Claim]:
-    """Every registered claim, in the order D1..D12, S1..S15 (discovered from derivations.parts)."""
+def import_parts() -> list[Any]:
+    """Import every module of :mod:`derivations.parts` (recursively, sorted by name)."""
     from derivations import parts
 
-    claims: dict[str, Claim] = {}
-    for info in sorted(pkgutil.iter_modules(parts.__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
+    modules = []
+    for info in sorted(
+        pkgutil.walk_packages(parts.__path__, prefix=parts.__name__ + "."), key=lambda m: m.name
+    ):
+        if any(piece.startswith("_") for piece in info.name.split(".")):
             continue
-        module = importlib.import_module(f"{parts.__name__}.{info.name}")
-        for claim in getattr(module, "CLAIMS", ()):
-            if claim.id in claims:
-                raise ValueError(f"claim {claim.id} registered twice (again in {module.__name__})")
-            claims[claim.id] = claim
+        modules.append(importlib.import_module(info.name))
+    return modules
+
+
+def all_claims() -> list[Claim]:
+    """Every registered claim, in the order D1..D12, S1..S15."""
+    claims: dict[str, Claim] = {}
+    for module in import_parts():
+        for value in vars(module).values():
+            if isinstance(value, Claim) and value.module == module.__name__:
+                if value.id in claims and claims[value.id] is not value:
+                    raise ValueError(f"claim {value.id} declared twice (again in {module.__name__})")
+                claims[value.id] = value
     return [claims[k] for k in sorted(claims, key=_claim_key)]
 
 
@@ -223,7 +340,14 @@ def get_claim(cid: str) -> Claim:
     return claims[key]
 
 
-def _run_evidence(ev: Evidence) -> EvidenceResult:
+# ---------------------------------------------------------------------------------------------
+# running evidence
+
+
+def _run_evidence(claim_id: str, ev: Evidence) -> EvidenceResult:
+    from derivations.codegen import _CURRENT_CLAIM
+
+    token = _CURRENT_CLAIM.set(claim_id)
     start = time.perf_counter()
     error = None
     try:
@@ -235,14 +359,16 @@ def _run_evidence(ev: Evidence) -> EvidenceResult:
     except Exception as exc:  # an evidence that crashes is reported, not hidden
         error = f"{type(exc).__name__}: {exc}"
         residual = float("inf")
-    seconds = time.perf_counter() - start
+    finally:
+        _CURRENT_CLAIM.reset(token)
     return EvidenceResult(
         level=Level(ev.level).value,
         description=ev.description,
         form=ev.form,
         residual=residual,
         tol=ev.tol,
-        seconds=seconds,
+        seconds=time.perf_counter() - start,
+        name=ev.name,
         error=error,
     )
 
@@ -268,9 +394,19 @@ def outcome_of(results: Sequence[EvidenceResult]) -> Outcome:
     return "holds" if all(r.passed for r in claim_ev) else "fails"
 
 
-def verify_claim(claim: Claim) -> ClaimResult:
-    """Run every piece of evidence of ``claim`` and compute its outcome."""
-    results = [_run_evidence(ev) for ev in claim.evidence]
+def verify_claim(claim: Claim, fail_fast: bool = False) -> ClaimResult:
+    """Run every piece of evidence of ``claim`` and compute its outcome.
+
+    With ``fail_fast`` it stops at the first evidence that does not behave as the recorded outcome
+    needs (a failing claim or corrected check, a passing printed check); the outcome is then
+    computed from the evidence run so far.
+    """
+    results = []
+    for ev in claim.evidence:
+        r = _run_evidence(claim.id, ev)
+        results.append(r)
+        if fail_fast and _contradicts(claim.expected, r):
+            break
     return ClaimResult(
         id=claim.id,
         label=claim.label,
@@ -281,12 +417,43 @@ def verify_claim(claim: Claim) -> ClaimResult:
     )
 
 
-def verify(ids: Iterable[str] | None = None, progress: bool = False) -> list[ClaimResult]:
+def _contradicts(expected: str, r: EvidenceResult) -> bool:
+    if r.error is not None:
+        return True
+    if r.form == "printed":
+        return r.passed if expected == "holds after correction" else False
+    return not r.passed
+
+
+def verify(
+    ids: Iterable[str] | None = None,
+    progress: Callable[[Claim], None] | None = None,
+    fail_fast: bool = False,
+) -> list[ClaimResult]:
     """Verify the claims with the given IDs (all when ``None``), in registry order."""
     claims = all_claims() if ids is None else [get_claim(i) for i in ids]
     out = []
-    for claim in claims:
-        if progress:
-            print(f"  verifying {claim.id} ...", flush=True)
-        out.append(verify_claim(claim))
+    for c in claims:
+        if progress is not None:
+            progress(c)
+        result = verify_claim(c, fail_fast=fail_fast)
+        out.append(result)
+        if fail_fast and not result.ok:
+            break
     return out
+
+
+def kernel_report() -> list[dict[str, Any]]:
+    """For every emitted kernel: its module, the claims it names and the claims whose evidence
+    read its expressions in this process (run :func:`verify` first)."""
+    from derivations.codegen import all_kernels
+
+    return [
+        {
+            "kernel": f"{k.target}.{k.name}",
+            "source": k.source,
+            "claims": list(k.claims),
+            "checked_by": sorted(k.checked_by, key=_claim_key),
+        }
+        for k in all_kernels()
+    ]

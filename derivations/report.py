@@ -57,10 +57,10 @@ def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> st
 def claim_markdown(result: ClaimResult) -> str:
     """Statement, erratum (printed/corrected), note, outcome and evidence table of a claim."""
     claim = get_claim(result.id)
-    parts = [f"**{claim.id}** (`{claim.label}`): {claim.statement}"]
+    parts = [f"**{claim.id}** (`{claim.label}`): {claim.render('statement')}"]
     if claim.printed:
-        parts.append(f"*Printed in the paper:* {claim.printed}")
-        parts.append(f"*Corrected:* {claim.corrected}")
+        parts.append(f"*Printed in the paper:* {claim.render('printed')}")
+        parts.append(f"*Corrected:* {claim.render('corrected')}")
     if claim.note:
         parts.append(f"*Note:* {plain(claim.note)}")
     parts.append(f"Outcome: **{result.outcome}** (recorded: {claim.expected}).")

@@ -1,31 +1,78 @@
 """symrb: numerics for Bloch, Crouch and Ratiu, "Symmetric Discrete Optimal Control and Deep Learning".
 
 The package imports only NumPy and SciPy.  Its kernels in :mod:`symrb._generated` are emitted by
-:mod:`derivations` (SymPy, development time only) and wrapped here by functions that validate input.
-Each submodule lists its public names in ``__all__``; they are re-exported here.
+the ``derivations`` of the source tree (SymPy, development time only) and wrapped here by
+functions that validate input.  Each submodule lists its public names in ``__all__``; they are
+available here too, loaded on first use (so ``import symrb`` is cheap and the ``symrb`` command
+works even while the generated kernels are being rewritten).
 """
 
 from __future__ import annotations
 
-from . import algebra, continuous, discrete, errors, learning, orbits, rigid_body, solvers
-from .algebra import *  # noqa: F403
-from .continuous import *  # noqa: F403
-from .discrete import *  # noqa: F403
-from .errors import *  # noqa: F403
-from .learning import *  # noqa: F403
-from .orbits import *  # noqa: F403
-from .rigid_body import *  # noqa: F403
-from .solvers import *  # noqa: F403
+import importlib
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
-__all__ = [
-    *algebra.__all__,
-    *continuous.__all__,
-    *discrete.__all__,
-    *errors.__all__,
-    *learning.__all__,
-    *orbits.__all__,
-    *rigid_body.__all__,
-    *solvers.__all__,
-]
+#: Public names of each submodule (a test checks this table against the modules' ``__all__``).
+_EXPORTS: dict[str, tuple[str, ...]] = {
+    "algebra": (
+        "hat", "vee", "pairing", "commutator", "skew_part", "J", "J_inv", "J_D",
+        "inertia_from_lam", "lam_from_inertia", "random_so", "random_SO", "random_lam",
+        "as_generator",
+    ),
+    "continuous": (
+        "symmetric_momentum", "symmetric_rigid_body_rhs", "mclachlan_scovel_rhs",
+        "multi_sample_control", "multi_sample_rhs", "gl_hamiltonian", "P_from_M", "Flow",
+        "RigidBody", "SymmetricRigidBody", "McLachlanScovel", "MultiSampleSymmetricRigidBody",
+        "Trajectory", "FlowSolution", "integrate",
+    ),
+    "discrete": (
+        "jd_residual", "symmetric_step", "symmetric_flow", "mv_algorithm1", "mv_algorithm2",
+        "discrete_rigid_body_flow",
+    ),
+    "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
+    "learning": (
+        "resnet_forward", "squared_error", "costate_sweep", "loss_gradients", "train",
+        "TrainResult", "toy_classification",
+    ),
+    "orbits": (
+        "orbit_extremal_rhs", "orbit_hamiltonian", "brockett_potential", "double_bracket_rhs",
+        "double_bracket_flow", "OrbitBVPResult", "solve_orbit_bvp",
+    ),
+    "rigid_body": (
+        "rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals",
+        "euler_rhs_so3",
+    ),
+    "solvers": ("MVSolveInfo", "solve_moser_veselov", "fold_scale"),
+}  # fmt: skip
+_WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
+
+__all__ = [name for names in _EXPORTS.values() for name in names]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        return importlib.import_module(f"{__name__}.{name}")
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'symrb' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__) | set(_EXPORTS))
+
+
+if TYPE_CHECKING:  # static type checkers see the eager imports
+    from . import algebra, continuous, discrete, errors, learning, orbits, rigid_body, solvers
+    from .algebra import *  # noqa: F403
+    from .continuous import *  # noqa: F403
+    from .discrete import *  # noqa: F403
+    from .errors import *  # noqa: F403
+    from .learning import *  # noqa: F403
+    from .orbits import *  # noqa: F403
+    from .rigid_body import *  # noqa: F403
+    from .solvers import *  # noqa: F403

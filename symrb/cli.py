@@ -1,101 +1,56 @@
-"""The ``symrb`` command line: ``symrb derive [--check]`` and ``symrb verify [IDS...] [--json]``.
+"""The ``symrb`` command: ``symrb derive [--check]`` and ``symrb verify [IDS...]``.
 
-Both commands are development tools: they import :mod:`derivations`, which needs SymPy
-(``pip install 'symrb[derive]'``).  Importing :mod:`symrb` itself never imports SymPy.
+Both are development tools that run the SymPy derivations of a source checkout
+(:mod:`derivations`, not part of the wheel).  This launcher imports none of symrb's numerics, so
+it works even while ``symrb/_generated`` is missing.  Exit status 2 (with what to install) when
+SymPy or the derivations are not available; otherwise see ``derivations.cli``.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import os
-import subprocess
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+_NEED = (
+    "symrb {cmd} runs the derivations of a source checkout of symrb and needs its 'derive' extra: "
+    "git clone the repository, then pip install -e '.[derive]' in it"
+)
 
-def _need_derivations() -> None:
+
+def _derivations_cli(cmd: str):  # type: ignore[no-untyped-def]
     try:
         import sympy  # noqa: F401
-    except ImportError:  # pragma: no cover - depends on the environment
-        sys.exit("symrb derive/verify need SymPy: pip install 'symrb[derive]'")
-
-
-def _cmd_derive(args: argparse.Namespace) -> int:
-    _need_derivations()
-    if os.environ.get("PYTHONHASHSEED") != "0":
-        # SymPy's printing order must not depend on string hashing: rerun with a fixed seed.
-        env = dict(os.environ, PYTHONHASHSEED="0")
-        argv = [sys.executable, "-m", "symrb.cli", "derive"] + (["--check"] if args.check else [])
-        return subprocess.run(argv, env=env, check=False).returncode
-    from derivations.codegen import emit_all
-
-    return emit_all(check=args.check)
-
-
-def _fmt_seconds(s: float) -> str:
-    return f"{s:.2f}s" if s >= 0.01 else f"{s * 1000:.1f}ms"
-
-
-def _cmd_verify(args: argparse.Namespace) -> int:
-    _need_derivations()
-    from derivations.registry import verify
-
+    except ImportError:
+        sys.exit(_exit2(_NEED.format(cmd=cmd) + " (SymPy is not installed)"))
     try:
-        results = verify(args.ids or None, progress=not args.json and args.progress)
-    except KeyError as exc:
-        print(exc.args[0], file=sys.stderr)
-        return 2
-    payload = [r.to_dict() for r in results]
-    if args.output:
-        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.output).write_text(json.dumps(payload, indent=1) + "\n")
-    if args.json:
-        print(json.dumps(payload, indent=1))
-    else:
-        header = (
-            f"{'ID':<4} {'label':<28} {'outcome':<24} {'ok':<3} evidence (level: residual, time)"
-        )
-        print(header)
-        print("-" * len(header))
-        for r in results:
-            ev = "; ".join(
-                f"{e.level}{'' if e.form == 'claim' else ' [' + e.form + ']'}: "
-                f"{e.residual:.1e} {_fmt_seconds(e.seconds)}"
-                + (f" ERROR {e.error}" if e.error else "")
-                for e in r.evidence
-            )
-            print(f"{r.id:<4} {r.label[:28]:<28} {r.outcome:<24} {'ok' if r.ok else 'NO':<3} {ev}")
-        bad = [r.id for r in results if not r.ok]
-        total = sum(r.seconds for r in results)
-        print(
-            f"\n{len(results)} claims checked in {total:.1f}s; "
-            + (
-                "all outcomes as recorded"
-                if not bad
-                else f"outcome differs from the record: {', '.join(bad)}"
-            )
-        )
-    return 0 if all(r.ok for r in results) else 1
+        import derivations.cli as dcli
+    except ImportError:
+        root = Path(__file__).resolve().parents[1]
+        if not (root / "derivations" / "__init__.py").is_file():
+            sys.exit(_exit2(_NEED.format(cmd=cmd) + " (no derivations package next to symrb)"))
+        sys.path.insert(0, str(root))
+        import derivations.cli as dcli
+    return dcli
+
+
+def _exit2(message: str) -> int:
+    print(message, file=sys.stderr)
+    return 2
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="symrb", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
-    p_derive = sub.add_parser("derive", help="regenerate symrb/_generated from derivations/")
-    p_derive.add_argument(
-        "--check", action="store_true", help="only diff; exit 1 if anything would change"
-    )
-    p_derive.set_defaults(func=_cmd_derive)
-    p_verify = sub.add_parser("verify", help="check the claims of the paper")
-    p_verify.add_argument("ids", nargs="*", help="claim IDs (default: all), e.g. S1 S4 D10")
-    p_verify.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    p_verify.add_argument("--output", help="also write the JSON to this file")
-    p_verify.add_argument("--progress", action="store_true", help="print each claim as it starts")
-    p_verify.set_defaults(func=_cmd_verify)
-    args = parser.parse_args(argv)
-    return int(args.func(args))
+    args = list(sys.argv[1:] if argv is None else argv)
+    cmd = next((a for a in args if not a.startswith("-")), "")
+    if cmd not in ("derive", "verify"):
+        print(
+            "usage: symrb {derive,verify} ...\n"
+            "  symrb derive [--check] [--only TARGET ...]   regenerate or check symrb/_generated\n"
+            "  symrb verify [IDS ...] [--json] [--output FILE] [--fail-fast]   check the claims",
+            file=sys.stderr,
+        )
+        return 0 if cmd in ("-h", "--help") or args in (["-h"], ["--help"]) else 2
+    return int(_derivations_cli(cmd).main(args))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,246 @@
+r"""Independent references for the float64 and high-precision evidence.
+
+Everything here is written from the paper's definitions with NumPy, SciPy and mpmath only, by a
+different route from symrb (which never imports this module, and which this module never
+imports), so that evidence comparing a public ``symrb`` function with these catches a wrong
+implementation instead of agreeing with it:
+
+* the inertia operator :math:`J(\Omega) = \Lambda\Omega + \Omega\Lambda` as an
+  :math:`n^2\times n^2` matrix, inverted by a linear solve (symrb uses the entry weights
+  :math:`1/(\lambda_i+\lambda_j)`);
+* the rigid body and symmetric rigid body vector fields built on it;
+* the exact solution of Euler's equations for n = 3 by Jacobi elliptic functions
+  (``scipy.special.ellipj``; Landau and Lifshitz, Mechanics, section 37);
+* the discrete symmetric representation and both Moser-Veselov algorithms in 50-digit arithmetic
+  (``mpmath``), :math:`J_D(U) = M` solved by Newton's method on the Cayley parameters of
+  :math:`U` (``mpmath.findroot``) started from the identity's branch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.special import ellipj
+
+Array = NDArray[np.float64]
+
+__all__ = [
+    "J_operator",
+    "J",
+    "J_inv",
+    "J_D",
+    "hat",
+    "vee",
+    "rigid_body_field",
+    "symmetric_field",
+    "pairing",
+    "euler_elliptic",
+    "random_rotation",
+    "random_skew",
+    "MPDiscrete",
+]
+
+
+def J_operator(lam: Array) -> Array:
+    """The matrix of Omega -> Lambda Omega + Omega Lambda on row-major vec(Omega), (n^2, n^2)."""
+    L = np.diag(np.asarray(lam, dtype=float))
+    eye = np.eye(L.shape[0])
+    return np.kron(L, eye) + np.kron(eye, L)  # vec(L X) = (L kron I) vec X, vec(X L) = (I kron L) vec X
+
+
+def J(Omega: Array, lam: Array) -> Array:
+    """Lambda Omega + Omega Lambda with explicit diagonal matrices (batched over leading axes)."""
+    L = np.diag(np.asarray(lam, dtype=float))
+    return L @ Omega + Omega @ L
+
+
+def J_inv(M: Array, lam: Array) -> Array:
+    """Solve Lambda Omega + Omega Lambda = M by a dense linear solve (batched over leading axes)."""
+    M = np.asarray(M, dtype=float)
+    k = M.shape[-1]
+    A = J_operator(lam)
+    flat = M.reshape(-1, k * k).T
+    return np.linalg.solve(A, flat).T.reshape(M.shape)
+
+
+def J_D(U: Array, lam: Array) -> Array:
+    """U Lambda - Lambda U^T with explicit diagonal matrices."""
+    L = np.diag(np.asarray(lam, dtype=float))
+    return U @ L - L @ np.swapaxes(U, -1, -2)
+
+
+def pairing(a: Array, b: Array) -> Array:
+    """<a, b> = -1/2 trace(a b)."""
+    return -0.5 * np.trace(a @ b, axis1=-2, axis2=-1)
+
+
+def hat(v: Array) -> Array:
+    """hat(v) w = v x w (built column by column from the cross product)."""
+    v = np.asarray(v, dtype=float)
+    cols = [np.cross(v, e) for e in np.eye(3)]
+    return np.stack(cols, axis=-1)
+
+
+def vee(m: Array) -> Array:
+    return np.stack([m[..., 2, 1], m[..., 0, 2], m[..., 1, 0]], axis=-1)
+
+
+def rigid_body_field(Q: Array, M: Array, lam: Array) -> tuple[Array, Array]:
+    """(Q Omega, M Omega - Omega M) with Omega = J^{-1}(M) from the linear solve."""
+    Om = J_inv(M, lam)
+    return Q @ Om, M @ Om - Om @ M
+
+
+def symmetric_field(Q: Array, P: Array, lam: Array) -> tuple[Array, Array]:
+    """(Q U, P U) with U = J^{-1}(Q^T P - P^T Q) from the linear solve."""
+    Qt, Pt = np.swapaxes(Q, -1, -2), np.swapaxes(P, -1, -2)
+    U = J_inv(Qt @ P - Pt @ Q, lam)
+    return Q @ U, P @ U
+
+
+def euler_elliptic(inertia: Array, a1: float, a3: float, t: Array) -> Array:
+    r"""Exact body angular momentum m(t) of Euler's equations :math:`\dot m = m\times\omega`,
+    :math:`\omega_i = m_i/I_i`, for :math:`I_1 < I_2 < I_3` and the initial angular velocity
+    :math:`\omega(0) = (a_1, 0, a_3)`, :math:`a_1, a_3 > 0`, on the branch
+    :math:`|m|^2 > 2E I_2` (Landau and Lifshitz, section 37):
+
+    .. math::
+
+        \omega_1 = A_1\operatorname{cn}\tau,\quad \omega_2 = -A_2\operatorname{sn}\tau,\quad
+        \omega_3 = A_3\operatorname{dn}\tau,\qquad
+        \tau = t\sqrt{(I_3-I_2)(|m|^2-2EI_1)/(I_1I_2I_3)}.
+
+    The sign of :math:`\omega_2` is that of :math:`\dot\omega_2(0) = (I_3-I_1)a_1a_3/I_2 > 0`
+    with ``sn`` odd, for the convention :math:`\dot m = m\times\omega` (so :math:`-A_2`).
+    Returns m at the times ``t``, shape (len(t), 3).
+    """
+    I1, I2, I3 = (float(x) for x in inertia)
+    if not I1 < I2 < I3:
+        raise ValueError(f"need I1 < I2 < I3, got {inertia}")
+    E2 = I1 * a1**2 + I3 * a3**2  # 2E
+    L2 = (I1 * a1) ** 2 + (I3 * a3) ** 2  # |m|^2
+    if not L2 > E2 * I2:
+        raise ValueError("initial data not on the branch |m|^2 > 2 E I_2")
+    A1 = np.sqrt((E2 * I3 - L2) / (I1 * (I3 - I1)))
+    A2 = np.sqrt((E2 * I3 - L2) / (I2 * (I3 - I2)))
+    A3 = np.sqrt((L2 - E2 * I1) / (I3 * (I3 - I1)))
+    k2 = (I2 - I1) * (E2 * I3 - L2) / ((I3 - I2) * (L2 - E2 * I1))
+    rate = np.sqrt((I3 - I2) * (L2 - E2 * I1) / (I1 * I2 * I3))
+    sn, cn, dn, _ = ellipj(rate * np.asarray(t, dtype=float), k2)
+    # the -A2 sn branch: at t = 0 omega_2 = 0 and omega_2 grows when (I1 - I3) a1 a3 / I2 < 0
+    sign = -1.0 if (I3 - I1) * a1 * a3 > 0 else 1.0
+    w = np.stack([A1 * cn, -sign * A2 * sn, A3 * dn], axis=-1)
+    return w * np.array([I1, I2, I3])
+
+
+def random_rotation(k: int, rng: np.random.Generator) -> Array:
+    """A rotation from the QR factorisation of a Gaussian matrix (det fixed to +1)."""
+    q, r = np.linalg.qr(rng.standard_normal((k, k)))
+    q = q * np.sign(np.diag(r))
+    if np.linalg.det(q) < 0:
+        q[:, 0] = -q[:, 0]
+    return q
+
+
+def random_skew(k: int, rng: np.random.Generator, scale: float = 1.0) -> Array:
+    a = rng.standard_normal((k, k)) * scale
+    return a - a.T
+
+
+class MPDiscrete:
+    """The discrete maps of Section 2 in ``dps``-digit arithmetic, for n = 3 (mpmath).
+
+    ``solve_jd(M)`` returns the U in SO(3) with U Lambda - Lambda U^T = M on the branch through
+    the identity: Newton on the Cayley parameters a of U = (I - A)^{-1}(I + A), A = hat(a),
+    continued from M = 0 (U = I) along t M, t = 1/4, 1/2, 3/4, 1, so no float64 start is needed.
+    """
+
+    def __init__(self, lam: Array, dps: int = 50) -> None:
+        import mpmath as mp
+
+        self.mp = mp
+        self.dps = dps
+        with mp.workdps(dps):
+            self.L = mp.diag([mp.mpf(float(x)) for x in lam])
+            self.eye = mp.eye(3)
+
+    def _skew(self, a: object, b: object, c: object) -> object:
+        mp = self.mp
+        return mp.matrix([[0, -c, b], [c, 0, -a], [-b, a, 0]])
+
+    def cayley(self, x: list[object]) -> object:
+        mp = self.mp
+        A = self._skew(*x)
+        return mp.inverse(self.eye - A) * (self.eye + A)
+
+    def solve_jd(self, M: object) -> object:
+        mp = self.mp
+        with mp.workdps(self.dps):
+            x = [mp.mpf(0), mp.mpf(0), mp.mpf(0)]
+            for t in (mp.mpf(1) / 4, mp.mpf(1) / 2, mp.mpf(3) / 4, mp.mpf(1)):
+
+                def F(a: object, b: object, c: object, t: object = t) -> list[object]:
+                    U = self.cayley([a, b, c])
+                    R = U * self.L - self.L * U.T - t * M
+                    return [R[2, 1], R[0, 2], R[1, 0]]
+
+                x = list(mp.findroot(F, x, tol=mp.mpf(10) ** (-self.dps + 8)))
+            return self.cayley(x)
+
+    def matrix(self, a: Array) -> object:
+        return self.mp.matrix(np.asarray(a, dtype=float).tolist())
+
+    def orthonormal(self, Q: Array) -> object:
+        """Q re-orthogonalised in high precision (QR with positive diagonal)."""
+        mp = self.mp
+        with mp.workdps(self.dps):
+            q, r = mp.qr(self.matrix(Q))
+            return q * mp.diag([mp.sign(r[i, i]) for i in range(3)])
+
+    def symmetric(self, Q0: object, P0: object, h: float, steps: int) -> tuple[list, list]:
+        """Q_k, P_k of the symmetric representation: J_D(U_k) = h (Q_k^T P_k - P_k^T Q_k)."""
+        mp = self.mp
+        with mp.workdps(self.dps):
+            Q, P = Q0, P0
+            Qs, Ps = [Q], [P]
+            for _ in range(steps):
+                U = self.solve_jd(mp.mpf(h) * (Q.T * P - P.T * Q))
+                Q, P = Q * U, P * U
+                Qs.append(Q)
+                Ps.append(P)
+            return Qs, Ps
+
+    def mv2(self, Q1: object, M1: object, steps: int) -> tuple[list, list]:
+        """MV-Algorithm 2 from (Q_1, M_1): returns Q_1.. and M_1.. (steps + 1 of each)."""
+        mp = self.mp
+        with mp.workdps(self.dps):
+            Qk, Mk = Q1, M1
+            Om = self.solve_jd(Mk).T  # mv2: M_k = Om_k^T L - L Om_k, i.e. J_D(Om_k^T) = M_k
+            Qs, Ms = [Qk], [Mk]
+            for _ in range(steps):
+                Mk = Om * Mk * Om.T  # mv3
+                Om = self.solve_jd(Mk).T  # mv2 for Om_{k+1}
+                Qk = Qk * Om.T  # mv1: Om_{k+1} = Q_{k+1}^T Q_k
+                Qs.append(Qk)
+                Ms.append(Mk)
+            return Qs, Ms
+
+    def mv1(self, Q0: object, Q1: object, steps: int) -> list:
+        """MV-Algorithm 1 from (Q_0, Q_1): returns Q_0, Q_1, ..., Q_{steps+1}."""
+        with self.mp.workdps(self.dps):
+            Qa, Qb = Q0, Q1
+            out = [Qa, Qb]
+            for _ in range(steps):
+                Om = Qb.T * Qa  # mv1
+                Mk = Om.T * self.L - self.L * Om  # mv2
+                Mk = Om * Mk * Om.T  # mv3
+                Om = self.solve_jd(Mk).T  # mv2 for the next Omega
+                Qa, Qb = Qb, Qb * Om.T  # mv1
+                out.append(Qb)
+            return out
+
+    def distance(self, a: object, b: Array) -> float:
+        """max |a - b| entrywise, a in high precision, b float64."""
+        with self.mp.workdps(self.dps):
+            d = a - self.matrix(b)
+            return float(max(abs(d[i, j]) for i in range(3) for j in range(3)))
