@@ -102,7 +102,11 @@ def _print_table(results: Sequence[Any], unchecked: Sequence[dict[str, Any]]) ->
     total = sum(r.seconds for r in results)
     print(
         f"\n{len(results)} claims checked in {total:.1f}s; "
-        + ("all outcomes as recorded" if not bad else f"outcome differs from the record: {', '.join(bad)}")
+        + (
+            "all outcomes as recorded"
+            if not bad
+            else f"outcome differs from the record: {', '.join(bad)}"
+        )
     )
 
 
@@ -113,7 +117,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     p_derive = sub.add_parser("derive", help="regenerate symrb/_generated from derivations/")
     p_derive.add_argument("--check", action="store_true", help="only diff; exit 1 on a difference")
-    p_derive.add_argument("--only", nargs="+", metavar="TARGET", help="only these generated modules")
+    p_derive.add_argument(
+        "--only", nargs="+", metavar="TARGET", help="only these generated modules"
+    )
     p_derive.add_argument("--target", type=Path, help="write into this directory instead")
     p_derive.set_defaults(func=_cmd_derive)
     p_verify = sub.add_parser("verify", help="check the claims of the paper")

@@ -111,7 +111,9 @@ _LI, _LJ = sp.symbols("lam_i lam_j", real=True)
 
 #: The auxiliaries every kernel may use.  ``Lambda`` = diag(lam); ``W_ij = 1/(lam_i + lam_j)``.
 AUXILIARIES: dict[str, Aux] = {
-    "Lambda": Aux("Lambda", lambda li, lj, same: same * li, diagonal=lambda li: li, latex=r"\Lambda"),
+    "Lambda": Aux(
+        "Lambda", lambda li, lj, same: same * li, diagonal=lambda li: li, latex=r"\Lambda"
+    ),
     "W": Aux("W", lambda li, lj, same: 1 / (li + lj), latex="W"),
 }
 Lam = AUXILIARIES["Lambda"].symbol
@@ -136,7 +138,8 @@ def _diag_code(aux: Aux, power: int = 1) -> str:
     assert aux.diagonal is not None
     li = sp.Symbol("lam_i", real=True)
     code = NumPyPrinter({"fully_qualified_modules": True}).doprint(aux.diagonal(li) ** power)
-    return "(" + re.sub(r"\blam_i\b", "lam", code) + ")"
+    code = re.sub(r"\blam_i\b", "lam", code)
+    return code if code == "lam" else f"({code})"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -202,6 +205,7 @@ class Kernel:
     stack : stack scalar outputs along a new last axis instead of returning a tuple
     components : argument name -> Matrix of scalar symbols for its entries (``arg[..., i, j]`` or
         ``arg[..., i]``); such kernels are printed through scalar CSE
+    register : False for a kernel that is only rendered (tests), never emitted
 
     Reading an output with ``kernel["name"]`` records which claim's evidence is running (the
     registry sets it), so ``symrb verify`` can list, for every kernel, the claims that checked it.
@@ -216,6 +220,7 @@ class Kernel:
     stack: bool = False
     components: dict[str, sp.Matrix] = field(default_factory=dict)
     source: str = ""
+    register: bool = True
     checked_by: set[str] = field(default_factory=set)
     order: int = field(default_factory=lambda: next(_counter))
 
@@ -225,12 +230,16 @@ class Kernel:
         if not self.source:
             frame = sys._getframe(2)
             self.source = str(frame.f_globals.get("__name__", ""))
-        if self.source.startswith("derivations.parts.") and self.source.rsplit(".", 1)[1] != self.target:
+        if (
+            self.source.startswith("derivations.parts.")
+            and self.source.rsplit(".", 1)[1] != self.target
+        ):
             raise ValueError(
                 f"kernel {self.name}: its target {self.target!r} must be the name of the part "
                 f"module that defines it ({self.source})"
             )
-        _KERNELS.append(self)
+        if self.register:  # register=False: a kernel rendered by a test, never emitted
+            _KERNELS.append(self)
 
     def __getitem__(self, key: str) -> sp.Basic:
         claim = _CURRENT_CLAIM.get()
@@ -310,7 +319,9 @@ def _power(base: sp.MatrixExpr, k: int) -> sp.MatrixExpr:
 def _word(expr: sp.Basic) -> tuple[sp.Expr, list[sp.Basic]]:
     """A product as (scalar coefficient, list of letters): powers of dense factors spelled out,
     powers of diagonal auxiliaries kept whole."""
-    coeff, mats = expr.as_coeff_matrices() if isinstance(expr, sp.MatMul) else (sp.Integer(1), [expr])
+    coeff, mats = (
+        expr.as_coeff_matrices() if isinstance(expr, sp.MatMul) else (sp.Integer(1), [expr])
+    )
     word: list[sp.Basic] = []
     for m in mats:
         if isinstance(m, sp.MatPow) and _is_diag(m.base) is None and m.exp.is_Integer and m.exp > 0:
@@ -410,10 +421,25 @@ def _is_matrix(e: sp.Basic) -> bool:
 class MatrixPrinter(NumPyPrinter):
     """NumPy printer for batched matrix expressions (see the module docstring)."""
 
-    def __init__(self) -> None:
+    def __init__(self, like: str = "") -> None:
         super().__init__({"fully_qualified_modules": True, "inline": True, "strict": True})
+        self.like = (
+            like  # an (..., n, n) argument that zero and identity matrices take the shape of
+        )
 
     # atoms
+    def _print_ZeroMatrix(self, expr: sp.ZeroMatrix) -> str:
+        if not self.like:
+            raise NotImplementedError(
+                "a zero matrix needs a matrix argument to take its shape from"
+            )
+        return f"numpy.zeros_like({self.like})"
+
+    def _print_Identity(self, expr: sp.Identity) -> str:
+        if not self.like:
+            raise NotImplementedError("an identity matrix needs a matrix argument for its shape")
+        return f"numpy.broadcast_to(numpy.eye({self.like}.shape[-1]), {self.like}.shape)"
+
     def _print_MatrixSymbol(self, expr: sp.MatrixSymbol) -> str:
         name = str(expr.name)
         if name in AUXILIARIES and AUXILIARIES[name].diagonal is not None:
@@ -447,7 +473,11 @@ class MatrixPrinter(NumPyPrinter):
             return f"({vec}[..., :, None] * {self._factor_product(mats[lead:])})"
         acc = self._factor(mats[0])
         for m, d in zip(mats[1:], diags[1:], strict=True):
-            acc = f"({acc} * {self._diag(m)}[..., None, :])" if d is not None else f"({acc} @ {self._factor(m)})"
+            acc = (
+                f"({acc} * {self._diag(m)}[..., None, :])"
+                if d is not None
+                else f"({acc} @ {self._factor(m)})"
+            )
         return acc
 
     def _factor_product(self, mats: Sequence[sp.Basic]) -> str:
@@ -517,6 +547,9 @@ class MatrixPrinter(NumPyPrinter):
     def _print_HadamardProduct(self, expr: sp.HadamardProduct) -> str:
         return "(" + " * ".join(sorted(self._factor(a) for a in expr.args)) + ")"
 
+    def _print_HadamardPower(self, expr: sp.HadamardPower) -> str:
+        return f"({self._factor(expr.base)} ** {self._print(expr.exp)})"
+
     def _print_MatPow(self, expr: sp.MatPow) -> str:
         aux = _is_diag(expr.base)
         if aux is not None:
@@ -579,6 +612,8 @@ def _count(expr: sp.Basic, acc: dict[str, int]) -> None:
         acc["products"] += 1
     elif isinstance(expr, (sp.MatAdd, sp.HadamardProduct)):
         acc["elementwise"] += len(expr.args) - 1
+    elif isinstance(expr, sp.HadamardPower):
+        acc["elementwise"] += 1
     elif isinstance(expr, _Entrywise):
         acc["elementwise"] += 1
     elif isinstance(expr, (sp.Trace, _TracePair)):
@@ -666,7 +701,8 @@ def _component_code(k: Kernel, printer: MatrixPrinter) -> tuple[list[str], list[
 
 def render_kernel(k: Kernel) -> str:
     """The text of one generated function."""
-    printer = MatrixPrinter()
+    like = next((a.name for a in k.args if a.shape.endswith("n, n)")), "")
+    printer = MatrixPrinter(like)
     argnames = [a.name for a in k.args]
     head = [f"def {k.name}({', '.join(argnames)}):\n"]
     conv = [f"    {name} = numpy.asarray({name}, dtype=float)\n" for name in argnames]
@@ -812,13 +848,18 @@ def emit_all(
     for name in stale:
         changed += 1
         if check:
-            print(f"stale generated file symrb/_generated/{name} (no derivation writes it)", file=out)
+            print(
+                f"stale generated file symrb/_generated/{name} (no derivation writes it)", file=out
+            )
         else:
             (target / name).unlink()
             print(f"removed stale symrb/_generated/{name}", file=out)
     if check:
         if changed:
-            print(f"derive --check: {changed} generated file(s) differ from their derivations", file=out)
+            print(
+                f"derive --check: {changed} generated file(s) differ from their derivations",
+                file=out,
+            )
             return 1
         print(f"derive --check: {len(files)} generated files match their derivations", file=out)
     return 0

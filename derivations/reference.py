@@ -45,7 +45,9 @@ def J_operator(lam: Array) -> Array:
     """The matrix of Omega -> Lambda Omega + Omega Lambda on row-major vec(Omega), (n^2, n^2)."""
     L = np.diag(np.asarray(lam, dtype=float))
     eye = np.eye(L.shape[0])
-    return np.kron(L, eye) + np.kron(eye, L)  # vec(L X) = (L kron I) vec X, vec(X L) = (I kron L) vec X
+    return np.kron(L, eye) + np.kron(
+        eye, L
+    )  # vec(L X) = (L kron I) vec X, vec(X L) = (I kron L) vec X
 
 
 def J(Omega: Array, lam: Array) -> Array:

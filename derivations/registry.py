@@ -326,7 +326,9 @@ def all_claims() -> list[Claim]:
         for value in vars(module).values():
             if isinstance(value, Claim) and value.module == module.__name__:
                 if value.id in claims and claims[value.id] is not value:
-                    raise ValueError(f"claim {value.id} declared twice (again in {module.__name__})")
+                    raise ValueError(
+                        f"claim {value.id} declared twice (again in {module.__name__})"
+                    )
                 claims[value.id] = value
     return [claims[k] for k in sorted(claims, key=_claim_key)]
 

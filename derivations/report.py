@@ -14,7 +14,7 @@ from typing import Any
 
 from derivations.registry import ClaimResult, EvidenceResult, get_claim, verify_claim
 
-__all__ = ["plain", "evidence_table", "claim_markdown", "check"]
+__all__ = ["plain", "evidence_table", "claim_markdown", "check", "load_results"]
 
 
 def plain(text: str) -> str:
@@ -84,3 +84,30 @@ def check(cid: str, show: bool = True) -> ClaimResult:
         f"{cid}: outcome {result.outcome!r}, recorded {result.expected!r}; " + "; ".join(failing)
     )
     return result
+
+
+def load_results(build_dir: str = "_build") -> tuple[dict[str, Any], str]:
+    """The results of ``symrb verify --output <build_dir>/verify.json`` (written before the book
+    build), or of a run here when that file is missing; checked against the registry.
+
+    Returns ``(payload, source)`` with ``payload = {"claims": [...], "kernels": [...]}``.
+    """
+    import json
+    from pathlib import Path
+
+    from derivations.registry import all_claims, kernel_report, verify
+
+    path = Path(build_dir) / "verify.json"
+    if path.exists():
+        payload = json.loads(path.read_text())
+        source = f"`{path.as_posix()}`, written by `symrb verify` before this build"
+    else:
+        results = verify()
+        payload = {"claims": [r.to_dict() for r in results], "kernels": kernel_report()}
+        source = "a run of the evidence during this build (no verify.json was found)"
+    ids = [r["id"] for r in payload["claims"]]
+    registered = [c.id for c in all_claims()]
+    assert ids == registered, f"{path} covers {ids}, the registry has {registered}: rerun verify"
+    bad = [r["id"] for r in payload["claims"] if not r["ok"]]
+    assert not bad, f"computed outcome differs from the record for {bad}"
+    return payload, source

@@ -185,9 +185,14 @@ def explicit(
     """
     from derivations.codegen import AUXILIARIES
 
-    env = {k: (sp.Matrix(v) if isinstance(v, sp.MatrixBase) else sp.sympify(v)) for k, v in values.items()}
+    env = {
+        k: (sp.Matrix(v) if isinstance(v, sp.MatrixBase) else sp.sympify(v))
+        for k, v in values.items()
+    }
     cache: dict[sp.Basic, Any] = {}
-    size = next((v.rows for v in env.values() if isinstance(v, sp.MatrixBase) and v.rows == v.cols), None)
+    size = next(
+        (v.rows for v in env.values() if isinstance(v, sp.MatrixBase) and v.rows == v.cols), None
+    )
     if lam is not None:
         size = len(lam)
 
@@ -357,7 +362,9 @@ class Words:
             f"{type(e).__name__} has no noncommutative form: map it to a symbol with opaque= ({e})"
         )
 
-    def trace_argument(self, expr: sp.Expr, opaque: dict[sp.Basic, sp.Basic] | None = None) -> sp.Expr:
+    def trace_argument(
+        self, expr: sp.Expr, opaque: dict[sp.Basic, sp.Basic] | None = None
+    ) -> sp.Expr:
         """For a scalar sum of traces ``sum c_i tr(X_i)``: the polynomial ``sum c_i X_i``."""
         e = expr.xreplace(opaque) if opaque else expr
         total = sp.Integer(0)
@@ -420,8 +427,10 @@ class _Latex(LatexPrinter):
         fn = expr.function
         (var,) = fn.variables
         name = fn.expr.func.__name__ if isinstance(fn.expr, sp.Function) else "f"
-        return rf"\{name}\left({self._print(expr.expr)}\right)" if name in ("tanh",) else (
-            rf"{name}\left({self._print(expr.expr)}\right)"
+        return (
+            rf"\{name}\left({self._print(expr.expr)}\right)"
+            if name in ("tanh",)
+            else (rf"{name}\left({self._print(expr.expr)}\right)")
         )
 
 

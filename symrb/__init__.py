@@ -67,7 +67,16 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # static type checkers see the eager imports
-    from . import algebra, continuous, discrete, errors, learning, orbits, rigid_body, solvers
+    from . import (  # noqa: F401
+        algebra,
+        continuous,
+        discrete,
+        errors,
+        learning,
+        orbits,
+        rigid_body,
+        solvers,
+    )
     from .algebra import *  # noqa: F403
     from .continuous import *  # noqa: F403
     from .discrete import *  # noqa: F403

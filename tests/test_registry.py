@@ -1,62 +1,90 @@
-"""The registry's outcome logic: a check proves something only if it can fail."""
+"""The registry: outcome logic, declarations, and displayed texts tied to checked formulas."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
+import sympy as sp
 
-from derivations.registry import Claim, Evidence, Level, get_claim, outcome_of, verify_claim
+from derivations.registry import (
+    Claim,
+    EvidenceResult,
+    Level,
+    all_claims,
+    claim,
+    get_claim,
+    outcome_of,
+    verify_claim,
+)
+
+CLAIMS = all_claims()
 
 
-def _claim(*evidence: Evidence, expected: str = "holds", **kw: str) -> Claim:
-    return Claim(
-        id="S99", label="x", title="t", statement="s", expected=expected, evidence=evidence, **kw
-    )  # type: ignore[arg-type]
+def _claim(expected: str = "holds", **kw: str) -> Claim:
+    return claim("S99", label="x", title="t", statement="s", expected=expected, **kw)  # type: ignore[arg-type]
 
 
-def _ev(value: float, form: str = "claim", tol: float = 1e-12) -> Evidence:
-    return Evidence(Level.FLOAT64, "synthetic", lambda: value, tol=tol, form=form)  # type: ignore[arg-type]
+def _with(c: Claim, value: float, form: str = "claim", tol: float = 1e-12) -> Claim:
+    @c.check(Level.FLOAT64, tol=tol, form=form)  # type: ignore[arg-type]
+    def synthetic() -> float:
+        """A synthetic residual."""
+        return value
+
+    return c
 
 
 def test_holds_and_fails() -> None:
-    assert verify_claim(_claim(_ev(0.0), _ev(1e-13))).outcome == "holds"
-    assert verify_claim(_claim(_ev(0.0), _ev(1e-3))).outcome == "fails"
+    assert verify_claim(_with(_with(_claim(), 0.0), 1e-13)).outcome == "holds"
+    assert verify_claim(_with(_with(_claim(), 0.0), 1e-3)).outcome == "fails"
 
 
 def test_erratum_needs_failing_printed_and_passing_corrected() -> None:
-    kw = {"printed": "p", "corrected": "c"}
-    ok = verify_claim(_claim(_ev(0.5, "printed"), _ev(0.0, "corrected"), **kw))
-    assert ok.outcome == "holds after correction"
-    # printed form that in fact holds: no erratum
-    assert verify_claim(_claim(_ev(0.0, "printed"), _ev(0.0, "corrected"), **kw)).outcome == "holds"
-    # correction that does not hold
-    assert verify_claim(_claim(_ev(0.5, "printed"), _ev(0.5, "corrected"), **kw)).outcome == "fails"
+    kw = {"printed": "p", "corrected": "c", "expected": "holds after correction"}
+    ok = _with(_with(_claim(**kw), 0.5, "printed"), 0.0, "corrected")
+    assert verify_claim(ok).outcome == "holds after correction"
+    fine = _with(_with(_claim(**kw), 0.0, "printed"), 0.0, "corrected")
+    assert verify_claim(fine).outcome == "holds"  # the printed form holds after all
+    bad = _with(_with(_claim(**kw), 0.5, "printed"), 0.5, "corrected")
+    assert verify_claim(bad).outcome == "fails"
 
 
 def test_crashing_or_nan_evidence_fails() -> None:
+    c = _claim()
+
+    @c.check(Level.FLOAT64)
     def boom() -> float:
+        """Raises."""
         raise RuntimeError("no")
 
-    r = verify_claim(_claim(Evidence(Level.FLOAT64, "crash", boom)))
+    r = verify_claim(c)
     assert r.outcome == "fails" and "RuntimeError" in (r.evidence[0].error or "")
-    assert verify_claim(_claim(_ev(float("nan")))).outcome == "fails"
+    assert verify_claim(_with(_claim(), float("nan"))).outcome == "fails"
+
+
+def test_fail_fast_stops_at_the_first_unexpected_evidence() -> None:
+    c = _with(_with(_with(_claim(), 0.0), 1.0), 0.0)
+    assert len(verify_claim(c, fail_fast=True).evidence) == 2
+    assert len(verify_claim(c).evidence) == 3
 
 
 def test_no_evidence_is_not_checkable() -> None:
     assert outcome_of([]) == "not checkable"
+    assert outcome_of([EvidenceResult("float64", "d", "claim", 0.0, 0.0, 0.0)]) == "holds"
 
 
-def test_mismatch_with_recorded_outcome_is_reported() -> None:
-    r = verify_claim(_claim(_ev(1.0), expected="holds"))
-    assert not r.ok
-
-
-def test_bad_claims_are_rejected() -> None:
+def test_declarations_are_validated() -> None:
     with pytest.raises(ValueError, match="id"):
-        Claim(id="X1", label="", title="", statement="", expected="holds")
+        claim("X1", label="", title="", statement="", expected="holds")
     with pytest.raises(ValueError, match="expected"):
-        Claim(id="S1", label="", title="", statement="", expected="maybe")  # type: ignore[arg-type]
-    with pytest.raises(ValueError, match="printed"):
-        _claim(_ev(0.5, "printed"))
+        claim("S1", label="", title="", statement="", expected="maybe")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="both"):
+        claim("S1", label="", title="", statement="", expected="holds", printed="p")
+    with pytest.raises(ValueError, match="printed and corrected"):
+        _with(_claim(), 0.5, "printed")
+    c = _claim()
+    with pytest.raises(ValueError, match="docstring"):
+        c.check(Level.FLOAT64)(lambda: 0.0)
 
 
 def test_unknown_id() -> None:
@@ -64,14 +92,51 @@ def test_unknown_id() -> None:
         get_claim("S999")
 
 
-def test_numpy_residuals_serialise_to_json() -> None:
-    import json
+def test_registry_ids_are_those_of_claims_md() -> None:
+    ids = [c.id for c in CLAIMS]
+    assert ids == [f"D{i}" for i in range(1, 13)] + [f"S{i}" for i in range(1, 16)]
 
-    import numpy as np
 
-    r = verify_claim(_claim(Evidence(Level.FLOAT64, "numpy", lambda: np.float64(1e-20), tol=1e-12)))
-    text = json.dumps(r.to_dict())
-    assert json.loads(text)["evidence"][0]["passed"] is True
+@pytest.mark.parametrize("c", CLAIMS, ids=[c.id for c in CLAIMS])
+def test_every_placeholder_has_a_formula_and_renders(c: Claim) -> None:
+    for which in ("statement", "printed", "corrected"):
+        text = c.render(which)
+        assert "[[" not in text, (c.id, which)
+    unused = set(c.formulas) - c.placeholders()
+    assert not unused, f"{c.id}: formulas never shown: {sorted(unused)}"
+
+
+_RELATION = re.compile(r"(?<![\\a-zA-Z])(=|<|>)|\\(le|ge|leq|geq|neq|ne|to|mapsto|equiv|approx)\b")
+_PARAMETER = re.compile(r"^\s*[A-Za-z]\w*\s*=\s*[-\d.,\s]+$")
+
+
+@pytest.mark.parametrize("c", CLAIMS, ids=[c.id for c in CLAIMS])
+def test_hand_written_math_states_no_relation(c: Claim) -> None:
+    """Relations shown for a claim come from [[formulas]] its evidence evaluates; math typed into
+    the texts may only name objects or give a parameter value such as n=3."""
+    for which in ("statement", "printed", "corrected"):
+        text = getattr(c, which) or ""
+        for math in re.findall(r"\$([^$]+)\$", text):
+            if _PARAMETER.match(math):
+                continue
+            assert not _RELATION.search(math), f"{c.id} {which}: relation typed by hand: ${math}$"
+
+
+def test_a_displayed_sign_is_a_checked_sign() -> None:
+    """Changing the sign of a displayed formula changes the evidence's verdict (S2's J)."""
+    c = get_claim("S2")
+    before = verify_claim(c)
+    eq = c.formulas["J"]
+    try:
+        c.formulas["J"] = sp.Eq(eq.lhs, -eq.rhs, evaluate=False)
+        import derivations.parts.rigid_body as rb
+
+        old, rb.J_DEF = rb.J_DEF, c.formulas["J"]
+        after = verify_claim(c)
+    finally:
+        c.formulas["J"] = eq
+        rb.J_DEF = old
+    assert before.ok and not after.ok
 
 
 def test_report_escapes_markdown_but_not_math() -> None:
@@ -79,13 +144,3 @@ def test_report_escapes_markdown_but_not_math() -> None:
 
     assert plain("u*_k and ||M||_op") == r"u\*\_k and \|\|M\|\|\_op"
     assert plain("keep $x_k^*$ as is") == "keep $x_k^*$ as is"
-
-
-def test_report_check_fails_on_unexpected_outcome(monkeypatch: pytest.MonkeyPatch) -> None:
-    from derivations import report
-
-    assert report.check("S1", show=False).ok
-    bad = _claim(_ev(1.0), expected="holds")
-    monkeypatch.setattr(report, "get_claim", lambda cid: bad)
-    with pytest.raises(AssertionError, match="outcome 'fails', recorded 'holds'"):
-        report.check("S99", show=False)

@@ -1,8 +1,10 @@
 """Build the wheel, install it into a clean virtual environment, and import symrb there.
 
-Checks that the package works from its wheel with only its declared run-time dependencies
-(NumPy and SciPy, fetched by pip from the package index), and that neither importing symrb, nor
-calling it, nor importing every generated kernel module pulls in SymPy.
+Checks that the wheel holds ``symrb`` only (no ``derivations``), that the package works from it
+with only its declared run-time dependencies (NumPy and SciPy, fetched by pip from the package
+index), that neither importing symrb, nor calling it, nor importing every generated kernel module
+pulls in SymPy, and that ``symrb derive`` / ``symrb verify`` there exit with status 2 and say what
+to install.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -89,6 +92,9 @@ def test_wheel_in_clean_venv(tmp_path: Path) -> None:
     _run(cmd, cwd=ROOT)
     wheels = sorted(dist.glob("symrb-*.whl"))
     assert len(wheels) == 1, f"expected one wheel, got {wheels}"
+    names = zipfile.ZipFile(wheels[0]).namelist()
+    tops = {name.split("/")[0] for name in names if not name.split("/")[0].endswith(".dist-info")}
+    assert tops == {"symrb"}, f"the wheel holds more than symrb: {sorted(tops)}"
 
     venv = tmp_path / "venv"
     _run([sys.executable, "-m", "venv", str(venv)])
@@ -109,3 +115,10 @@ def test_wheel_in_clean_venv(tmp_path: Path) -> None:
     assert missing.returncode != 0, (
         "SymPy is installed in the clean venv: it must not be a dependency"
     )
+    script = py.parent / "symrb"
+    for cmd in (["verify"], ["derive", "--check"]):
+        proc = subprocess.run(
+            [str(script), *cmd], capture_output=True, text=True, env=env, cwd=tmp_path
+        )
+        assert proc.returncode == 2, proc.stdout + proc.stderr
+        assert "pip install -e '.[derive]'" in proc.stderr

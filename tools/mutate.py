@@ -171,6 +171,11 @@ def run_one(m: Mutant, verify_args: list[str], timeout: float) -> Outcome:
     )
 
 
+def _git(*args: str) -> str:
+    proc = subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True, check=False)
+    return proc.stdout.strip()
+
+
 def summarise(outcomes: list[Outcome]) -> dict[str, object]:
     counted = [o for o in outcomes if not o.equivalent]
     killed = [o for o in counted if o.killed]
@@ -213,7 +218,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{m.id:<28} {m.file:<44} {m.what}{tag}")
         return 0
 
-    print(f"{len(mutants)} mutants, {args.jobs} at a time; each runs: symrb {' '.join(verify_args)}")
+    print(
+        f"{len(mutants)} mutants, {args.jobs} at a time; each runs: symrb {' '.join(verify_args)}"
+    )
     start = time.perf_counter()
     outcomes: list[Outcome] = []
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
@@ -237,7 +244,13 @@ def main(argv: list[str] | None = None) -> int:
         print("survivors: " + ", ".join(summary["survivors"]))  # type: ignore[arg-type]
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        payload = {"summary": summary, "outcomes": [asdict(o) for o in outcomes]}
+        payload = {
+            "commit": _git("rev-parse", "--short", "HEAD"),
+            "uncommitted_changes": bool(_git("status", "--porcelain", "--untracked-files=no")),
+            "verify": verify_args,
+            "summary": summary,
+            "outcomes": [asdict(o) for o in outcomes],
+        }
         args.json.write_text(json.dumps(payload, indent=1) + "\n")
     return 0 if not summary["survivors"] else 1
 

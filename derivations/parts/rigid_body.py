@@ -14,7 +14,7 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.codegen import Arg, Kernel, Jinv, Lam, matrix, vector
+from derivations.codegen import Arg, Jinv, Kernel, Lam, matrix, vector
 from derivations.registry import Level, claim
 from derivations.symbolic import (
     Bracket,
@@ -318,7 +318,10 @@ def s3_variational_derivative() -> sp.Expr:
     lam, Omega, eta = _lam(4), skew_matrix("w", 4), skew_matrix("e", 4)
     eps = sp.Symbol("epsilon")
     lag = explicit(LAGRANGIAN.rhs, {"Omega": Omega + eps * eta}, lam)
-    return residual(sp.diff(lag, eps).subs(eps, 0) - explicit(Pair(J_DEF.rhs, _eta3), {"Omega": Omega, "eta": eta}, lam))
+    return residual(
+        sp.diff(lag, eps).subs(eps, 0)
+        - explicit(Pair(J_DEF.rhs, _eta3), {"Omega": Omega, "eta": eta}, lam)
+    )
 
 
 @S3.check(Level.SYMBOLIC_GENERAL_N)
@@ -424,8 +427,7 @@ MANAKOV_INTEGRALS = Kernel(
     "The non-trivial coefficients of lambda^j in trace((M + lambda Lambda^2)^k), 2 <= k <= 5\n"
     "(A = Lambda^2), in this order:\n\n"
     + "\n".join(
-        f"- k={k}, lambda^{j}: "
-        + " + ".join(f"{c} tr({''.join(w)})" for w, c in words.items())
+        f"- k={k}, lambda^{j}: " + " + ".join(f"{c} tr({''.join(w)})" for w, c in words.items())
         for k, j, words in _MANAKOV
     ),
     claims=("S4",),
@@ -524,7 +526,9 @@ def s4_integrals_in_involution() -> sp.Expr:
     grads = [skew_gradient(F, Ms) for F in _integrals(4, 4, lam, Ms)]
     total = sp.Integer(0)
     for a, b in itertools.combinations(range(len(grads)), 2):
-        bracket = explicit(Pair(M, Bracket(_xi3, _eta3)), {"M": Ms, "xi": grads[a], "eta": grads[b]})
+        bracket = explicit(
+            Pair(M, Bracket(_xi3, _eta3)), {"M": Ms, "xi": grads[a], "eta": grads[b]}
+        )
         total += residual(bracket)
     return total
 
@@ -582,8 +586,9 @@ def s4_symrb_integrals_pointwise() -> float:
 def s4_conserved_on_reference_flow() -> float:
     """symrb.manakov_integrals along a trajectory of the reference rigid body field (J^-1 by a
     linear solve; DOP853, rtol 1e-12, n = 4, t in [0, 20]): max drift relative to the values."""
-    import symrb
     from scipy.integrate import solve_ivp
+
+    import symrb
 
     rng = np.random.default_rng(6)
     k = 4
