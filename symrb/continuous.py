@@ -7,7 +7,7 @@ version, the reconstruction :math:`P = Q\exp(\sinh^{-1}(M/2))`, and a ``solve_iv
     \qquad\text{(symmetric rigid body, paper eq. srb1)}
 
     \dot Q = QJ^{-1}(Q^TB),\quad \dot B = BJ^{-1}(Q^TB)
-    \qquad\text{(McLachlan-Scovel, eq. rbnlms)}
+    \qquad\text{(McLachlan-Scovel, eq. rbnlms; } B = 2P \text{ when } Q^TP \text{ is skew)}
 
     \dot Q^a = Q^aU,\quad \dot P^a = P^aU,\quad U = \sum_a J^{-1}((Q^a)^TP^a - (P^a)^TQ^a)
     \qquad\text{(learning version, eq. eqnrm)}
@@ -63,7 +63,8 @@ def _pair(Q: ArrayLike, P: ArrayLike, qname: str, pname: str, n: int | None = No
 
 
 def symmetric_momentum(Q: ArrayLike, P: ArrayLike) -> Array:
-    r"""The body momentum :math:`M = Q^TP - P^TQ` of the symmetric representation (claim S6).
+    r"""The body momentum :math:`M = Q^TP - P^TQ` of the symmetric representation (claims S6, S9,
+    S11).
 
     ``Q``, ``P`` have shape (..., n, n) (any square matrices); the result is skew, same shape.
     """
@@ -93,7 +94,10 @@ def mclachlan_scovel_rhs(Q: ArrayLike, B: ArrayLike, lam: ArrayLike) -> tuple[Ar
     (claim S7).
 
     :math:`J^{-1}` is defined on :math:`\mathfrak{so}(n)`, so :math:`Q^TB` must be skew (this set
-    is invariant).  Raises :class:`InputError` otherwise.
+    is invariant).  Raises :class:`InputError` otherwise.  For a costate :math:`P` of the
+    symmetric rigid body with :math:`Q^TP` skew, the extremal flow is this field for
+    :math:`B = 2P` (the paper's (rbnlms) with :math:`B = P` runs it at half speed); for any
+    :math:`P`, :math:`B = P - QP^TQ` maps the symmetric flow with :math:`Q` orthogonal to it.
     """
     L = v.inertia(lam)
     a, b = _pair(Q, B, "Q", "B", L.shape[-1])
@@ -118,7 +122,12 @@ def multi_sample_control(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     Returns U of shape (..., n, n).
     """
     a, b, L = _samples(Q, P, lam)
-    return _Jinv_weights(L) * np.sum(_gen.symmetric_momentum(a, b), axis=-3)
+    return _shared_control(a, b, L)
+
+
+def _shared_control(Q: Array, P: Array, lam: Array) -> Array:
+    """sum_a J^{-1}(M^a) over axis -3 (no validation: used inside the integrator too)."""
+    return _Jinv_weights(lam) * np.sum(_gen.symmetric_momentum(Q, P), axis=-3)
 
 
 def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:
@@ -287,7 +296,8 @@ class SymmetricRigidBody(Flow):
 
 class McLachlanScovel(Flow):
     r"""The McLachlan-Scovel equations :math:`\dot Q = QJ^{-1}(Q^TB)`, :math:`\dot B = BJ^{-1}(Q^TB)`;
-    state ``("Q", "B")`` with :math:`Q^TB` skew; derived ``M`` :math:`= Q^TB`."""
+    state ``("Q", "B")`` with :math:`Q^TB` skew; derived ``M`` :math:`= Q^TB` (it follows the
+    rigid body equations, claim S7)."""
 
     name = "McLachlan-Scovel"
     state = ("Q", "B")
@@ -311,15 +321,13 @@ class MultiSampleSymmetricRigidBody(Flow):
     state = ("Q", "P")
     sample_axes = 1
 
-    @staticmethod
-    def _control(y, lam):
-        return _Jinv_weights(lam) * np.sum(_gen.symmetric_momentum(y["Q"], y["P"]), axis=-3)
-
     def rhs(self, y, lam):
-        return _gen.control_rhs(y["Q"], y["P"], self._control(y, lam)[..., None, :, :])
+        return _gen.control_rhs(
+            y["Q"], y["P"], _shared_control(y["Q"], y["P"], lam)[..., None, :, :]
+        )
 
     def derived(self, y, lam):
-        return {"U": self._control(y, lam)}
+        return {"U": _shared_control(y["Q"], y["P"], lam)}
 
 
 class Trajectory(dict):

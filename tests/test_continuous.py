@@ -203,6 +203,20 @@ def test_mclachlan_scovel_matches_symmetric_flow() -> None:
     np.testing.assert_allclose(b.y.M, a.y.M, atol=1e-9)
 
 
+def test_costate_with_skew_QTP_is_mclachlan_scovel_for_twice_the_costate() -> None:
+    """Claim S7 as corrected: for Q^T P skew the symmetric flow from (Q, P) is the
+    McLachlan-Scovel flow from (Q, 2P), not from (Q, P)."""
+    Q0 = symrb.random_SO(4, seed=22)
+    P0 = Q0 @ _skew_with_norm(4, 0.8, 22)
+    kw = dict(lam=LAM, rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 5, 6))
+    a = symrb.integrate(symrb.SymmetricRigidBody, (0, 5), {"Q": Q0, "P": P0}, **kw)
+    b = symrb.integrate(symrb.McLachlanScovel, (0, 5), {"Q": Q0, "B": 2 * P0}, **kw)
+    c = symrb.integrate(symrb.McLachlanScovel, (0, 5), {"Q": Q0, "B": P0}, **kw)
+    np.testing.assert_allclose(b.y.Q, a.y.Q, atol=1e-9)
+    np.testing.assert_allclose(b.y.B, 2 * a.y.P, atol=1e-9)
+    assert np.abs(c.y.Q - a.y.Q).max() > 1e-2
+
+
 def test_multi_sample_flow_shapes_and_control() -> None:
     Q0 = symrb.random_SO(3, (4,), seed=8)
     P0 = symrb.random_SO(3, (4,), seed=9)
@@ -230,6 +244,55 @@ def test_multi_sample_total_momentum_is_a_rigid_body() -> None:
     rb = symrb.integrate(symrb.RigidBody, (0, 4), (np.eye(3), Mtot[0]), **kw)
     np.testing.assert_allclose(Mtot, rb.y.M, atol=1e-9)
     np.testing.assert_allclose(ms.y.U, rb.y.Omega, atol=1e-9)
+
+
+def test_mclachlan_scovel_keeps_QTB_skew() -> None:
+    """Moved from the evidence of claim S7 (a property of every flow Qdot = QU, Bdot = BU with U
+    skew): Q^T B stays skew along symrb's McLachlan-Scovel flow, n = 5, t in [0, 10]."""
+    rng = np.random.default_rng(7)
+    lam = np.sort(rng.uniform(0.5, 2.0, 5))
+    Q0 = symrb.random_SO(5, seed=rng)
+    B0 = Q0 @ symrb.random_so(5, seed=rng)
+    kw = dict(lam=lam, rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 10, 21))
+    sol = symrb.integrate(symrb.McLachlanScovel, (0, 10), {"Q": Q0, "B": B0}, **kw)
+    assert sol.success
+    assert np.abs(sol.y.M + np.swapaxes(sol.y.M, -1, -2)).max() < 1e-9
+    assert np.abs(np.swapaxes(sol.y.Q, -1, -2) @ sol.y.Q - np.eye(5)).max() < 1e-9
+
+
+@pytest.mark.parametrize("r", [1.5, 2.0])
+def test_operator_norm_conserved_on_rigid_body_flow(r: float) -> None:
+    """Moved from the evidence of claim S11 (isospectral flows conserve ||M||_op): inside S and
+    on C, n = 4, t in [0, 10]."""
+    lam = np.array([0.5, 0.8, 1.4, 2.0])
+    M0 = _skew_with_norm(4, r, 12)
+    kw = dict(lam=lam, rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 10, 41))
+    sol = symrb.integrate(symrb.RigidBody, (0, 10), {"Q": np.eye(4), "M": M0}, **kw)
+    assert np.abs(np.linalg.norm(sol.y.M, 2, axis=(-2, -1)) - r).max() < 1e-9
+
+
+def test_symmetric_flow_started_on_C_stays_on_C() -> None:
+    """Moved from the evidence of claim S11: Q^T P with a rotation by pi/2 gives ||M||_op = 2,
+    and the symmetric flow keeps it there (n = 4, t in [0, 10])."""
+    lam = np.array([0.5, 0.8, 1.4, 2.0])
+    Q0 = symrb.random_SO(4, seed=12)
+    A = np.array([[0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 0.6, -0.8], [0, 0, 0.8, 0.6]])
+    kw = dict(lam=lam, rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 10, 41))
+    sol = symrb.integrate(symrb.SymmetricRigidBody, (0, 10), {"Q": Q0, "P": Q0 @ A}, **kw)
+    assert np.abs(np.linalg.norm(sol.y.M, 2, axis=(-2, -1)) - 2.0).max() < 1e-9
+
+
+def test_symmetric_flow_keeps_SO_and_conserves_H() -> None:
+    """Moved from the evidence of claim S12 (properties of the class of flows): started on
+    SO(4) x SO(4), Q and P stay orthogonal and the gl(n) Hamiltonian is conserved, t in [0, 10]."""
+    lam = np.array([0.5, 0.8, 1.4, 2.0])
+    Q0, P0 = symrb.random_SO(4, (2,), seed=13)
+    kw = dict(lam=lam, rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 10, 41))
+    sol = symrb.integrate(symrb.SymmetricRigidBody, (0, 10), {"Q": Q0, "P": P0}, **kw)
+    eye = np.eye(4)
+    for X in (sol.y.Q, sol.y.P):
+        assert np.abs(np.swapaxes(X, -1, -2) @ X - eye).max() < 1e-9
+    assert np.abs(sol.y.H / sol.y.H[0] - 1.0).max() < 1e-9
 
 
 def test_integrate_validation() -> None:
