@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike
 
 from . import _validate as v
 from ._generated import discrete_rigid_body as _gen
+from ._generated import symmetric_rigid_body as _srb
 from ._validate import Array
 from .errors import InputError
 from .solvers import _EPS, _solve_batch, _warm_single
@@ -136,7 +137,7 @@ def symmetric_step(
     """
     h = _check_h(h)
     L, (Qa, Pa), batch = _prepare(lam, (Q, "Q", "SO"), (P, "P", "square"))
-    U = _Stepper(L, batch).solve(h * _gen.sym_momentum(Qa, Pa))
+    U = _Stepper(L, batch).solve(h * _srb.symmetric_momentum(Qa, Pa))
     return Qa @ U, Pa @ U, U
 
 
@@ -161,7 +162,7 @@ def symmetric_flow(
     stepper = _Stepper(L, batch)
     Qs, Ps = [Q.copy()], [P.copy()]
     for k in range(1, steps + 1):
-        U = stepper.solve(h * _gen.sym_momentum(Q, P))
+        U = stepper.solve(h * _srb.symmetric_momentum(Q, P))
         Q, P = Q @ U, P @ U
         if k % save_every == 0:
             Qs.append(Q)
@@ -239,7 +240,9 @@ def discrete_rigid_body_flow(
 ) -> tuple[Array, Array, Array]:
     r"""The discrete rigid body at step ``h`` from the body momentum ``M0`` (continuous scale).
 
-    Runs :func:`symmetric_flow` from :math:`P_0 = Q_0M_0/2` (so :math:`Q_0^TP_0 - P_0^TQ_0 = M_0`)
+    Runs :func:`symmetric_flow` from :math:`P_0 = Q_0M_0/2` (so :math:`Q_0^TP_0 - P_0^TQ_0 = M_0`;
+    this costate is not orthogonal, but every costate with the same :math:`M_0`, e.g. the one in
+    :math:`SO(n)`, :math:`Q_0\exp(\sinh^{-1}(M_0/2))`, gives the same :math:`Q_k`, claim D7)
     and returns ``(t, Q, M)`` with :math:`t_k = kh` and :math:`M_k = Q_k^TP_k - P_k^TQ_k`, a
     second-order approximation of :math:`(Q(t_k), M(t_k))` of :math:`\dot Q = Q\Omega`,
     :math:`\dot M = [M,\Omega]`, :math:`\Omega = J^{-1}(M)`.
@@ -249,4 +252,4 @@ def discrete_rigid_body_flow(
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     Qs, Ps = symmetric_flow(Q, Q @ (0.5 * M), L, h, steps, save_every=save_every)
     t = h * save_every * np.arange(Qs.shape[0], dtype=float)
-    return t, Qs, np.asarray(_gen.sym_momentum(Qs, Ps), dtype=float)
+    return t, Qs, np.asarray(_srb.symmetric_momentum(Qs, Ps), dtype=float)

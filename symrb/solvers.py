@@ -16,8 +16,12 @@ i.e. ``scipy.linalg.solve_continuous_are(a=-M/2, b=I, q=Lambda^2 + M^2/4, r=I)``
 Leite's reformulation).  Its closed-loop matrix is :math:`-M/2 - S = -X`, so the *stabilizing*
 solution is the one with every eigenvalue of :math:`X = U\Lambda` in the open right half-plane.
 At :math:`M = 0` it is :math:`S = \Lambda`, :math:`U = I`; it depends continuously on :math:`M`
-and is unique when it exists.  This is the branch through the identity.  It ends where an
-eigenvalue of :math:`U\Lambda` reaches the imaginary axis: there the linearisation
+and is unique when it exists.  This is the branch through the identity.  Other solutions exist
+(claim D7): at :math:`M = 0` every diagonal sign matrix commutes with :math:`\Lambda`, so for
+n = 3 the identity and the three half-turns about the principal axes all solve the equation in
+:math:`SO(3)`, and they continue for small :math:`M`; only the branch through the identity is
+returned.  The branch ends where
+an eigenvalue of :math:`U\Lambda` reaches the imaginary axis: there the linearisation
 
 .. math::
 

@@ -67,6 +67,19 @@ def test_three_algorithms_agree_over_ten_thousand_steps():
     assert np.allclose(np.sort(np.linalg.eigvals(MB).imag, axis=-1), ev0, atol=1e-13)
 
 
+def test_mv_algorithm2_conserves_the_spectrum():
+    """mv3 is a conjugation, so the spectrum of M_k along MV-Algorithm 2 stays that of M_1 (n = 4,
+    1000 steps).  Every orthogonal update has this property, so it is a test of the implementation
+    class, not evidence for claim D10 (which compares with a 50-digit reference)."""
+    rng = np.random.default_rng(10)
+    lam = np.array([0.6, 0.9, 1.3, 1.7])
+    M1 = random_so(4, seed=rng, scale=0.05)
+    _Q, MB = mv_algorithm2(random_SO(4, seed=rng), M1, lam, 1000)
+    ev0 = np.sort(np.linalg.eigvals(M1).imag)
+    evs = np.sort(np.linalg.eigvals(MB).imag, axis=-1)
+    assert np.max(np.abs(evs - ev0)) <= 1e-12 * np.max(np.abs(ev0))
+
+
 def _reference(Q0, M0, lam, T):
     nn = lam.shape[0]
 
