@@ -27,6 +27,8 @@ Each vector field calls one kernel generated in :mod:`symrb._generated.adjoint_o
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -56,11 +58,18 @@ def _pair_xN(x: ArrayLike, N: ArrayLike, xname: str = "x") -> tuple[Array, Array
 
 
 def orbit_extremal_rhs(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> tuple[Array, Array]:
-    r"""The extremal vector field of the orbit problem with Brockett's potential (eq. opb):
+    r"""The extremal vector field of the orbit problem with Brockett's potential (eq. opb).
 
     .. math:: \dot x = [x, [p, x]],\qquad \dot p = [p, [p, x]] - [N, [N, x]].
 
-    ``x``, ``p``, ``N`` are skew arrays (..., n, n) (broadcast); returns ``(xdot, pdot)``.
+    Parameters
+    ----------
+    x, p, N : array (..., n, n)
+        skew state, costate and fixed element (broadcast against each other)
+
+    Returns
+    -------
+    (xdot, pdot) : arrays of the broadcast shape
     """
     xx, nn = _pair_xN(x, N)
     pp = v.skew(p, "p", nn.shape[-1])
@@ -68,21 +77,53 @@ def orbit_extremal_rhs(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> tuple[Array,
 
 
 def orbit_hamiltonian(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> Array:
-    r"""The optimal Hamiltonian :math:`H^* = -\tfrac12\langle x,[p,[p,x]]\rangle + V(x)
-    = \tfrac12\|[p,x]\|^2 - \tfrac12\|[x,N]\|^2`, conserved along :func:`orbit_extremal_rhs`."""
+    r"""The optimal Hamiltonian with Brockett's potential, conserved by :func:`orbit_extremal_rhs`.
+
+    .. math:: H^* = -\tfrac12\langle x,[p,[p,x]]\rangle + V(x)
+        = \tfrac12\|[p,x]\|^2 - \tfrac12\|[x,N]\|^2.
+
+    Parameters
+    ----------
+    x, p, N : array (..., n, n)
+        skew state, costate and fixed element (broadcast against each other)
+
+    Returns
+    -------
+    array (...)
+    """
     xx, nn = _pair_xN(x, N)
     pp = v.skew(p, "p", nn.shape[-1])
     return _gen.orbit_hamiltonian(xx, pp, nn)
 
 
 def brockett_potential(x: ArrayLike, N: ArrayLike) -> Array:
-    r"""Brockett's potential :math:`V(x) = -\tfrac12\|[x, N]\|^2 = \tfrac12\langle x, [N,[N,x]]\rangle`."""
+    r"""Brockett's potential :math:`V(x) = -\tfrac12\|[x, N]\|^2 = \tfrac12\langle x, [N,[N,x]]\rangle`.
+
+    Parameters
+    ----------
+    x, N : array (..., n, n)
+        skew state and fixed element (broadcast against each other)
+
+    Returns
+    -------
+    array (...)
+    """
     xx, nn = _pair_xN(x, N)
     return _gen.brockett_potential(xx, nn)
 
 
 def double_bracket_rhs(x: ArrayLike, N: ArrayLike) -> Array:
-    r"""The double bracket vector field :math:`\dot x = [x, [x, N]]` (skew x, N)."""
+    r"""The double bracket vector field :math:`\dot x = [x, [x, N]]`.
+
+    Parameters
+    ----------
+    x, N : array (..., n, n)
+        skew state and fixed element (broadcast against each other)
+
+    Returns
+    -------
+    array of the broadcast shape
+    """
     xx, nn = _pair_xN(x, N)
     return _gen.double_bracket_rhs(xx, nn)
 
@@ -146,8 +187,12 @@ class OrbitBVPResult:
         return _unpack(self.sol.sol(ts), M, k)
 
 
+@functools.cache
 def _iu(k: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-    return np.triu_indices(k, 1)
+    """Row and column indices of the strict upper triangle of a k x k matrix (read-only)."""
+    i, j = np.triu_indices(k, 1)
+    i.flags.writeable = j.flags.writeable = False
+    return i, j
 
 
 def _pack(x: Array, p: Array) -> Array:
@@ -155,6 +200,11 @@ def _pack(x: Array, p: Array) -> Array:
     i, j = _iu(x.shape[-1])
     m = x.shape[0]
     return np.concatenate([x[..., i, j].reshape(m, -1), p[..., i, j].reshape(m, -1)], axis=1).T
+
+
+def _y_half(M: int, k: int) -> int:
+    """The number of packed coordinates of the states (the costates follow them)."""
+    return M * k * (k - 1) // 2
 
 
 def _unpack(y: Array, M: int, k: int) -> tuple[Array, Array]:
@@ -166,6 +216,21 @@ def _unpack(y: Array, M: int, k: int) -> tuple[Array, Array]:
     out[..., i, j] = np.moveaxis(yy, 1, 0)
     out[..., j, i] = -np.moveaxis(yy, 1, 0)
     return out[0], out[1]
+
+
+def _extend(
+    sol: Callable[[Array], Array], T_old: float, T_new: float, nodes: int
+) -> tuple[Array, Array]:
+    """The initial guess on [0, T_new] from a solution ``sol`` on [0, T_old], T_new > T_old.
+
+    The first half of ``sol`` as is, its second half shifted to end at T_new, its midpoint value
+    in between, on ``nodes`` equally spaced times (``solve_bvp`` refines the layers itself:
+    keeping the previous mesh makes it refine far more).
+    """
+    t = np.linspace(0.0, T_new, nodes)
+    half = 0.5 * T_old
+    source = np.where(t < half, t, np.maximum(t - (T_new - T_old), half))
+    return t, sol(source)
 
 
 def solve_orbit_bvp(
@@ -199,10 +264,14 @@ def solve_orbit_bvp(
     Solved with ``scipy.integrate.solve_bvp`` on the upper-triangle coordinates of the skew
     matrices, from the initial guess :math:`x \equiv x_0`, :math:`p \equiv` ``p_guess`` (by
     default the terminal value :math:`p_T`; the guess p = 0 gives a singular collocation Jacobian
-    when x0 commutes with N).  For ``T > continuation_start`` the horizon is grown geometrically (factor
-    ``continuation_growth``) from below ``continuation_start`` to ``T``, each solution rescaled in
-    time serving as the guess of the next: Newton's method from p = 0 does not converge on long
-    horizons.  Does not raise when the solver fails: check ``success`` and ``residual``.
+    when x0 commutes with N).  For ``T > continuation_start`` the horizon is grown geometrically
+    (factor ``continuation_growth``) from below ``continuation_start`` to ``T``: Newton's method
+    from a constant guess does not converge on long horizons.  The guess on a longer horizon keeps
+    the first half of the previous solution, shifts its second half to end at the new horizon and
+    holds its midpoint value in between (an optimal trajectory on a long horizon stays near a
+    steady state between an initial and a terminal layer); stretching the previous solution in
+    time instead widens both layers, and for two samples fails beyond T = 5 or so.  Does not raise
+    when the solver fails: check ``success`` and ``residual``.
     """
     nn = v.skew(N, "N")
     if nn.ndim != 2:
@@ -235,15 +304,15 @@ def solve_orbit_bvp(
         dx, dp = _gen.orbit_rhs_with_control(x, p, u[:, None], nn)
         return _pack(dx, dp)
 
-    def bc(ya, yb):
-        xa, _ = _unpack(ya[:, None], M, k)
-        _, pb = _unpack(yb[:, None], M, k)
-        i, j = _iu(k)
-        return np.concatenate([(xa[0] - xs0)[..., i, j].ravel(), (pb[0] - pT)[..., i, j].ravel()])
+    # the boundary values packed: x^a(0) = x^a_0 (the states, first half), p^a(T) = p_T
+    half = _y_half(M, k)
+    boundary = _pack(xs0[None], np.broadcast_to(pT, (1, M, k, k)))[:, 0]
 
-    # continuation in the horizon: solve on [0, T_j] for T_j = T0, growth * T0, ..., T and use each
-    # solution, rescaled in time, as the initial guess of the next (Newton from p = 0 fails for long
-    # horizons)
+    def bc(ya, yb):
+        return np.concatenate([ya[:half] - boundary[:half], yb[half:] - boundary[half:]])
+
+    # continuation in the horizon: solve on [0, T_j] for T_j = T0, growth * T0, ..., T, each
+    # solution extended (see _extend) to the initial guess of the next
     horizons = [float(T)]
     while horizons[0] > continuation_start:
         horizons.insert(0, horizons[0] / continuation_growth)
@@ -258,9 +327,7 @@ def solve_orbit_bvp(
         sol = solve_bvp(rhs, bc, t, y, tol=tol, max_nodes=int(max_nodes))
         if not sol.success or j + 1 == len(horizons):
             break
-        t_next = horizons[j + 1]
-        t = np.linspace(0.0, 1.0, max(int(nodes), sol.x.size)) * t_next
-        y = sol.sol(t * Tj / t_next)
+        t, y = _extend(sol.sol, Tj, horizons[j + 1], int(nodes))
     x, p = _unpack(sol.y, M, k)
     u = _gen.optimal_control(x, p).sum(axis=1)
     bcr = float(np.max(np.abs(bc(sol.y[:, 0], sol.y[:, -1]))))

@@ -1,13 +1,18 @@
-"""Numerics of symrb.orbits (S13-S15): batching, validation, invariants, the boundary value problem."""
+"""symrb.orbits (S13-S15): batching, validation, invariants, the boundary value problem; and the
+demonstrations that the claims' checks can fail (opposite signs, separate controls, wrong
+displayed formulas)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import derivations.parts.adjoint_orbits as ao
 import symrb
+from derivations.symbolic import Pair, Words, eq, trace_residual
 from symrb import orbits
 from symrb.errors import InputError
 
@@ -205,3 +210,125 @@ def test_two_samples_share_control_and_leave_double_bracket():
         np.max(np.abs(res.x[:, a] - orbits.double_bracket_flow(x0[a], N, res.t))) for a in (0, 1)
     )
     assert dev > 1e-2
+
+
+def test_two_samples_long_horizon():
+    """The continuation (first half kept, second half shifted) reaches T = 8 for two samples; the
+    shared control conserves <x^1, x^2> and ||x^a||."""
+    X0, N = ao.two_sample_data()
+    res = orbits.solve_orbit_bvp(X0, N, 8.0, tol=1e-5)
+    assert res.success, res.message
+    np.testing.assert_allclose(pair(res.x[:, 0], res.x[:, 1]), pair(X0[0], X0[1]), atol=1e-7)
+    np.testing.assert_allclose(
+        pair(res.x, res.x), np.broadcast_to(pair(X0, X0), (res.t.size, 2)), atol=1e-7
+    )
+
+
+def test_extend_guess():
+    """_extend keeps the first half of the solution, shifts the second half and holds the middle."""
+    calls = []
+
+    def sol(s):
+        calls.append(np.array(s))
+        return np.stack([s, 2 * s])
+
+    t, y = orbits._extend(sol, 2.0, 5.0, 11)
+    np.testing.assert_allclose(t, np.linspace(0.0, 5.0, 11))
+    source = calls[0]
+    np.testing.assert_allclose(source[t < 1.0], t[t < 1.0])
+    np.testing.assert_allclose(source[t > 4.0], t[t > 4.0] - 3.0)
+    np.testing.assert_allclose(source[(t >= 1.0) & (t <= 4.0)], 1.0)
+    assert y.shape == (2, 11)
+
+
+# ----------------------------------------------------------------------------- the checks can fail
+# (moved from the claims' evidence: each shows that a wrong sign or formula makes a check fail)
+
+
+def test_opposite_control_sign_is_not_stationary():
+    """dH/du vanishes at the emitted u* = [p, x] but not at [x, p]."""
+    ustar = ao.OPTIMAL_CONTROL.outputs["u"]
+    assert trace_residual(ao.stationarity(ustar)) == 0
+    assert trace_residual(ao.stationarity(-ustar)) > 0
+
+
+def test_opposite_potential_gradient_fails():
+    """The derivative of Brockett's potential is <[N,[N,x]], d>, not <-[N,[N,x]], d>."""
+    w = Words()
+    dV = ao._directional(ao.BROCKETT_POTENTIAL.outputs["V"], {ao.x: ao.d}, w)
+    right = ao._pair_poly(ao.BROCKETT_GRADIENT.rhs, ao.d, w)
+    assert trace_residual(dV - right) == 0
+    assert trace_residual(dV + right) > 0
+
+
+def test_wrong_displayed_gradient_fails_the_check(monkeypatch):
+    shown = ao.BROCKETT_GRADIENT
+    monkeypatch.setattr(ao, "BROCKETT_GRADIENT", eq(shown.lhs, -shown.rhs))
+    assert ao.s14_gradient() > 0
+
+
+def test_separate_controls_change_the_pairing():
+    """With two different controls d/dt <x^1, x^2> does not vanish (the shared control is what
+    conserves it)."""
+    w = Words()
+    u2 = ao.matrix("u_2")
+    field = ao.ORBIT_RHS_WITH_CONTROL.outputs["xdot"]
+    moves = {
+        ao._x1: ao._kernel_of_sample(field, 1),
+        ao._x2: ao._kernel_of_sample(field, 2, control=u2),
+    }
+    assert trace_residual(ao._directional(Pair(ao._x1, ao._x2), moves, w)) > 0
+
+
+def test_printed_endpoint_sign_gives_the_reversed_flow():
+    """p = +N also solves the costate equation, but then xdot = [x,[N,x]] = -[x,[x,N]]."""
+    w = Words()
+    at = {ao.p: ao.N}
+    pdot = ao.ORBIT_EXTREMAL_RHS.outputs["pdot"].xreplace(at)
+    xdot = ao.ORBIT_EXTREMAL_RHS.outputs["xdot"].xreplace(at)
+    db = ao.DOUBLE_BRACKET_RHS.outputs["xdot"]
+    assert trace_residual(ao._pair_poly(pdot, ao.d, w)) == 0
+    assert trace_residual(ao._pair_poly(xdot + db, ao.d, w)) == 0
+    assert trace_residual(ao._pair_poly(xdot - db, ao.d, w)) > 0
+
+
+def test_printed_equations_fail_and_corrected_pass():
+    """The same function judges both forms: the printed per-sample equations are not Hamilton's
+    equations of the shared problem, the corrected ones are."""
+    assert ao._two_sample_hamilton("printed") > 0
+    assert ao._two_sample_hamilton("corrected") == 0
+
+
+def test_mixed_forms_rescale_the_control():
+    """su(2), costate paired by -1/2 tr, ||u||^2 = -kappa(u, u) = -4 tr(u u): u* = [p, x] / 8."""
+    assert ao.killing_factor(ao.su_basis(2)) == 4
+    assert ao.mixed_form_control_scale() == sp.Rational(1, 8)
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        lambda b: b.subs(ao._beta / 2, ao._beta),  # sin(beta): too strong
+        lambda b: b.subs(ao._beta / 2, ao._beta / 3),  # sin(beta/3): true, but not the sharp bound
+    ],
+)
+def test_wrong_bound_fails_the_check(monkeypatch, change):
+    bound = ao.BOUND
+    monkeypatch.setattr(ao, "BOUND", sp.Ge(bound.lhs, change(bound.rhs)))
+    assert ao.s15_bound_so3() > 0
+
+
+def test_wrong_decay_rate_fails_the_check(monkeypatch):
+    phase = ao.PHASE
+    faster = phase.rhs.subs(ao._Norm(ao.N), 2 * ao._Norm(ao.N))
+    monkeypatch.setattr(ao, "PHASE", eq(phase.lhs, faster))
+    assert ao.s15_decay_exact_so3() > 0
+
+
+def test_one_sample_second_term_decreases_with_T():
+    """The exact one-sample values ||[N,[N,x_T]]|| at T = 1, 2, 4, 8, 16 decrease to 0, the last
+    ratio close to exp(-||x_0|| ||N|| 8)."""
+    x0, N = ao.one_sample_data()
+    _, decay = ao._exact_so3(x0, N, np.array(ao.ONE_SAMPLE_HORIZONS))
+    assert np.all(np.diff(decay) < 0) and decay[-1] < 1e-3
+    assert decay[-1] / decay[-2] == pytest.approx(np.exp(-0.5 * 8), rel=0.02)
