@@ -154,7 +154,8 @@ class MPDiscrete:
 
     ``solve_jd(M)`` returns the U in SO(3) with U Lambda - Lambda U^T = M on the branch through
     the identity: Newton on the Cayley parameters a of U = (I - A)^{-1}(I + A), A = hat(a),
-    continued from M = 0 (U = I) along t M, t = 1/4, 1/2, 3/4, 1, so no float64 start is needed.
+    continued in float64 from M = 0 (U = I) along t M, t = 1/4, 1/2, 3/4, 1 (scipy.optimize.root),
+    then polished in ``dps`` digits (mpmath.findroot).
     """
 
     def __init__(self, lam: Array, dps: int = 50) -> None:
@@ -178,16 +179,49 @@ class MPDiscrete:
     def solve_jd(self, M: object) -> object:
         mp = self.mp
         with mp.workdps(self.dps):
-            x = [mp.mpf(0), mp.mpf(0), mp.mpf(0)]
-            for t in (mp.mpf(1) / 4, mp.mpf(1) / 2, mp.mpf(3) / 4, mp.mpf(1)):
+            Mf = np.array(M.tolist(), dtype=float)
+            x = self._float_branch(Mf)
 
-                def F(a: object, b: object, c: object, t: object = t) -> list[object]:
-                    U = self.cayley([a, b, c])
-                    R = U * self.L - self.L * U.T - t * M
-                    return [R[2, 1], R[0, 2], R[1, 0]]
+            def F(a: object, b: object, c: object) -> list[object]:
+                U = self.cayley([a, b, c])
+                R = U * self.L - self.L * U.T - M
+                return [R[2, 1], R[0, 2], R[1, 0]]
 
-                x = list(mp.findroot(F, x, tol=mp.mpf(10) ** (-self.dps + 8)))
+            def Jac(a: object, b: object, c: object) -> object:
+                # dU = (I - A)^{-1} dA (U + I) for U = (I - A)^{-1}(I + A), A = hat(a, b, c)
+                A = self._skew(a, b, c)
+                inv = mp.inverse(self.eye - A)
+                U = inv * (self.eye + A)
+                cols = []
+                for e in ((1, 0, 0), (0, 1, 0), (0, 0, 1)):
+                    dU = inv * self._skew(*e) * (U + self.eye)
+                    dR = dU * self.L - self.L * dU.T
+                    cols.append([dR[2, 1], dR[0, 2], dR[1, 0]])
+                return mp.matrix(cols).T
+
+            x0 = [mp.mpf(float(v)) for v in x]
+            tol = mp.mpf(10) ** (-self.dps + 8)
+            x = list(mp.findroot(F, x0, J=Jac, solver="mdnewton", tol=tol))
             return self.cayley(x)
+
+    def _float_branch(self, M: Array) -> Array:
+        """Cayley parameters of the branch solution in float64: Newton (scipy.optimize.root) on
+        t M for t = 1/4, 1/2, 3/4, 1, starting from U = I at t = 0."""
+        from scipy.optimize import root
+
+        lam = np.array([float(self.L[i, i]) for i in range(3)])
+
+        def residual(x: Array, t: float) -> Array:
+            A = hat(x)
+            U = np.linalg.solve(np.eye(3) - A, np.eye(3) + A)
+            R = U * lam[None, :] - lam[:, None] * U.T - t * M
+            return np.array([R[2, 1], R[0, 2], R[1, 0]])
+
+        x = np.zeros(3)
+        for t in (0.25, 0.5, 0.75, 1.0):
+            sol = root(residual, x, args=(t,), method="hybr", options={"xtol": 1e-14})
+            x = sol.x
+        return x
 
     def matrix(self, a: Array) -> object:
         return self.mp.matrix(np.asarray(a, dtype=float).tolist())
@@ -242,7 +276,7 @@ class MPDiscrete:
             return out
 
     def distance(self, a: object, b: Array) -> float:
-        """max |a - b| entrywise, a in high precision, b float64."""
+        """max |a - b| entrywise, a in high precision, b float64 (NaN in b gives NaN)."""
         with self.mp.workdps(self.dps):
             d = a - self.matrix(b)
-            return float(max(abs(d[i, j]) for i in range(3) for j in range(3)))
+            return float(np.max([float(abs(d[i, j])) for i in range(3) for j in range(3)]))

@@ -337,6 +337,15 @@ class Words:
         from derivations.codegen import Lam
 
         e = expr.xreplace(opaque) if opaque else expr
+        if opaque:
+            # a Hadamard product matches whatever order SymPy stored its factors in
+            by_factors = {
+                frozenset(k.args): v for k, v in opaque.items() if isinstance(k, sp.HadamardProduct)
+            }
+            e = e.replace(
+                lambda x: isinstance(x, sp.HadamardProduct) and frozenset(x.args) in by_factors,
+                lambda x: by_factors[frozenset(x.args)],
+            )
         return self._of(e, Lam)
 
     def _of(self, e: sp.Basic, Lam: sp.MatrixSymbol) -> sp.Expr:
@@ -423,15 +432,14 @@ class _Latex(LatexPrinter):
             return r"J^{-1}\left(" + self._print(inner) + r"\right)"
         return super()._print_HadamardProduct(expr)
 
-    def _print_ElementwiseApplyFunction(self, expr: Any) -> str:
-        fn = expr.function
-        (var,) = fn.variables
-        name = fn.expr.func.__name__ if isinstance(fn.expr, sp.Function) else "f"
-        return (
-            rf"\{name}\left({self._print(expr.expr)}\right)"
-            if name in ("tanh",)
-            else (rf"{name}\left({self._print(expr.expr)}\right)")
-        )
+    def _print_MatMul(self, expr: sp.MatMul) -> str:
+        """A rational coefficient as a small fraction in front: tfrac12 Q M, not (1/2) Q M."""
+        coeff, mats = expr.as_coeff_mmul()
+        if coeff.is_Rational and coeff.q != 1 and mats:
+            sign = "-" if coeff < 0 else ""
+            body = self._print(mats if not isinstance(mats, sp.MatMul) else mats)
+            return rf"{sign}\tfrac{{{abs(coeff.p)}}}{{{coeff.q}}}{body}"
+        return super()._print_MatMul(expr)
 
 
 def latex(expr: Any) -> str:
