@@ -149,8 +149,9 @@ def _diag_code(aux: Aux, power: int = 1) -> str:
 class _Entrywise(sp.MatrixExpr):
     """A named scalar function applied entrywise (an opaque node for CSE; see :func:`entrywise`)."""
 
-    def __new__(cls, name: str, arg: sp.MatrixExpr) -> _Entrywise:
-        return super().__new__(cls, sp.Symbol(name), arg)
+    def __new__(cls, name: str | sp.Symbol, arg: sp.MatrixExpr) -> _Entrywise:
+        # sympy.cse rebuilds nodes as node.func(*node.args): accept the Symbol it holds
+        return super().__new__(cls, sp.Symbol(str(name)), arg)
 
     @property
     def shape(self) -> tuple[sp.Expr, sp.Expr]:
@@ -561,6 +562,10 @@ class MatrixPrinter(NumPyPrinter):
         (var,) = fn.variables
         hole = sp.Symbol("__entrywise_arg__")
         body = self._print(fn.expr.xreplace({var: hole}))
+        arg = self._print(expr.args[1])
+        bare = arg[1:-1] if _balanced_outer(arg) else arg
+        # as the only argument of a call the argument needs no parentheses of its own
+        body = body.replace(f"({hole})", f"({bare})")
         return "(" + body.replace(str(hole), self._factor(expr.args[1])) + ")"
 
     def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
@@ -668,7 +673,8 @@ def _docstring(k: Kernel, ops: str) -> str:
         "Notes",
         "-----",
         f"Checked by claim{'s' * (len(k.claims) != 1)} {', '.join(k.claims)} "
-        f"(``symrb verify {' '.join(k.claims)}``); expressions from ``{k.source}``.",
+        f"(``symrb verify {' '.join(k.claims)}``);",
+        f"expressions from ``{k.source}``.",
         "",
         f"Total ops per batch item: {ops}.",
     ]

@@ -377,6 +377,8 @@ class Words:
         """For a scalar sum of traces ``sum c_i tr(X_i)``: the polynomial ``sum c_i X_i``."""
         e = expr.xreplace(opaque) if opaque else expr
         total = sp.Integer(0)
+        if e == 0:
+            return total
         for term in sp.Add.make_args(sp.expand(e)):
             traces = [f for f in sp.Mul.make_args(term) if isinstance(f, sp.Trace)]
             if len(traces) != 1:
@@ -432,6 +434,13 @@ class _Latex(LatexPrinter):
             return r"J^{-1}\left(" + self._print(inner) + r"\right)"
         return super()._print_HadamardProduct(expr)
 
+    def _print_ElementwiseApplyFunction(self, expr: Any) -> str:
+        """f applied entrywise, shown as the scalar formula with the matrix argument in place."""
+        (var,) = expr.function.variables
+        hole = sp.Symbol("ARGUMENT")
+        body = self._print(expr.function.expr.xreplace({var: hole}))
+        return body.replace(self._print(hole), r"\left(" + self._print(expr.expr) + r"\right)")
+
     def _print_MatMul(self, expr: sp.MatMul) -> str:
         """A rational coefficient as a small fraction in front: tfrac12 Q M, not (1/2) Q M."""
         coeff, mats = expr.as_coeff_mmul()
@@ -446,7 +455,7 @@ def latex(expr: Any) -> str:
     """LaTeX for a formula: a SymPy object, or a tuple of them joined by commas."""
     if isinstance(expr, tuple | list):
         return ",\\quad ".join(latex(e) for e in expr)
-    return _Latex({"mat_symbol_style": "plain"}).doprint(expr)
+    return _Latex({"mat_symbol_style": "plain", "order": "none"}).doprint(expr)
 
 
 # ---------------------------------------------------------------------------------------------

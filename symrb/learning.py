@@ -6,15 +6,18 @@ A network of N layers is the control system :math:`x_{k+1} = f(x_k, u_k)` with
 .. math::
 
     f(x, u) = x + \sigma(Kx + \beta) \quad(\text{residual}),\qquad
-    f(x, u) = \sigma(Kx + \beta) \quad(\text{plain, the paper's Remark 1}),
+    f(x, u) = \sigma(Kx + \beta) \quad(\text{plain}),
 
 with :math:`\sigma = \tanh` or the logistic function :math:`(1 + \tanh(z/2))/2 = 1/(1 + e^{-z})`,
-applied entrywise.  The samples :math:`x^a_0` share the controls.  The loss is the terminal cost
+applied entrywise.  The residual layer is the ResNet layer :math:`x + h\sigma(Kx + \beta)` of
+Benning et al. (2019) with :math:`h = 1`; the paper's Remark 1 gives that name to the plain layer
+(claim D6).  The samples :math:`x^a_0` share the controls.  The loss is the terminal cost
 :math:`\Phi = \sum_a \phi(x^a_N)`, :math:`\phi(x) = \tfrac12|x - y^a|^2` (running cost g = 0).
 
 Sign conventions (derived in :mod:`derivations.parts.discrete_control`, claims D5 and D6):
 the Hamiltonian is :math:`H(p, x, u) = \langle p, f(x, u)\rangle` and the problem a minimisation,
-so the costates are
+so with the corrected endpoint condition of D5 (the paper's m8 has the opposite sign, which
+without a running cost only flips the sign of every costate) the costates are
 
 .. math::
 
@@ -58,13 +61,21 @@ __all__ = [
 _ACTIVATIONS = ("tanh", "logistic")
 
 
+#: (activation, residual) -> (layer step, adjoint step), the generated kernels of claim D6
+_KERNELS: dict[tuple[str, bool], tuple[Callable, Callable]] = {
+    ("tanh", True): (_gen.resnet_step_tanh, _gen.resnet_adjoint_tanh),
+    ("tanh", False): (_gen.resnet_step_tanh_plain, _gen.resnet_adjoint_tanh_plain),
+    ("logistic", True): (_gen.resnet_step_logistic, _gen.resnet_adjoint_logistic),
+    ("logistic", False): (_gen.resnet_step_logistic_plain, _gen.resnet_adjoint_logistic_plain),
+}
+
+
 def _kernels(activation: str, residual: bool) -> tuple[Callable, Callable]:
     if activation not in _ACTIVATIONS:
         raise InputError(f"activation must be one of {_ACTIVATIONS}, got {activation!r}")
     if not isinstance(residual, bool | np.bool_):
         raise InputError(f"residual must be True or False, got {residual!r}")
-    suffix = activation + ("" if residual else "_plain")
-    return getattr(_gen, f"resnet_step_{suffix}"), getattr(_gen, f"resnet_adjoint_{suffix}")
+    return _KERNELS[(activation, bool(residual))]
 
 
 def _weights(K: ArrayLike, beta: ArrayLike) -> tuple[Array, Array]:

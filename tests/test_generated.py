@@ -56,6 +56,11 @@ class _LambdifyPrinter(NumPyPrinter):
     def _print_Trace(self, expr: sp.Trace) -> str:
         return f"numpy.trace({self._print(expr.arg)})"
 
+    def _print_ElementwiseApplyFunction(self, expr: sp.Basic) -> str:
+        (var,) = expr.function.variables
+        body = self._print(expr.function.expr.xreplace({var: sp.Symbol("__arg__")}))
+        return "(" + body.replace("__arg__", "(" + self._print(expr.expr) + ")") + ")"
+
 
 def _lambdify(args: list[sp.Basic], exprs: list[sp.Basic]) -> object:
     printer = _LambdifyPrinter({"fully_qualified_modules": True, "strict": True})

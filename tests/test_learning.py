@@ -52,6 +52,30 @@ def test_batch_matches_per_sample_loop(act, res):
     assert loss == pytest.approx(sl, rel=1e-14)
 
 
+@pytest.mark.parametrize("act", ["tanh", "logistic"])
+def test_residual_layer_is_a_perturbation_of_the_identity(act):
+    """Claim D6: with weights eps K the residual layer's Jacobian in x tends to I, the plain
+    layer's to 0 (central differences of one layer)."""
+    rng = np.random.default_rng(5)
+    K, b, x = rng.standard_normal((1, 3, 3)), rng.standard_normal((1, 3)), rng.standard_normal(3)
+
+    def jacobian(eps, residual, step=1e-6):
+        cols = [
+            (
+                learning.resnet_forward(x + step * e, eps * K, b, act, residual)[-1]
+                - learning.resnet_forward(x - step * e, eps * K, b, act, residual)[-1]
+            )
+            / (2 * step)
+            for e in np.eye(3)
+        ]
+        return np.array(cols).T
+
+    for eps in (1e-2, 1e-4):
+        size = eps * np.abs(K).max()  # |dsigma| <= 1: the layer's Jacobian is I (+ or 0) + O(eps)
+        assert np.abs(jacobian(eps, True) - np.eye(3)).max() <= 2 * size
+        assert np.abs(jacobian(eps, False)).max() <= 2 * size
+
+
 def test_sample_axes_can_be_2d():
     x0, K, b, y = _net(1, M=6)
     _, gK, gb = learning.loss_gradients(x0, K, b, y)

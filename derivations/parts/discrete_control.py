@@ -1,447 +1,824 @@
 r"""Discrete optimal control and deep learning (paper, Section 2, first part): claims D1-D6.
 
-Conventions fixed here (and stated on the book pages):
+Conventions (stated on the book pages): :math:`H(y,x,u) = \langle y, f(x,u)\rangle - g(x,u)` as
+printed, with :math:`y` the costate :math:`p_{k+1}`; the problems are minimisations, so the augmented
+functionals whose critical points give the extremal equations are *minus* the cost plus multiplier
+terms; :math:`H^*(y,x) = \hat H(y,x,u^*(y,x),\sigma(y,x))` is the reduced Hamiltonian and
+:math:`(H^*_{xy})_{ij} = \partial^2H^*/\partial x_i\partial y_j`.
 
-* :math:`H(p_{k+1},x_k,u_k) = \langle p_{k+1}, f(x_k,u_k)\rangle - g(x_k,u_k)` as printed, and the
-  problem is a *minimisation*; the augmented functional whose critical points we take is
-  :math:`V = \sum_k \langle p_{k+1}, f(x_k,u_k) - x_{k+1}\rangle + \langle\sigma_k, h(u_k)\rangle
-  - g(x_k,u_k)\,[- \sum_a\phi(x^a_N)]`, i.e. minus the cost plus multiplier terms;
-* with this sign the costate is *minus* the gradient of the cost-to-go:
-  :math:`p_k = -\partial C/\partial x_k`; the weight gradient is
-  :math:`\partial C/\partial u_k = -\sum_a \partial H/\partial u_k`;
-* :math:`H^*(y,x) = \hat H(y,x,u^*(y,x),\sigma(y,x))` is the reduced (optimised) Hamiltonian;
-  by the envelope argument :math:`\partial H^*/\partial x = \partial H/\partial x` and
-  :math:`\partial H^*/\partial y = \partial H/\partial y` at :math:`u^*`;
-* for matrices of second derivatives, :math:`(H^*_{xy})_{ij} = \partial^2 H^*/\partial x_i\partial y_j`.
+The displayed formulas are SymPy objects in the paper's indexed notation (:math:`x_k`,
+:math:`p^a_{k+1}`, sums over steps and samples, undefined :math:`f, g, h, \phi`); the evidence
+evaluates those same objects with :func:`_value` on explicit vectors and functions, so a summation
+range, an index or a sign shown in the book is the one that was checked.
 
-Derived here (each claim's evidence is a function below):
-
-* D1: the stationarity conditions of the augmented functional (undefined smooth f, g, h; n = 2,
-  m = 2, l = 1, N = 3) and three errata: the proof's rewriting with :math:`\sum_{k=0}^{N}` and
-  :math:`p_{N+1}=0` adds a phantom term; the costate equation at k = N does not hold (p_N is free
-  for a fixed endpoint); the proof's functional V needs one multiplier :math:`\sigma_k` per step;
-* D2: the implicit step needs the mixed second derivative of the *reduced* Hamiltonian H*
-  invertible; the printed condition on H at fixed u is not sufficient (exact counterexample);
-* D3: the linearised equations hold with H* (not H-hat at frozen u*) and with the transpose of the
-  mixed-derivative matrix in the second line;
-* D4: the advance map is symplectic (generic second derivatives, n = 2, 3; float64 on a random
-  nonlinear family solved with scipy);
-* D5: the multi-sample problem with terminal cost: free endpoint, per-sample states in the costate
-  equation, :math:`p^a_N = -\nabla\phi(x^a_N)` for this H, multipliers :math:`\sigma_k`;
-* D6: the costate recursion for the ResNet layers :math:`f(x,u)=x+\sigma(Kx+\beta)` and
-  :math:`f(x,u)=\sigma(Kx+\beta)` is back-propagation: :math:`-p^a_k = \partial\Phi/\partial x^a_k`,
-  :math:`\partial\Phi/\partial K_k = -\sum_a\partial H/\partial K_k`.
-
-Emitted (``symrb/_generated/discrete_control.py``): ResNet forward steps and adjoint (costate and
-dH/du) steps for tanh and the logistic sigmoid, residual and plain, at matrix level.
+Emitted to ``symrb/_generated/discrete_control.py`` (claim D6): the ResNet steps
+:math:`x_{k+1} = x_k + \sigma(K_kx_k+\beta_k)` (residual) and :math:`\sigma(K_kx_k+\beta_k)` (plain)
+and their adjoint steps (the costate :math:`p_k = \partial H/\partial x` and
+:math:`\partial H/\partial K`, :math:`\partial H/\partial\beta`), for :math:`\sigma = \tanh` and the
+logistic function.  One function, :func:`layer`, builds the displayed generic layer and the kernels.
 """
 
 from __future__ import annotations
 
+import functools
 import itertools
+import operator
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
-from derivations.codegen import Arg, Kernel, n
-from derivations.registry import Claim, Evidence, Level
-from derivations.symbolic import residual
+from derivations.codegen import Arg, Kernel, entrywise, matrix, n, vector
+from derivations.registry import Level, claim
+from derivations.symbolic import eq, explicit, lhs_minus_rhs, residual
 
-# ---------------------------------------------------------------------------------------------
-# small helpers
+# =============================================================================================
+# display objects for the indexed notation and their evaluation (private helpers; _Dot, _Sample,
+# _Steps and _value would serve other discrete parts too and could move to derivations.symbolic)
+
+
+class _Dot(sp.Expr):
+    """The dot product <a, b> = a^T b of two vectors of R^p (printed with angle brackets)."""
+
+    is_commutative = True
+
+    def __new__(cls, a: sp.Basic, b: sp.Basic) -> _Dot:
+        return super().__new__(cls, sp.sympify(a), sp.sympify(b))
+
+    def _latex(self, printer: Any) -> str:
+        a, b = (printer._print(x) for x in self.args)
+        return rf"\left\langle {a}, {b}\right\rangle"
+
+
+class _Sample(sp.Indexed):
+    """x^a_k: a quantity of sample a at step k (an Indexed object printed with a superscript)."""
+
+    def _latex(self, printer: Any) -> str:
+        base, a, k = self.args
+        return f"{printer._print(base.label)}^{{{printer._print(a)}}}_{{{printer._print(k)}}}"
+
+
+class _Steps(sp.Basic):
+    """Relations that hold for every integer k with lo <= k <= hi (printed with the range)."""
+
+    def __new__(cls, relations: Sequence[sp.Eq], k: sp.Symbol, lo: Any, hi: Any) -> _Steps:
+        return super().__new__(cls, sp.Tuple(*relations), k, sp.sympify(lo), sp.sympify(hi))
+
+    @property
+    def relations(self) -> tuple[sp.Eq, ...]:
+        return tuple(self.args[0])
+
+    def steps(self, N: int) -> range:
+        """The steps k of the displayed range for a horizon of N steps."""
+        _rels, _k, lo, hi = self.args
+        return range(int(lo.subs(_N, N)), int(hi.subs(_N, N)) + 1)
+
+    def at(self, k: int, which: int = 0, **indices: int) -> tuple[sp.Basic, sp.Basic]:
+        """(lhs, rhs) of relation ``which`` at step k (and e.g. sample ``a=1``)."""
+        return _instance(self.relations[which], {self.args[1]: k, **_named(indices)})
+
+    def _latex(self, printer: Any) -> str:
+        rels, k, lo, hi = self.args
+        body = r",\quad ".join(printer._print(r) for r in rels)
+        rng = f"{printer._print(lo)} \\le {printer._print(k)} \\le {printer._print(hi)}"
+        return rf"{body}\quad ({rng})"
+
+
+def _named(indices: dict[str, int]) -> dict[sp.Symbol, int]:
+    return {_INDEX[name]: value for name, value in indices.items()}
+
+
+def _instance(relation: sp.Eq, sub: dict[sp.Symbol, int]) -> tuple[sp.Basic, sp.Basic]:
+    """(lhs, rhs) of a displayed relation with its free indices replaced by integers (the sides
+    are substituted separately: rebuilding an ``Eq`` could evaluate it)."""
+    return relation.lhs.xreplace(sub), relation.rhs.xreplace(sub)
+
+
+def _key(e: sp.Basic) -> str | tuple[Any, ...]:
+    if isinstance(e, sp.Indexed):
+        return (str(e.base.label), *(int(i) for i in e.indices))
+    return str(e.name)
+
+
+def _indexed_key(
+    e: sp.Indexed, values: dict[Any, Any], functions: dict[str, Any]
+) -> tuple[Any, ...]:
+    """The key of an indexed symbol, its indices evaluated (so x_N and p_{N+1} take N from the
+    values)."""
+    return (str(e.base.label), *(int(_value(i, values, functions)) for i in e.indices))
+
+
+def _add(a: Any, b: Any) -> Any:
+    """a + b, where a scalar zero (the right side of a displayed ``= 0``) adds to a matrix."""
+    if isinstance(a, sp.MatrixBase) != isinstance(b, sp.MatrixBase):
+        zero, mat = (b, a) if isinstance(a, sp.MatrixBase) else (a, b)
+        if zero != 0:
+            raise TypeError(f"cannot add the scalar {zero} to a matrix")
+        return mat
+    return a + b
+
+
+def _minus(a: Any, b: Any) -> Any:
+    """a - b for the two evaluated sides of a displayed relation."""
+    return _add(a, -b)
+
+
+def _dot(a: Any, b: Any) -> sp.Expr:
+    if isinstance(a, sp.MatrixBase):
+        return (a.T * b)[0, 0]
+    return a * b
+
+
+def _fresh(point: Any, tag: int) -> Any:
+    if isinstance(point, sp.MatrixBase):
+        return sp.Matrix(point.rows, 1, [sp.Dummy(f"d{tag}_{i}") for i in range(point.rows)])
+    return sp.Dummy(f"d{tag}")
+
+
+def _grad(value: Any, var: Any) -> Any:
+    """Derivative of a scalar (gradient), vector (Jacobian) or scalar-variable expression."""
+    if not isinstance(var, sp.MatrixBase):
+        return value.diff(var)
+    if isinstance(value, sp.MatrixBase):
+        return value.jacobian(var)
+    return sp.Matrix([sp.diff(value, v) for v in var])
+
+
+def _value(e: Any, values: dict[Any, Any], functions: dict[str, Callable[..., Any]]) -> Any:
+    """Evaluate a displayed formula on explicit data.
+
+    ``values`` maps a symbol's name, or ``(name, *indices)`` for an indexed symbol such as
+    :math:`x_2` or :math:`p^1_2`, to a SymPy scalar or column vector; ``functions`` maps the name
+    of an undefined function (``f``, ``H``, ``\\phi``, ...) to a callable on such values.  Sums are
+    expanded over their (evaluated) limits, ``_Dot`` is the dot product, a ``Derivative`` is the
+    gradient (Jacobian) in its variables at their values, ``Subs`` evaluates at the given point,
+    and matrix expressions in matrix symbols go to :func:`~derivations.symbolic.explicit`.
+    """
+    if isinstance(e, sp.Indexed):
+        return values[_indexed_key(e, values, functions)]
+    if isinstance(e, sp.Symbol):
+        return values[_key(e)]
+    if isinstance(e, sp.Number):
+        return e
+    if isinstance(e, _Dot):
+        return _dot(*(_value(x, values, functions) for x in e.args))
+    if isinstance(e, sp.Sum):
+        term, *limits = e.args
+        (k, lo, hi), rest = limits[0], limits[1:]
+        inner = sp.Sum(term, *rest) if rest else term
+        lo, hi = (int(_value(x, values, functions)) for x in (lo, hi))
+        parts = [
+            _value(inner.xreplace({k: sp.Integer(j)}), values, functions) for j in range(lo, hi + 1)
+        ]
+        return functools.reduce(_add, parts)
+    if isinstance(e, sp.Derivative):
+        return _derivative(e, values, functions)
+    if isinstance(e, sp.Subs):
+        inner, variables, points = e.args
+        at = {
+            _key(v): _value(pt, values, functions) for v, pt in zip(variables, points, strict=True)
+        }
+        return _value(inner, {**values, **at}, functions)
+    if isinstance(e, AppliedUndef):
+        return functions[e.func.__name__](*(_value(x, values, functions) for x in e.args))
+    if isinstance(e, sp.MatrixExpr):
+        return explicit(e, {k: v for k, v in values.items() if isinstance(k, str)})
+    args = [_value(x, values, functions) for x in e.args]
+    if isinstance(e, sp.Add):
+        return functools.reduce(_add, args)
+    if isinstance(e, sp.Mul):
+        return functools.reduce(operator.mul, args)
+    if isinstance(e, sp.Pow):
+        return args[0] ** args[1]
+    raise TypeError(f"_value: no rule for {type(e).__name__} ({e})")
+
+
+def _derivative(e: sp.Derivative, values: dict[Any, Any], functions: dict[str, Any]) -> Any:
+    """d/dv_m ... d/dv_1 of the inner expression at the values of v_1, ..., v_m: each variable is
+    replaced by fresh symbols (all its occurrences: a partial derivative), the result is
+    differentiated in turn and the fresh symbols are replaced by the variable's value."""
+    fresh: dict[Any, Any] = {}
+    order = []
+    for var, count in e.variable_count:
+        key = _indexed_key(var, values, functions) if isinstance(var, sp.Indexed) else _key(var)
+        if key not in fresh:
+            fresh[key] = _fresh(values[key], len(fresh))
+        order += [key] * int(count)
+    # the other values are constants of a partial derivative: hide large ones behind symbols
+    hidden: dict[sp.Basic, sp.Basic] = {}
+
+    def hide(v: Any) -> Any:
+        if isinstance(v, sp.MatrixBase):
+            return v.applyfunc(hide)
+        if isinstance(v, sp.Basic) and not v.is_Atom:
+            return hidden.setdefault(v, sp.Dummy(f"c{len(hidden)}"))
+        return v
+
+    held = {k: hide(v) for k, v in values.items() if k not in fresh}
+    result = _value(e.expr, {**held, **fresh}, functions)
+    for key in order:
+        result = _grad(result, fresh[key])
+    result = result.xreplace({d: v for v, d in hidden.items()}) if hidden else result
+    back: dict[sp.Basic, sp.Basic] = {}
+    for key, d in fresh.items():
+        point = values[key]
+        back.update(zip(d, point, strict=True) if isinstance(d, sp.MatrixBase) else [(d, point)])
+    if all(isinstance(v, sp.Symbol) for v in back.values()) or not result.has(sp.Derivative):
+        return result.xreplace(back)
+    return result.subs(back, simultaneous=True)
+
+
+def _define(
+    formula: sp.Eq, functions: dict[str, Any], constants: dict[Any, Any] | None = None
+) -> Callable[..., Any]:
+    """The function defined by a displayed formula ``F(a, b, ...) = rhs`` as a callable."""
+    params = [_key(a) for a in formula.lhs.args]
+
+    def fn(*args: Any) -> Any:
+        return _value(
+            formula.rhs, {**(constants or {}), **dict(zip(params, args, strict=True))}, functions
+        )
+
+    return fn
+
+
+def _substituted(values: dict[Any, Any], sub: dict[sp.Basic, sp.Basic]) -> dict[Any, Any]:
+    """The values with ``sub`` applied to every SymPy scalar and matrix."""
+    return {k: (v.xreplace(sub) if hasattr(v, "xreplace") else v) for k, v in values.items()}
 
 
 def _vec(name: str, dim: int) -> sp.Matrix:
     return sp.Matrix([sp.Symbol(f"{name}_{i + 1}", real=True) for i in range(dim)])
 
 
-def _grad(expr: sp.Expr, v: sp.Matrix) -> sp.Matrix:
-    return sp.Matrix([sp.diff(expr, s) for s in v])
+def _generic(nx: int, nu: int, nl: int) -> dict[str, Callable[..., Any]]:
+    """Undefined smooth f: R^nx x R^nu -> R^nx, g: R^nx x R^nu -> R, h: R^nu -> R^nl and
+    phi: R^nx -> R, as callables on explicit vectors."""
+    X, U = _vec("X", nx), _vec("U", nu)
+    F = sp.Matrix([sp.Function(f"f{i + 1}")(*X, *U) for i in range(nx)])
+    G = sp.Function("g")(*X, *U)
+    Hc = sp.Matrix([sp.Function(f"h{i + 1}")(*U) for i in range(nl)])
+    Phi = sp.Function("phi")(*X)
 
-
-def _jac(F: sp.Matrix, v: sp.Matrix) -> sp.Matrix:
-    """(dF_i / dv_j)."""
-    return F.jacobian(v)
-
-
-class GeneralProblem:
-    """Undefined smooth f: R^n x R^m -> R^n, g: R^n x R^m -> R, h: R^m -> R^l, phi: R^n -> R.
-
-    ``H(y, x, u)`` and ``Hhat(y, x, u, s)`` are built from the printed definitions eq8.4, eq8.5.
-    """
-
-    def __init__(self, nx: int = 2, nu: int = 2, nl: int = 1) -> None:
-        self.nx, self.nu, self.nl = nx, nu, nl
-        X, U = _vec("X", nx), _vec("U", nu)
-        self._X, self._U = X, U
-        args = (*X, *U)
-        self._f = sp.Matrix([sp.Function(f"f{i + 1}")(*args) for i in range(nx)])
-        self._g = sp.Function("g")(*args)
-        self._h = sp.Matrix([sp.Function(f"h{i + 1}")(*U) for i in range(nl)])
-        self._phi = sp.Function("phi")(*X)
-
-    def _at(self, expr, x: sp.Matrix, u: sp.Matrix | None = None):
-        sub = dict(zip(self._X, x, strict=True))
-        if u is not None:
-            sub.update(zip(self._U, u, strict=True))
+    def at(expr: Any, x: Any = None, u: Any = None) -> Any:
+        sub = dict(zip(X, x, strict=True)) if x is not None else {}
+        sub.update(zip(U, u, strict=True) if u is not None else {})
         return expr.xreplace(sub)
 
-    def f(self, x, u):
-        return self._at(self._f, x, u)
-
-    def g(self, x, u):
-        return self._at(self._g, x, u)
-
-    def h(self, u):
-        return self._h.xreplace(dict(zip(self._U, u, strict=True)))
-
-    def phi(self, x):
-        return self._at(self._phi, x)
-
-    def H(self, y, x, u):
-        return (y.T * self.f(x, u))[0, 0] - self.g(x, u)
-
-    def Hhat(self, y, x, u, s):
-        return self.H(y, x, u) + (s.T * self.h(u))[0, 0]
-
-
-# ---------------------------------------------------------------------------------------------
-# D1: the discrete maximum principle (fixed endpoints)
-
-
-def d1_stationarity(N: int = 3) -> sp.Expr:
-    """Stationarity of V = sum_k <p_{k+1}, f(x_k,u_k) - x_{k+1}> + <sigma_k, h(u_k)> - g(x_k,u_k)
-    (x_0, x_N fixed) is exactly: x_{k+1} = dH/dp (k = 0..N-1), p_k = dH/dx (k = 1..N-1),
-    dHhat/du_k (with sigma_k) = 0 and h(u_k) = 0 (k = 0..N-1).  Undefined f, g, h; n = m = 2, l = 1.
-    """
-    P = GeneralProblem(2, 2, 1)
-    xs = [_vec(f"x{k}", P.nx) for k in range(N + 1)]
-    us = [_vec(f"u{k}", P.nu) for k in range(N)]
-    ps = [None] + [_vec(f"p{k}", P.nx) for k in range(1, N + 1)]
-    ss = [_vec(f"s{k}", P.nl) for k in range(N)]
-    V = sum(
-        (
-            (ps[k + 1].T * (P.f(xs[k], us[k]) - xs[k + 1]))[0, 0]
-            + (ss[k].T * P.h(us[k]))[0, 0]
-            - P.g(xs[k], us[k])
-            for k in range(N)
-        ),
-        sp.Integer(0),
-    )
-    y, x, u, s = _vec("Y", P.nx), _vec("Xg", P.nx), _vec("Ug", P.nu), _vec("S", P.nl)
-    Hh = P.Hhat(y, x, u, s)
-    Hp, Hx, Hu = _grad(Hh, y), _grad(Hh, x), _grad(Hh, u)
-
-    def at(e, k):
-        sub = dict(zip(y, ps[k + 1], strict=True))
-        sub.update(zip(x, xs[k], strict=True))
-        sub.update(zip(u, us[k], strict=True))
-        sub.update(zip(s, ss[k], strict=True))
-        return e.xreplace(sub)
-
-    total = sp.Integer(0)
-    for k in range(N):
-        total += residual(_grad(V, ps[k + 1]) - (at(Hp, k) - xs[k + 1]))  # state equation
-        total += residual(_grad(V, us[k]) - at(Hu, k))  # eq8.6 with sigma_k
-        total += residual(_grad(V, ss[k]) - P.h(us[k]))  # constraint
-    for k in range(1, N):
-        total += residual(_grad(V, xs[k]) - (at(Hx, k) - ps[k]))  # costate, k = 1..N-1
-    # x_N is fixed, so no condition ties p_N to anything else: V is affine in p_N through x_N only
-    return total
-
-
-def d1_printed_rewrite(N: int = 2) -> sp.Expr:
-    """The proof rewrites sum_{k<N}(-<p_{k+1},x_{k+1}> + Hhat_k) as <p_0,x_0> + sum_{k=0}^{N}
-    (-<p_k,x_k> + Hhat(p_{k+1},x_k,u_k,sigma)) with p_{N+1} = 0.  The difference is
-    Hhat(0, x_N, u_N, sigma) = -g(x_N,u_N) + <sigma,h(u_N)>, not zero: a phantom control u_N."""
-    P = GeneralProblem(2, 2, 1)
-    xs = [_vec(f"x{k}", P.nx) for k in range(N + 1)]
-    us = [_vec(f"u{k}", P.nu) for k in range(N + 1)]  # u_N is the phantom the rewrite needs
-    ps = [_vec(f"p{k}", P.nx) for k in range(N + 2)]
-    ps[N + 1] = sp.zeros(P.nx, 1)
-    s = _vec("s", P.nl)
-    line2 = sum(
-        (-(ps[k + 1].T * xs[k + 1])[0, 0] + P.Hhat(ps[k + 1], xs[k], us[k], s) for k in range(N)),
-        sp.Integer(0),
-    )
-    line3 = (ps[0].T * xs[0])[0, 0] + sum(
-        (-(ps[k].T * xs[k])[0, 0] + P.Hhat(ps[k + 1], xs[k], us[k], s) for k in range(N + 1)),
-        sp.Integer(0),
-    )
-    return residual(line2 - line3)
-
-
-# exact example 1 (n = m = 1, no constraint): f = x + u, g = u^2/2, x_0 = 0, x_2 = 1
-
-
-def example_terminal_costate() -> dict[str, sp.Expr]:
-    """Minimise u_0^2/2 + u_1^2/2 with x_{k+1} = x_k + u_k, x_0 = 0, x_2 = 1.
-
-    The minimiser is u_0 = u_1 = 1/2; stationarity in u_1 gives p_2 = u_1 = 1/2.  The printed
-    costate equation at k = N with p_{N+1} = 0 reads p_N = dH/dx(0, x_N, u_N) = -dg/dx = 0.
-    """
-    u0, u1, p1, p2 = sp.symbols("u0 u1 p1 p2", real=True)
-    x, u, y = sp.symbols("x u y", real=True)
-    f, g = x + u, u**2 / 2
-    H = y * f - g
-    # direct minimisation with u_1 = 1 - u_0
-    u0_opt = sp.solve(sp.diff((u0**2 + (1 - u0) ** 2) / 2, u0), u0)[0]
-    sol = {u0: u0_opt, u1: 1 - u0_opt}
-    # stationarity in u_k: dH/du(p_{k+1}, x_k, u_k) = 0
-    eqs = [
-        sp.diff(H, u).subs({y: p1, x: 0, u: sol[u0]}),
-        sp.diff(H, u).subs({y: p2, x: sol[u0], u: sol[u1]}),
-    ]
-    ps = sp.solve(eqs, [p1, p2], dict=True)[0]
-    # costate equation at k = 1 (interior): p_1 = dH/dx(p_2, x_1, u_1)
-    interior = ps[p1] - sp.diff(H, x).subs({y: ps[p2], x: sol[u0], u: sol[u1]})
-    printed_pN = sp.diff(H, x).subs({y: 0, x: 1})  # any u_N: -dg/dx = 0
     return {
-        "u0": sol[u0],
-        "u1": sol[u1],
-        "p1": ps[p1],
-        "p2": ps[p2],
-        "interior": interior,
-        "printed_pN": printed_pN,
+        "f": lambda x, u: at(F, x, u),
+        "g": lambda x, u: at(G, x, u),
+        "h": lambda u: at(Hc, u=u),
+        r"\phi": lambda x: at(Phi, x),
     }
 
 
-def d1_printed_costate_at_N() -> sp.Expr:
-    ex = example_terminal_costate()
-    return abs(ex["p2"] - ex["printed_pN"])
+def _with_hamiltonians(functions: dict[str, Any]) -> dict[str, Any]:
+    """Add H and Hhat, defined by the displayed formulas, to f, g, h."""
+    functions["H"] = _define(H_DEF, functions)
+    functions[r"\hat{H}"] = _define(HHAT_DEF, functions)
+    return functions
 
 
-def d1_corrected_costate_interior() -> sp.Expr:
-    ex = example_terminal_costate()
-    return abs(ex["interior"])
+def _coverage_defect(
+    V: sp.Expr, values: dict[Any, Any], fixed: set[Any], covered: list[Any]
+) -> int:
+    """How far the variables compared with a displayed equation are from being the variables of V
+    (those it depends on, minus the fixed data), each once."""
+    variables = {
+        key
+        for key, val in values.items()
+        if isinstance(key, tuple) and key not in fixed and any(V.has(s) for s in val)
+    }
+    return len(variables.symmetric_difference(covered)) + len(covered) - len(set(covered))
 
 
-# exact example 2 (n = 1, m = 2, l = 1): h(u) = u1 - u2, f = x + u1, g = (u1^2 + (u2 - x)^2)/2
+def _nonzero(expr: Any) -> int:
+    """Number of entries of ``expr`` that do not expand to 0.
+
+    The identities checked here are polynomial in the values of undefined functions and their
+    derivatives (f, g, sigma, sigma', ...) at canonical arguments, so expansion decides them, and
+    a false identity is reported at once (``simplify`` on a large non-zero expression can take
+    minutes, which would hide a wrong kernel behind a time-out)."""
+    items = list(expr) if isinstance(expr, sp.MatrixBase) else [expr]
+    return sum(1 for e in items if sp.expand(e) != 0)
 
 
-def example_multiplier(single_sigma: bool = False) -> list[dict[sp.Symbol, sp.Expr]]:
-    """KKT system of: minimise sum_k g(x_k,u_k), x_{k+1} = x_k + u_{k,1}, h(u_k) = u_{k,1} - u_{k,2}
-    = 0, g = (u_1^2 + (u_2 - x)^2)/2, N = 2, x_0 = 0, x_2 = 1.  Solved exactly (it is linear).
-    With ``single_sigma`` one multiplier is shared by both steps, as in the proof's functional V."""
-    x, y, s = sp.symbols("x y s", real=True)
-    U = sp.symbols("U1 U2", real=True)
-    f = x + U[0]
-    g = (U[0] ** 2 + (U[1] - x) ** 2) / 2
-    h = U[0] - U[1]
-    Hh = y * f - g + s * h
-    x1, p1, p2 = sp.symbols("x1 p1 p2", real=True)
-    u = [sp.symbols(f"u{k}_1 u{k}_2", real=True) for k in range(2)]
-    sig = [sp.Symbol("sigma", real=True)] * 2 if single_sigma else list(sp.symbols("sigma0 sigma1"))
-    xs, ps = [sp.Integer(0), x1, sp.Integer(1)], [None, p1, p2]
+def _least_squares_residual(equations: list[sp.Expr], unknowns: list[sp.Symbol]) -> sp.Expr:
+    """|A z - b|^2 at the least-squares solution z of the linear system A z = b (exact): zero
+    exactly when the equations have a solution."""
+    A, b = sp.linear_eq_to_matrix([sp.expand(e) for e in equations], unknowns)
+    r = A * (A.pinv() * b) - b
+    return sp.nsimplify((r.T * r)[0, 0])
 
-    def at(e, k):
-        return e.subs({y: ps[k + 1], x: xs[k], U[0]: u[k][0], U[1]: u[k][1], s: sig[k]})
 
+# =============================================================================================
+# the notation shared by the claims
+
+_k, _N, _a, _M = sp.symbols("k N a M", integer=True)
+_INDEX = {"k": _k, "a": _a}
+# k + 1, N - 1, N + 1 unevaluated, so that they print in this order (substituting k or N evaluates)
+_k1, _Nm1, _N1 = (sp.Add(s, c, evaluate=False) for s, c in ((_k, 1), (_N, -1), (_N, 1)))
+
+
+def _plus(*terms: sp.Expr) -> sp.Expr:
+    """A sum printed in the order written."""
+    return sp.Add(*terms, evaluate=False)
+
+
+_x, _u, _p, _sig = (sp.IndexedBase(s) for s in ("x", "u", "p", r"\sigma"))
+_f, _g, _h, _phi = (sp.Function(s) for s in ("f", "g", "h", r"\phi"))
+_H, _Hhat, _Hstar, _ustar = (sp.Function(s) for s in ("H", r"\hat{H}", "H^*", "u^*"))
+_sigma_fn = sp.Function(r"\sigma")
+_y, _xs, _us, _sigma1 = sp.symbols("y x u sigma")
+_C, _V = sp.symbols("C V")
+
+
+def _xa(a: Any, k: Any) -> _Sample:
+    return _Sample(_x, a, k)
+
+
+def _pa(a: Any, k: Any) -> _Sample:
+    return _Sample(_p, a, k)
+
+
+#: H(y, x, u) = <y, f(x, u)> - g(x, u) (eq8.4) and Hhat = H + <sigma, h(u)> (eq8.5).
+H_DEF = eq(_H(_y, _xs, _us), _plus(_Dot(_y, _f(_xs, _us)), -_g(_xs, _us)))
+HHAT_DEF = eq(_Hhat(_y, _xs, _us, _sigma1), _H(_y, _xs, _us) + _Dot(_sigma1, _h(_us)))
+#: the reduced Hamiltonian
+REDUCED = eq(_Hstar(_y, _xs), _Hhat(_y, _xs, _ustar(_y, _xs), _sigma_fn(_y, _xs)))
+
+# =============================================================================================
+# D1: the discrete maximum principle (fixed endpoints)
+
+D1 = claim(
+    "D1",
+    label="prob8.1, gendiscprop, eq8.3-eq8.6",
+    title="Discrete maximum principle (fixed endpoints, control constraint)",
+    statement="Proposition gendiscprop: a solution of the problem of minimising [[cost]] subject to "
+    "[[dynamics]], with $x_0$ and $x_N$ given, and [[constraint]] satisfies the extremal equations "
+    "of [[H]] and [[Hhat]], the critical points of an augmented functional $V$.",
+    printed="The costate equation is stated for every step up to $N$, [[costate_printed]], with "
+    "[[terminal_printed]]; the proof's functional has one multiplier for all steps, "
+    "[[V_printed]], and the proof rewrites it as [[rewrite_printed]].",
+    corrected="[[state]]; [[costate]] only (the equation at step 0 merely defines $p_0$, and $p_N$ "
+    "is a free unknown fixed by the endpoint $x_N$); [[stationary]] with one multiplier $\\sigma_k$ "
+    "per step. These are exactly the critical points of [[V]], which equals [[rewrite]].",
+    expected="holds after correction",
+    section="2",
+    note="The structure of the principle is right, but three details are not. (i) The costate "
+    "equation at k = N with p_{N+1} = 0 would force p_N = -dg/dx(x_N, u_N) for a phantom control "
+    "u_N; for a fixed endpoint p_N is free (exact example f = x + u, g = u^2/2, x_0 = 0, x_2 = 1: "
+    "p_2 = 1/2 while the printed equation gives 0). (ii) The proof's V needs one multiplier per "
+    "step (the proposition's sigma = sigma(p_{k+1}, x_k) already allows that; V does not): in an "
+    "exact example the minimiser has sigma_0 = -3/7, sigma_1 = -1/7, and with one shared sigma "
+    "the stationarity equations at the minimiser have no solution. (iii) The proof's rewriting "
+    "with the sum up to N adds Hhat(0, x_N, u_N, sigma) = -g(x_N, u_N) + <sigma, h(u_N)>.",
+)
+COST = D1.formula("cost", eq(_C, sp.Sum(_g(_x[_k], _u[_k]), (_k, 0, _Nm1))))
+DYNAMICS = D1.formula("dynamics", _Steps([eq(_x[_k1], _f(_x[_k], _u[_k]))], _k, 0, _Nm1))
+CONSTRAINT = D1.formula("constraint", _Steps([eq(_h(_u[_k]), 0)], _k, 0, _Nm1))
+D1.formula("H", H_DEF)
+D1.formula("Hhat", HHAT_DEF)
+_H_k = _H(_p[_k1], _x[_k], _u[_k])
+STATE = D1.formula("state", _Steps([eq(_x[_k1], sp.Derivative(_H_k, _p[_k1]))], _k, 0, _Nm1))
+_COSTATE_EQ = eq(_p[_k], sp.Derivative(_H_k, _x[_k]))
+COSTATE = D1.formula("costate", _Steps([_COSTATE_EQ], _k, 1, _Nm1))
+COSTATE_PRINTED = D1.formula("costate_printed", _Steps([_COSTATE_EQ], _k, 0, _N))
+TERMINAL_PRINTED = D1.formula("terminal_printed", eq(_p[_N1], 0))
+STATIONARY = D1.formula(
+    "stationary",
+    _Steps([eq(sp.Derivative(_Hhat(_p[_k1], _x[_k], _u[_k], _sig[_k]), _u[_k]), 0)], _k, 0, _Nm1),
+)
+
+
+def _functional(multiplier: sp.Basic) -> sp.Sum:
+    term = _plus(
+        _Dot(_p[_k1], _plus(_f(_x[_k], _u[_k]), -_x[_k1])),
+        _Dot(multiplier, _h(_u[_k])),
+        -_g(_x[_k], _u[_k]),
+    )
+    return sp.Sum(term, (_k, 0, _Nm1))
+
+
+V_DEF = D1.formula("V", eq(_V, _functional(_sig[_k])))
+V_PRINTED = D1.formula("V_printed", eq(_V, _functional(_sigma1)))
+
+
+def _rewrite(multiplier: sp.Basic, last: sp.Expr) -> sp.Expr:
+    term = _plus(-_Dot(_p[_k], _x[_k]), _Hhat(_p[_k1], _x[_k], _u[_k], multiplier))
+    return _plus(_Dot(_p[0], _x[0]), sp.Sum(term, (_k, 0, last)))
+
+
+REWRITE = D1.formula("rewrite", eq(_V, _plus(_rewrite(_sig[_k], _Nm1), -_Dot(_p[_N], _x[_N]))))
+REWRITE_PRINTED = D1.formula("rewrite_printed", eq(_V, _rewrite(_sigma1, _N)))
+
+
+def _d1_variables(N: int, nx: int, nu: int, nl: int, phantom: bool = False) -> dict[Any, Any]:
+    """Symbolic vectors x_0..x_N, u_k, p_0..p_{N+1}, sigma_k and one sigma (u_N with phantom)."""
+    values: dict[Any, Any] = {"N": N, "sigma": _vec("s", nl)}
+    for k in range(N + 2):
+        values[("p", k)] = _vec(f"p{k}", nx)
+    for k in range(N + 1):
+        values[("x", k)] = _vec(f"x{k}", nx)
+    for k in range(N + 1 if phantom else N):
+        values[("u", k)] = _vec(f"u{k}", nu)
+        values[(r"\sigma", k)] = _vec(f"s{k}", nl)
+    return values
+
+
+@D1.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d1_stationarity() -> sp.Expr:
+    """The derivatives of the displayed V (one multiplier per step, x_0 and x_N fixed) in p_{k+1},
+    x_k, u_k and sigma_k are the displayed state, costate, stationarity and constraint equations
+    over their displayed ranges, and these cover every variable of V once (undefined f, g, h;
+    n = m = 2, l = 1, N = 3)."""
+    N = 3
+    values = _d1_variables(N, 2, 2, 1)
+    fn = _with_hamiltonians(_generic(2, 2, 1))
+    V = _value(V_DEF.rhs, values, fn)
+    total = sp.Integer(0)
+    covered = []
+    # dV/dvar is rhs - lhs of "x_{k+1} = dH/dp" and lhs - rhs of "dHhat/du = 0"
+    for steps, var, sign in ((STATE, _p[_k + 1], -1), (COSTATE, _x[_k], -1),
+                             (STATIONARY, _u[_k], 1), (CONSTRAINT, _sig[_k], 1)):  # fmt: skip
+        for k in steps.steps(N):
+            lhs, rhs = steps.at(k)
+            key = _key(var.xreplace({_k: k}))
+            covered.append(key)
+            side = _minus(_value(lhs, values, fn), _value(rhs, values, fn))
+            total += _nonzero(_minus(_grad(V, values[key]), sign * side))
+    fixed = {("x", 0), ("x", N)}
+    total += _coverage_defect(V, values, fixed, covered)
+    return total
+
+
+def _d1_costate_range_defect(costate: _Steps) -> sp.Expr:
+    """Minimise u_0^2/2 + u_1^2/2 with x_{k+1} = x_k + u_k, x_0 = 0, x_2 = 1 (n = m = 1); take
+    p_1, p_2 from the displayed stationarity conditions at the minimiser and p_3 from the printed
+    terminal convention; return sum |lhs - rhs| of the costate equation over its displayed steps
+    k >= 1 (p_0 does not occur in V: the equation at k = 0 defines it)."""
+    N, v, uN = 2, sp.Symbol("v"), sp.Symbol("u_N")
+    fn = _with_hamiltonians(
+        {"f": lambda x, u: x + u, "g": lambda x, u: u[0] ** 2 / 2, "h": lambda u: sp.zeros(1, 1)}
+    )
+    values: dict[Any, Any] = {"N": N, ("x", 0): sp.Matrix([0])}
+    values.update(
+        {("u", 0): sp.Matrix([v]), ("u", 1): sp.Matrix([1 - v]), ("u", N): sp.Matrix([uN])}
+    )
+    for k in DYNAMICS.steps(N):
+        lhs, rhs = DYNAMICS.at(k)
+        values[_key(lhs)] = _value(rhs, values, fn)
+    best = sp.solve(sp.diff(_value(COST.rhs, values, fn), v), v)[0]
+    values = _substituted(values, {v: best})
+    ps = sp.symbols("P1:3")
+    values.update({("p", k + 1): sp.Matrix([ps[k]]) for k in range(N)})
+    values.update({(r"\sigma", k): sp.zeros(1, 1) for k in range(N)})
     eqs = []
-    for k in range(2):
-        eqs.append(xs[k + 1] - at(f, k))
-        eqs += [at(sp.diff(Hh, U[i]), k) for i in range(2)]
-        eqs.append(at(h, k))
-    eqs.append(p1 - at(sp.diff(Hh, x), 1))
-    unknowns = [x1, p1, p2, *u[0], *u[1], *sorted(set(sig), key=str)]
-    return sp.solve(eqs, unknowns, dict=True)
+    for k in STATIONARY.steps(N):
+        lhs, rhs = STATIONARY.at(k)
+        eqs += list(_value(lhs, values, fn) - sp.Matrix([_value(rhs, values, fn)]))
+    sol = sp.solve(eqs, ps, dict=True)[0]
+    values.update({("p", k + 1): sp.Matrix([sol[ps[k]]]) for k in range(N)})
+    lhs, rhs = _instance(TERMINAL_PRINTED, {_N: N})
+    values[_key(lhs)] = sp.Matrix([_value(rhs, values, fn)])
+    total = sp.Integer(0)
+    for k in costate.steps(N):
+        if k >= 1:
+            lhs, rhs = costate.at(k)
+            total += sum(abs(e) for e in _value(lhs, values, fn) - _value(rhs, values, fn))
+    return sp.nsimplify(total)
 
 
-def example_multiplier_minimiser() -> sp.Expr:
-    """Direct minimisation (u_{k,1} = u_{k,2} = v_k, v_0 + v_1 = 1): v_0 = 3/7."""
-    v0 = sp.Symbol("v0", real=True)
-    v1 = 1 - v0
-    cost = (v0**2 + v0**2) / 2 + (v1**2 + (v1 - v0) ** 2) / 2
-    return sp.solve(sp.diff(cost, v0), v0)[0]
+@D1.check(Level.EXACT_RATIONAL, form="printed")
+def d1_printed_costate_at_N() -> sp.Expr:
+    """f = x + u, g = u^2/2, x_0 = 0, x_2 = 1 (n = m = 1): at the exact minimiser, with p_1, p_2
+    from the stationarity conditions, the printed costate equation over its range up to N (with
+    p_3 = 0 and a phantom u_2) is off by |p_2 - dH/dx(0, x_2, u_2)| = 1/2."""
+    return _d1_costate_range_defect(COSTATE_PRINTED)
 
 
+@D1.check(Level.EXACT_RATIONAL, form="corrected")
+def d1_corrected_costate_range() -> sp.Expr:
+    """The same computation with the corrected range 1 <= k <= N - 1: the costate equation holds
+    at the minimiser."""
+    return _d1_costate_range_defect(COSTATE)
+
+
+def _d1_multiplier_defect(functional: sp.Eq) -> sp.Expr:
+    """f = x + u_1, g = (u_1^2 + (u_2 - x)^2)/2, h = u_1 - u_2, N = 2, x_0 = 0, x_2 = 1 (n = 1,
+    m = 2, l = 1).  At the exact minimiser (from the displayed cost, dynamics and constraint), the
+    derivatives of the given V in x_1, u_0, u_1 are linear in the costates and multipliers;
+    returns the least-squares residual of that linear system (0 exactly when multipliers exist)."""
+    N = 2
+    fn = _with_hamiltonians({
+        "f": lambda x, u: x + sp.Matrix([u[0]]),
+        "g": lambda x, u: (u[0] ** 2 + (u[1] - x[0]) ** 2) / 2,
+        "h": lambda u: sp.Matrix([u[0] - u[1]]),
+    })  # fmt: skip
+    values = _d1_variables(N, 1, 2, 1)
+    values[("x", 0)], values[("x", 2)] = sp.Matrix([0]), sp.Matrix([1])
+    # the minimiser: u_k on h(u_k) = 0, v_0 + v_1 fixed by x_2 = 1
+    v = sp.Symbol("v")
+    point = dict(values)
+    for k, vk in enumerate((v, 1 - v)):
+        w = sp.Symbol("w")
+        point[("u", k)] = sp.Matrix([vk, w])
+        lhs, _rhs = CONSTRAINT.at(k)
+        point[("u", k)] = point[("u", k)].subs(w, sp.solve(_value(lhs, point, fn)[0], w)[0])
+    point[("x", 1)] = _value(DYNAMICS.at(0)[1], point, fn)
+    best = sp.solve(sp.diff(_value(COST.rhs, point, fn), v), v)[0]
+    at_min = {values[key][i]: point[key][i].subs(v, best)
+              for key in (("x", 1), ("u", 0), ("u", 1)) for i in range(values[key].rows)}  # fmt: skip
+    V = _value(functional.rhs, values, fn)
+    eqs = []
+    for key in (("x", 1), ("u", 0), ("u", 1)):
+        eqs += [e.xreplace(at_min) for e in _grad(V, values[key])]
+    unknowns = sorted({s for e in eqs for s in e.free_symbols}, key=str)
+    return _least_squares_residual(eqs, unknowns)
+
+
+@D1.check(Level.EXACT_RATIONAL, form="printed")
+def d1_printed_single_multiplier() -> sp.Expr:
+    """f = x + u_1, g = (u_1^2 + (u_2 - x)^2)/2, h = u_1 - u_2, N = 2, x_0 = 0, x_2 = 1: at the
+    exact minimiser, the stationarity equations of the printed V (one sigma) in x_1, u_0, u_1 have
+    no solution for (p_1, p_2, sigma): least-squares residual of that linear system."""
+    return _d1_multiplier_defect(V_PRINTED)
+
+
+@D1.check(Level.EXACT_RATIONAL, form="corrected")
 def d1_corrected_multipliers() -> sp.Expr:
-    """With sigma_k per step the KKT system has one solution, and it is the true minimiser."""
-    sols = example_multiplier(single_sigma=False)
-    if len(sols) != 1:
-        return sp.Integer(1)
-    u01 = sols[0][sp.Symbol("u0_1", real=True)]
-    return abs(u01 - example_multiplier_minimiser())
+    """The same with the corrected V (sigma_k per step): the linear system for (p_1, p_2, sigma_0,
+    sigma_1) is solvable at the minimiser (residual 0)."""
+    return _d1_multiplier_defect(V_DEF)
 
 
-def d1_printed_single_sigma() -> sp.Expr:
-    """|sigma_0 - sigma_1| at the minimiser (2/7): a single sigma cannot serve both steps
-    (and the printed system with one sigma has no solution at all)."""
-    sol = example_multiplier(single_sigma=False)[0]
-    s0, s1 = sp.symbols("sigma0 sigma1")
-    return abs(sol[s0] - sol[s1])
+def _d1_rewrite_defect(functional: sp.Eq, rewrite: sp.Eq) -> sp.Expr:
+    """The displayed functional minus its displayed rewrite, for undefined f, g, h, N = 2,
+    n = m = 2, l = 1 (p_{N+1} and a phantom u_N from the printed terminal convention)."""
+    N = 2
+    values = _d1_variables(N, 2, 2, 1, phantom=True)
+    fn = _with_hamiltonians(_generic(2, 2, 1))
+    lhs, rhs = _instance(TERMINAL_PRINTED, {_N: N})
+    values[_key(lhs)] = _value(rhs, values, fn) * sp.ones(2, 1)
+    return _nonzero(_value(functional.rhs, values, fn) - _value(rewrite.rhs, values, fn))
 
 
-# ---------------------------------------------------------------------------------------------
+@D1.check(Level.SYMBOLIC_FIXED_N, form="printed")
+def d1_printed_rewrite() -> sp.Expr:
+    """The printed V minus the proof's rewrite with the sum up to N and p_{N+1} = 0 does not
+    vanish: it is -Hhat(0, x_N, u_N, sigma) (undefined f, g, h, N = 2)."""
+    return _d1_rewrite_defect(V_PRINTED, REWRITE_PRINTED)
+
+
+@D1.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d1_corrected_rewrite() -> sp.Expr:
+    """The corrected V minus the corrected rewrite (sum up to N - 1, minus <p_N, x_N>) vanishes
+    identically (undefined f, g, h, N = 2)."""
+    return _d1_rewrite_defect(V_DEF, REWRITE)
+
+
+# =============================================================================================
 # D2: the implicit step
 
-
-def _reduced(H: sp.Expr, u: sp.Symbol) -> tuple[sp.Expr, sp.Expr]:
-    """u*(y, x) from dH/du = 0 (unique here) and H*(y, x) = H(y, x, u*)."""
-    sols = sp.solve(sp.diff(H, u), u)
-    if len(sols) != 1:
-        raise ValueError(f"expected a unique u*, got {sols}")
-    return sols[0], sp.simplify(H.subs(u, sols[0]))
-
-
-def d2_envelope_family() -> sp.Expr:
-    """f = a(x) + b(x) u, g = u^2/2 + V(x) (a, b, V undefined): u* = b y, and
-    d/dy [dH/dx(y, x, u*(y, x))] = d^2H*/dy dx = a' + 2 b b' y, while the printed matrix at u = u*
-    is d^2H/dy dx = a' + b' u* = a' + b b' y: the step is governed by H*, not by H at fixed u."""
-    x, y, u = sp.symbols("x y u", real=True)
-    a, b, V = (sp.Function(c)(x) for c in "abV")
-    H = y * (a + b * u) - u**2 / 2 - V
-    ustar, Hstar = _reduced(H, u)
-    step_map = sp.diff(H, x).subs(u, ustar)  # p_k as a function of y = p_{k+1}
-    r = residual(sp.diff(step_map, y) - sp.diff(Hstar, x, y))  # IFT matrix = H*_xy
-    r += residual(sp.diff(Hstar, x) - step_map)  # envelope: H*_x = H_x at u*
-    r += residual(sp.diff(Hstar, y) - sp.diff(H, y).subs(u, ustar))  # H*_y = H_y at u*
-    expected = sp.diff(a, x) + 2 * b * sp.diff(b, x) * y
-    return r + residual(sp.diff(Hstar, x, y) - expected)
-
-
-def d2_singular_not_unique() -> sp.Expr:
-    """f = u (no x), g = (u^2 + x^2)/2: H*_xy = 0 and p_k = -x_k for every p_{k+1}: the step does
-    not determine p_{k+1} (every y solves, none if p_k != -x_k).  Residual 0 when verified."""
-    x, y, u = sp.symbols("x y u", real=True)
-    H = y * u - (u**2 + x**2) / 2
-    _ustar, Hstar = _reduced(H, u)
-    r = residual(sp.diff(Hstar, x, y))
-    r += residual(sp.diff(Hstar, x) + x)  # p_k = -x_k, independent of p_{k+1}
-    return r
+D2 = claim(
+    "D2",
+    label="remark after gendiscprop",
+    title="The implicit step needs an invertible mixed second derivative",
+    statement="With [[H]], the costate equation is an implicit step [[step]] for the unknown $y$ "
+    "(the costate "
+    "$p_{k+1}$) given $p_k$ and the state $x$; computing $y$ needs the Jacobian of its right side "
+    "in $y$ to be invertible.",
+    printed="Invertibility of [[printed_matrix]] at every $(y, x, u)$, with $u$ held fixed, lets "
+    "one compute $p_{k+1}$.",
+    corrected="The Jacobian of the step is the mixed derivative of the reduced Hamiltonian "
+    "[[reduced]] (envelope theorem), [[step_jacobian]], so the implicit function theorem needs "
+    "that matrix invertible; it equals the printed matrix only when $u^*$ does not depend on $y$.",
+    expected="holds after correction",
+    section="2",
+    note="u*_k depends on p_{k+1}, so the Jacobian of the step picks up H_xu du*/dy. Exact "
+    "counterexample: f = x + u, g = (u + x)^2/2 >= 0 has d^2H/dy dx = 1 everywhere, yet u* = y - x "
+    "and p_k = 0 for every p_{k+1}: the step does not determine p_{k+1}. The index order (y_i x_j "
+    "or x_i y_j) is a transpose and does not matter for invertibility.",
+)
+D2.formula("H", H_DEF)
+STEP = D2.formula(
+    "step",
+    eq(sp.Symbol("p_k"), sp.Subs(sp.Derivative(_H(_y, _xs, _us), _xs), _us, _ustar(_y, _xs))),
+)
+PRINTED_MATRIX = D2.formula("printed_matrix", sp.Derivative(_H(_y, _xs, _us), _y, _xs))
+D2.formula("reduced", REDUCED)
+STEP_JACOBIAN = D2.formula(
+    "step_jacobian",
+    eq(sp.Symbol(r"\partial p_{k}/\partial y"), sp.Derivative(_Hstar(_y, _xs), _y, _xs)),
+)
 
 
-def d2_printed_condition_insufficient() -> sp.Expr:
-    """Exact counterexample to the printed condition: f = x + u, g = (u + x)^2/2 >= 0.
-    d^2H/dy dx = 1 at every (y, x, u) (the printed matrix is invertible everywhere), yet
-    u* = y - x and p_k = dH/dx(y, x, u*) = 0 for every y: p_{k+1} is not determined.
-    Returns 1 when this is confirmed (the printed sufficiency claim fails), else 0."""
-    x, y, u = sp.symbols("x y u", real=True)
-    H = y * (x + u) - (u + x) ** 2 / 2
-    ustar, Hstar = _reduced(H, u)
-    printed_matrix = sp.diff(H, y, x)
-    step = sp.diff(H, x).subs(u, ustar)
-    confirmed = (
-        sp.simplify(printed_matrix - 1) == 0
-        and sp.simplify(sp.diff(step, y)) == 0
-        and sp.simplify(sp.diff(Hstar, x, y)) == 0
-    )
-    return sp.Integer(1) if confirmed else sp.Integer(0)
+def _scalar_problem(
+    f: Callable[..., Any], g: Callable[..., Any]
+) -> tuple[dict[str, Any], dict[Any, Any]]:
+    """Functions H, Hhat, u*, H* of a scalar unconstrained problem (n = m = 1) defined by the
+    displayed formulas, u* solved from dH/du = 0, and symbolic values for y, x."""
+    Y, X, U = sp.symbols("Y X U", real=True)
+    fn = _with_hamiltonians({"f": f, "g": g, "h": lambda u: sp.S.Zero})
+    dHdu = _value(sp.Derivative(_H(_y, _xs, _us), _us), {"y": Y, "x": X, "u": U}, fn)
+    (ustar,) = sp.solve(dHdu, U)
+    fn["u^*"] = lambda y, x: ustar.xreplace({Y: y, X: x})
+    fn[r"\sigma"] = lambda y, x: sp.S.Zero
+    fn["H^*"] = _define(REDUCED, fn)
+    return fn, {"y": Y, "x": X}
 
 
-# ---------------------------------------------------------------------------------------------
+def _d2_examples() -> list[tuple[Callable[..., Any], Callable[..., Any]]]:
+    xx = sp.Symbol("x_")
+    a, b, V = (sp.Lambda(xx, sp.Function(c)(xx)) for c in "abV")
+    return [
+        (lambda x, u: x + u, lambda x, u: (u + x) ** 2 / 2),
+        (lambda x, u: a(x) + b(x) * u, lambda x, u: u**2 / 2 + V(x)),
+    ]
+
+
+def _d2_defect(named: sp.Basic) -> sp.Expr:
+    """For f = x + u, g = (u + x)^2/2 and for f = a(x) + b(x) u, g = u^2/2 + V(x) (a, b, V
+    undefined; n = m = 1): the number of examples in which the determinant of the named matrix
+    (at u = u*(y, x)) differs from that of the true Jacobian in y of the displayed step."""
+    total = sp.Integer(0)
+    for f, g in _d2_examples():
+        fn, values = _scalar_problem(f, g)
+        jac = sp.Matrix([sp.diff(_value(STEP.rhs, values, fn), values["y"])])
+        at = {**values, "u": fn["u^*"](values["y"], values["x"])}
+        total += _nonzero(sp.Matrix([_value(named, at, fn)]).det() - jac.det())
+    return total
+
+
+@D2.check(Level.SYMBOLIC_FIXED_N, form="printed")
+def d2_printed_matrix() -> sp.Expr:
+    """The printed matrix d^2H/dy dx at u = u* against the true Jacobian of the step in y: in
+    f = x + u, g = (u + x)^2/2 the printed matrix is 1 while the step's Jacobian is 0 (p_k = 0 for
+    every y); in f = a(x) + b(x) u, g = u^2/2 + V(x) they differ by b b' y (count of examples)."""
+    return _d2_defect(PRINTED_MATRIX)
+
+
+@D2.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d2_reduced_matrix() -> sp.Expr:
+    """The same comparison with the displayed right side of the corrected step Jacobian, the mixed
+    derivative of H* built from the displayed reduced Hamiltonian: equal in both examples."""
+    return _d2_defect(STEP_JACOBIAN.rhs)
+
+
+# =============================================================================================
 # D3: linearised extremal equations
 
+D3 = claim(
+    "D3",
+    label="C:8.3",
+    title="Linearised extremal equations",
+    statement="Corollary C:8.3: differentiating the extremal equations gives the differentials "
+    "$dp_k$ and $dx_{k+1}$ as linear functions of $dx_k$ and $dp_{k+1}$.",
+    printed="[[printed]], with second derivatives of $\\hat H$ at $(p_{k+1}, x_k, u^*_k)$.",
+    corrected="[[corrected]] with the second derivatives of the reduced Hamiltonian [[reduced]]; "
+    "the entry $(i, j)$ of $H^*_{xy}$ is the derivative in $x_i$ and $y_j$.",
+    expected="holds after correction",
+    section="2",
+    note="Two slips. (i) Second derivatives must be those of the reduced Hamiltonian H* (u* and "
+    "sigma depend on (p_{k+1}, x_k)); at frozen u*, Hhat is linear in p, so the printed coefficient "
+    "of dp_{k+1} in dx_{k+1} is always 0, while it is H*_yy = B B^T in the family f = a(x) + B u, "
+    "g = |u|^2/2 + V(x). (ii) For n > 1 the two lines need transposed mixed matrices; the printed "
+    "form uses the same one (if the printed symbol is read as the mixed derivative contracted in "
+    "the right slot, this second point is notation only). In the symbolic family u* does not depend "
+    "on x, so there only the H*_yy block separates H* from frozen Hhat; the float64 family with "
+    "u*(x, p_{k+1}) separates every block.",
+)
+_dxk, _dpk, _dx1, _dp1 = (vector(s) for s in ("dx_k", "dp_k", "dx_{k+1}", "dp_{k+1}"))
+_R = {"xx": matrix("H^*_{xx}"), "xy": matrix("H^*_{xy}"), "yy": matrix("H^*_{yy}")}
+_P = {"xx": matrix(r"\hat{H}_{xx}"), "xy": matrix(r"\hat{H}_{px}"), "yy": matrix(r"\hat{H}_{pp}")}
+LINEARISED = D3.formula(
+    "corrected",
+    (
+        eq(_dpk, _R["xx"] * _dxk + _R["xy"] * _dp1),
+        eq(_dx1, _R["xy"].T * _dxk + _R["yy"] * _dp1),
+    ),
+)
+LINEARISED_PRINTED = D3.formula(
+    "printed",
+    (
+        eq(_dpk, _P["xx"] * _dxk + _P["xy"] * _dp1),
+        eq(_dx1, _P["xy"] * _dxk + _P["yy"] * _dp1),
+    ),
+)
+D3.formula("reduced", REDUCED)
 
-def _d3_family():
-    """n = m = 2: f = a(x) + B u (a undefined, B a constant symbolic matrix), g = |u|^2/2 + V(x).
-    u* = B^T y.  Returns (x, y, H(y,x,u), u, u*, H*)."""
-    x, y, u = _vec("x", 2), _vec("y", 2), _vec("u", 2)
-    a = sp.Matrix([sp.Function(f"a{i + 1}")(*x) for i in range(2)])
-    V = sp.Function("V")(*x)
+
+def _linearisation_mismatch(
+    formulas: tuple[sp.Eq, sp.Eq],
+    names: dict[str, sp.MatrixSymbol],
+    blocks: dict[str, sp.Matrix],
+    true: dict[str, sp.Matrix],
+    transpose: bool,
+) -> list[sp.Matrix]:
+    """lhs - rhs of the displayed linearisation with its matrices given by ``blocks`` (the mixed
+    one transposed when ``transpose``: the other index convention) and the differentials by the
+    true linear maps (x_k, p_{k+1}) -> (p_k, x_{k+1}), columns for the unit vectors."""
+    dim = true["Pxx"].rows
+    dxk = sp.eye(dim).row_join(sp.zeros(dim))
+    dp1 = sp.zeros(dim).row_join(sp.eye(dim))
+    env = {
+        "dx_k": dxk,
+        "dp_{k+1}": dp1,
+        "dp_k": true["Pxx"].row_join(true["Pxy"]),
+        "dx_{k+1}": true["Xx"].row_join(true["Xy"]),
+        str(names["xx"].name): blocks["xx"],
+        str(names["xy"].name): blocks["xy"].T if transpose else blocks["xy"],
+        str(names["yy"].name): blocks["yy"],
+    }
+    return [explicit(lhs_minus_rhs(f), env) for f in formulas]
+
+
+def _d3_family() -> tuple[dict[str, sp.Matrix], dict[str, sp.Matrix], dict[str, sp.Matrix]]:
+    """f = a(x) + B u, g = |u|^2/2 + V(x), n = m = 2 (a, V undefined, B symbolic): the blocks of
+    H* (from the displayed reduced Hamiltonian), of Hhat at frozen u*, and the Jacobians of the
+    true maps p_k = dH/dx(y, x, u*(y, x)) (the displayed step) and x_{k+1} = f(x, u*)."""
+    X, Y, U = _vec("x", 2), _vec("y", 2), _vec("u", 2)
+    a = sp.Matrix([sp.Function(f"a{i + 1}")(*X) for i in range(2)])
+    V = sp.Function("V")(*X)
     B = sp.Matrix(2, 2, sp.symbols("b11 b12 b21 b22", real=True))
-    H = (y.T * (a + B * u))[0, 0] - (u.T * u)[0, 0] / 2 - V
-    sols = sp.solve(list(_grad(H, u)), list(u), dict=True)
-    ustar = sp.Matrix([sols[0][ui] for ui in u])
-    Hstar = sp.expand(H.xreplace(dict(zip(u, ustar, strict=True))))
-    return x, y, H, u, ustar, Hstar
+
+    def at_x(e: Any, x: Any) -> Any:
+        return e.xreplace(dict(zip(X, x, strict=True)))
+
+    fn = _with_hamiltonians({
+        "f": lambda x, u: at_x(a, x) + B * u,
+        "g": lambda x, u: _dot(u, u) / 2 + at_x(V, x),
+        "h": lambda u: sp.zeros(1, 1),
+    })  # fmt: skip
+    values = {"y": Y, "x": X, "u": U}
+    dHdu = _value(sp.Derivative(_H(_y, _xs, _us), _us), values, fn)
+    sol = sp.solve(list(dHdu), list(U), dict=True)[0]
+    ustar = U.xreplace(sol)
+    fn["u^*"] = lambda y, x: ustar.xreplace(dict(zip(Y, y, strict=True)))
+    fn[r"\sigma"] = lambda y, x: sp.zeros(1, 1)
+    fn["H^*"] = _define(REDUCED, fn)
+    Hs = fn["H^*"](Y, X)
+    reduced = {
+        "xx": sp.hessian(Hs, X),
+        "xy": sp.Matrix(2, 2, lambda i, j: sp.diff(Hs, X[i], Y[j])),
+        "yy": sp.hessian(Hs, Y),
+    }
+    H = fn["H"](Y, X, U)
+    sub = dict(zip(U, ustar, strict=True))
+    frozen = {
+        "xx": sp.hessian(H, X).xreplace(sub),
+        "xy": sp.Matrix(2, 2, lambda i, j: sp.diff(H, X[i], Y[j])).xreplace(sub),
+        "yy": sp.hessian(H, Y).xreplace(sub),
+    }
+    pk = _value(STEP.rhs, values, fn)
+    x1 = fn["f"](X, ustar)
+    true = {
+        "Pxx": pk.jacobian(X),
+        "Pxy": pk.jacobian(Y),
+        "Xx": x1.jacobian(X),
+        "Xy": x1.jacobian(Y),
+    }
+    return reduced, frozen, true
 
 
-def _d3_true_linearisation():
-    """Jacobians of the actual maps (x_k, y) -> p_k = H_x(y, x_k, u*), x_{k+1} = H_y(y, x_k, u*)."""
-    x, y, H, u, ustar, Hstar = _d3_family()
-    sub = dict(zip(u, ustar, strict=True))
-    Pk = _grad(H, x).xreplace(sub)
-    Xk1 = _grad(H, y).xreplace(sub)
-    return x, y, H, u, ustar, Hstar, (_jac(Pk, x), _jac(Pk, y), _jac(Xk1, x), _jac(Xk1, y))
+def _d3_symbolic_defect(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: str) -> sp.Expr:
+    """Mismatch count of the displayed linearisation in the symbolic family, minimised over the
+    index conventions the formula's mixed symbol admits (one for the corrected form)."""
+    reduced, frozen, true = _d3_family()
+    blocks = reduced if kind == "reduced" else frozen
+    options = (False,) if names is _R else (False, True)
+    return sp.Min(*[
+        sum((_nonzero(m) for m in _linearisation_mismatch(formulas, names, blocks, true, t)),
+            sp.Integer(0))
+        for t in options
+    ])  # fmt: skip
 
 
+@D3.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d3_corrected() -> sp.Expr:
-    """dp_k = H*_xx dx_k + H*_xy dp_{k+1}, dx_{k+1} = (H*_xy)^T dx_k + H*_yy dp_{k+1}."""
-    x, y, _H, _u, _us, Hs, (Pxx, Pxy, Xx, Xy) = _d3_true_linearisation()
-    Hxx = sp.hessian(Hs, x)
-    Hyy = sp.hessian(Hs, y)
-    Hxy = sp.Matrix(2, 2, lambda i, j: sp.diff(Hs, x[i], y[j]))
-    return residual(Pxx - Hxx) + residual(Pxy - Hxy) + residual(Xx - Hxy.T) + residual(Xy - Hyy)
+    """f = a(x) + B u, g = |u|^2/2 + V(x) (a, V undefined, n = m = 2): the displayed corrected
+    equations with the blocks of H* reproduce the Jacobians of the true maps (x_k, p_{k+1}) ->
+    (p_k, x_{k+1}) (count of mismatching entries)."""
+    return _d3_symbolic_defect(LINEARISED, _R, "reduced")
 
 
+@D3.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d3_printed_frozen_control() -> sp.Expr:
-    """The printed corollary with second derivatives of Hhat at frozen (u*, sigma): the dp_{k+1}
-    coefficient of dx_{k+1} is d^2Hhat/dp^2 = 0 (Hhat is linear in p), but the true one is
-    H*_yy = B B^T.  Returns the number of mismatching entries (printed form fails when > 0)."""
-    x, y, H, u, ustar, _Hs, (Pxx, Pxy, Xx, Xy) = _d3_true_linearisation()
-    sub = dict(zip(u, ustar, strict=True))
-    frozen_yy = sp.hessian(H, y).xreplace(sub)
-    frozen_xx = sp.hessian(H, x).xreplace(sub)
-    return residual(Xy - frozen_yy) + residual(Pxx - frozen_xx)
+    """Same family: the printed equations with second derivatives of Hhat at frozen u* mismatch
+    (the dp_{k+1} coefficient of dx_{k+1} is 0 instead of B B^T), for either index convention of
+    the mixed matrix (smallest count of mismatching entries)."""
+    return _d3_symbolic_defect(LINEARISED_PRINTED, _P, "frozen")
 
 
+@D3.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d3_printed_same_matrix() -> sp.Expr:
-    """Even with H*, the printed corollary uses one matrix d^2H/dp dx in both lines.  Whichever
-    index convention it denotes, one of the two lines is off by a transpose for n = 2 (a(x)
-    generic): returns the smaller of the two mismatch counts."""
-    x, y, _H, _u, _us, Hs, (_Pxx, Pxy, Xx, _Xy) = _d3_true_linearisation()
-    Hxy = sp.Matrix(2, 2, lambda i, j: sp.diff(Hs, x[i], y[j]))
-    Hyx = Hxy.T
-    as_xy = residual(Pxy - Hxy) + residual(Xx - Hxy)
-    as_yx = residual(Pxy - Hyx) + residual(Xx - Hyx)
-    return sp.Min(as_xy, as_yx)
-
-
-def _d3_nonlinear_gap(blocks: str, seeds=range(3)) -> float:
-    """Largest |J_blocks - J_true| on the nonlinear family (u* depends on x and on p_{k+1}),
-    J_true by implicit differentiation of the advance map, J_blocks from the D3 linearisation
-    with the given second-derivative blocks ("reduced": of H*, "frozen": of Hhat at fixed u*)."""
-    worst = 0.0
-    for seed in seeds:
-        fam = NonlinearFamily(3, 2, seed=seed)
-        rng = np.random.default_rng(100 + seed)
-        xk, pk = 0.5 * rng.standard_normal(3), 0.5 * rng.standard_normal(3)
-        _, y, u = fam.advance(xk, pk)
-        get = fam.reduced_hessian_blocks if blocks == "reduced" else fam.frozen_hessian_blocks
-        J_blocks = advance_jacobian_from_blocks(*get(xk, y, u))
-        worst = max(worst, float(np.abs(J_blocks - fam.advance_jacobian(xk, pk)).max()))
-    return worst
-
-
-# ---------------------------------------------------------------------------------------------
-# D4: symplecticity of the advance map
-
-
-def advance_jacobian_from_blocks(Hxx, Hxy, Hyy):
-    """Jacobian of (x_k, p_k) -> (x_{k+1}, p_{k+1}) from the corrected linearisation (D3):
-    dp_{k+1} = Hxy^{-1} (dp_k - Hxx dx_k), dx_{k+1} = Hxy^T dx_k + Hyy dp_{k+1}.
-    Works for SymPy matrices and NumPy arrays."""
-    if isinstance(Hxx, sp.MatrixBase):
-        A_inv = Hxy.inv()
-        top = (Hxy.T - Hyy * A_inv * Hxx).row_join(Hyy * A_inv)
-        bot = (-A_inv * Hxx).row_join(A_inv)
-        return top.col_join(bot)
-    A_inv = np.linalg.inv(Hxy)
-    top = np.hstack([Hxy.T - Hyy @ A_inv @ Hxx, Hyy @ A_inv])
-    bot = np.hstack([-A_inv @ Hxx, A_inv])
-    return np.vstack([top, bot])
-
-
-def omega(dim: int):
-    """The canonical form Omega = [[0, I], [-I, 0]] in coordinates (x, p) (dx ^ dp)."""
-    return np.block([[np.zeros((dim, dim)), np.eye(dim)], [-np.eye(dim), np.zeros((dim, dim))]])
-
-
-def d4_symbolic(dim: int = 2) -> sp.Expr:
-    """Jac^T Omega Jac = Omega for generic symmetric Hxx, Hyy and generic invertible Hxy (n = dim):
-    every smooth H* with invertible mixed derivative.  Denominators are cleared with det(Hxy)."""
-    Hxx = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"s{min(i, j)}{max(i, j)}"))
-    Hyy = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"t{min(i, j)}{max(i, j)}"))
-    A = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"a{i}{j}"))
-    det = A.det()
-    adj = A.adjugate()  # A^{-1} = adj / det
-    top = (det * A.T - Hyy * adj * Hxx).row_join(Hyy * adj)
-    bot = (-adj * Hxx).row_join(adj)
-    Jd = top.col_join(bot)  # = det * Jac
-    Om = sp.Matrix(omega(dim).astype(int))
-    return residual(Jd.T * Om * Jd - det**2 * Om)
+    """Same family, printed equations with the blocks of H*: one mixed matrix in both lines
+    mismatches for either index convention (smallest count of mismatching entries)."""
+    return _d3_symbolic_defect(LINEARISED_PRINTED, _P, "reduced")
 
 
 class NonlinearFamily:
@@ -449,49 +826,46 @@ class NonlinearFamily:
 
     The implicit advance map solves p_k = H_x(y, x_k, u) and H_u(y, x_k, u) = 0 for (y, u) with
     scipy.optimize.root (analytic Jacobian), then x_{k+1} = f(x_k, u); its Jacobian follows by
-    implicit differentiation.
+    implicit differentiation.  Written from the definitions with NumPy (an independent route).
     """
 
-    def __init__(self, nx: int, nu: int, seed: int, tau: float = 0.3, alpha: float = 0.5):
+    def __init__(self, nx: int, nu: int, seed: int, tau: float = 0.3, alpha: float = 0.5) -> None:
         rng = np.random.default_rng(seed)
         self.nx, self.nu, self.tau, self.alpha = nx, nu, tau, alpha
         self.W = rng.standard_normal((nx, nx))
         self.B = rng.standard_normal((nx, nu))
         self.c = rng.standard_normal(nx)
 
-    def f(self, x, u):
+    def f(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
         return x + self.tau * np.tanh(self.W @ x + self.B @ u + self.c)
 
-    def _parts(self, x, y, u):
-        z = self.W @ x + self.B @ u + self.c
-        t = np.tanh(z)
+    def _parts(self, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        t = np.tanh(self.W @ x + self.B @ u + self.c)
         d = 1.0 - t**2
-        dd = -2.0 * t * d
-        return d, dd
+        return d, -2.0 * t * d
 
-    def equations(self, x, p, y, u):
-        d, dd = self._parts(x, y, u)
+    def equations(self, x: np.ndarray, p: np.ndarray, y: np.ndarray, u: np.ndarray):
+        """Residual of (p_k = H_x, 0 = H_u) and its Jacobians in (y, u), x and p."""
+        d, dd = self._parts(x, u)
         tau, W, B = self.tau, self.W, self.B
         F = np.concatenate([y + tau * W.T @ (d * y) - self.alpha * x - p, tau * B.T @ (d * y) - u])
         Jy = np.vstack([np.eye(self.nx) + tau * W.T * d, tau * B.T * d])
         Ju = np.vstack([tau * W.T @ np.diag(y * dd) @ B, tau * B.T @ np.diag(y * dd) @ B])
         Ju[self.nx :] -= np.eye(self.nu)
-        Jx = np.vstack(
-            [
-                tau * W.T @ np.diag(y * dd) @ W - self.alpha * np.eye(self.nx),
-                tau * B.T @ np.diag(y * dd) @ W,
-            ]
-        )
+        Jx = np.vstack([
+            tau * W.T @ np.diag(y * dd) @ W - self.alpha * np.eye(self.nx),
+            tau * B.T @ np.diag(y * dd) @ W,
+        ])  # fmt: skip
         Jp = np.vstack([-np.eye(self.nx), np.zeros((self.nu, self.nx))])
         return F, np.hstack([Jy, Ju]), Jx, Jp
 
-    def reduced_hessian_blocks(self, x, y, u):
+    def reduced_hessian_blocks(self, x: np.ndarray, y: np.ndarray, u: np.ndarray):
         """Second derivatives of H*(y, x) = H(y, x, u*(y, x)) by the Schur complement
-        H*_ab = H_ab - H_au H_uu^{-1} H_ub (unconstrained u): returns (H*_xx, H*_xy, H*_yy)."""
-        d, dd = self._parts(x, y, u)
+        H*_ab = H_ab - H_au H_uu^{-1} H_ub: (H*_xx, H*_xy, H*_yy), (H*_xy)_ij = d2/dx_i dy_j."""
+        d, dd = self._parts(x, u)
         tau, W, B = self.tau, self.W, self.B
         Hxx = tau * W.T @ np.diag(y * dd) @ W - self.alpha * np.eye(self.nx)
-        Hxy = (np.eye(self.nx) + tau * d[:, None] * W).T  # (H_xy)_ij = d2H/dx_i dy_j = (f_x)_ji
+        Hxy = (np.eye(self.nx) + tau * d[:, None] * W).T
         Huu = tau * B.T @ np.diag(y * dd) @ B - np.eye(self.nu)
         Hux = tau * B.T @ np.diag(y * dd) @ W
         Huy = tau * B.T * d
@@ -499,21 +873,21 @@ class NonlinearFamily:
         Sx, Sy = S[:, : self.nx], S[:, self.nx :]
         return Hxx - Hux.T @ Sx, Hxy - Hux.T @ Sy, -Huy.T @ Sy
 
-    def frozen_hessian_blocks(self, x, y, u):
-        """Second derivatives of Hhat at the control held fixed at u* (the printed corollary's
-        reading): (H_xx, H_xy, H_yy) with H_yy = 0 since H is linear in the costate."""
-        d, dd = self._parts(x, y, u)
+    def frozen_hessian_blocks(self, x: np.ndarray, y: np.ndarray, u: np.ndarray):
+        """Second derivatives of Hhat with the control held at u*: (H_xx, H_xy, H_yy = 0)."""
+        d, dd = self._parts(x, u)
         Hxx = self.tau * self.W.T @ np.diag(y * dd) @ self.W - self.alpha * np.eye(self.nx)
         Hxy = (np.eye(self.nx) + self.tau * d[:, None] * self.W).T
         return Hxx, Hxy, np.zeros((self.nx, self.nx))
 
-    def advance(self, x, p, guess=None):
+    def advance(self, x: np.ndarray, p: np.ndarray, guess: np.ndarray | None = None):
+        """(x_{k+1}, p_{k+1}, u_k) from (x_k, p_k) by solving the implicit step."""
         from scipy.optimize import root
 
         nx = self.nx
         z0 = np.concatenate([p, np.zeros(self.nu)]) if guess is None else guess
 
-        def fun(zz):
+        def fun(zz: np.ndarray):
             F, J, _, _ = self.equations(x, p, zz[:nx], zz[nx:])
             return F, J
 
@@ -524,19 +898,19 @@ class NonlinearFamily:
             raise RuntimeError(f"implicit step did not converge: |F| = {np.max(np.abs(F)):.2e}")
         return self.f(x, u), y, u
 
-    def advance_jacobian(self, x, p):
-        """Exact Jacobian of (x_k, p_k) -> (x_{k+1}, p_{k+1}) by implicit differentiation."""
+    def advance_jacobian(self, x: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Jacobian of (x_k, p_k) -> (x_{k+1}, p_{k+1}) by implicit differentiation."""
         nx = self.nx
         _x1, y, u = self.advance(x, p)
         _F, Jyu, Jx, Jp = self.equations(x, p, y, u)
-        dyu = -np.linalg.solve(Jyu, np.hstack([Jx, Jp]))  # d(y, u) / d(x, p)
-        d, _ = self._parts(x, y, u)
+        dyu = -np.linalg.solve(Jyu, np.hstack([Jx, Jp]))
+        d, _ = self._parts(x, u)
         fx = np.eye(nx) + self.tau * d[:, None] * self.W
         fu = self.tau * d[:, None] * self.B
         dx1 = np.hstack([fx, np.zeros((nx, nx))]) + fu @ dyu[nx:]
         return np.vstack([dx1, dyu[:nx]])
 
-    def advance_jacobian_fd(self, x, p, step: float = 1e-6):
+    def advance_jacobian_fd(self, x: np.ndarray, p: np.ndarray, step: float = 1e-6) -> np.ndarray:
         """Central finite-difference Jacobian (each perturbed solve starts from the base point)."""
         nx = self.nx
         _x1, y, u = self.advance(x, p)
@@ -546,345 +920,849 @@ class NonlinearFamily:
         for j in range(2 * nx):
             e = np.zeros(2 * nx)
             e[j] = step
-            xp, pp = (z + e)[:nx], (z + e)[nx:]
-            xm, pm = (z - e)[:nx], (z - e)[nx:]
-            a1, b1, _ = self.advance(xp, pp, guess)
-            a2, b2, _ = self.advance(xm, pm, guess)
+            a1, b1, _ = self.advance((z + e)[:nx], (z + e)[nx:], guess)
+            a2, b2, _ = self.advance((z - e)[:nx], (z - e)[nx:], guess)
             cols.append((np.concatenate([a1, b1]) - np.concatenate([a2, b2])) / (2 * step))
         return np.array(cols).T
 
 
-def symplecticity_defects(
-    seeds=range(5), nx: int = 3, nu: int = 2, fd: bool = False
-) -> list[float]:
-    """max |Jac^T Omega Jac - Omega| for random families and points (exact or FD Jacobian)."""
+def _true_maps(J: np.ndarray, dim: int) -> dict[str, sp.Matrix]:
+    """From the Jacobian of (x_k, p_k) -> (x_{k+1}, p_{k+1}) the Jacobians of (x_k, p_{k+1}) ->
+    (p_k, x_{k+1}): dp_k = D^-1 (dp_{k+1} - C dx_k), dx_{k+1} = A dx_k + B dp_k."""
+    A, B, C, D = J[:dim, :dim], J[:dim, dim:], J[dim:, :dim], J[dim:, dim:]
+    Di = np.linalg.inv(D)
+    maps = {"Pxx": -Di @ C, "Pxy": Di, "Xx": A - B @ Di @ C, "Xy": B @ Di}
+    return {k: sp.Matrix(v) for k, v in maps.items()}
+
+
+def _d3_float_defect(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: str) -> float:
+    """Largest entry of lhs - rhs of the displayed linearisation on the nonlinear float64 family
+    (3 random families and points, n = 3, m = 2), with blocks of H* or of Hhat at frozen u*,
+    minimised over the index conventions the formula's mixed symbol admits."""
+    worst = 0.0
+    for seed in range(3):
+        fam = NonlinearFamily(3, 2, seed=seed)
+        rng = np.random.default_rng(100 + seed)
+        xk, pk = 0.5 * rng.standard_normal(3), 0.5 * rng.standard_normal(3)
+        _, y, u = fam.advance(xk, pk)
+        get = fam.reduced_hessian_blocks if kind == "reduced" else fam.frozen_hessian_blocks
+        blocks = {k: sp.Matrix(v) for k, v in zip(("xx", "xy", "yy"), get(xk, y, u), strict=True)}
+        true = _true_maps(fam.advance_jacobian(xk, pk), 3)
+        options = (False,) if names is _R else (False, True)
+        gaps = []
+        for t in options:
+            mats = _linearisation_mismatch(formulas, names, blocks, true, t)
+            gaps.append(np.max([float(abs(v)) for m in mats for v in m]))
+        worst = float(np.max([worst, np.min(gaps)]))
+    return worst
+
+
+@D3.check(Level.FLOAT64, tol=1e-11, form="corrected")
+def d3_nonlinear_corrected() -> float:
+    """f = x + 0.3 tanh(W x + B u + c), g = |u|^2/2 + |x|^2/4 (u* depends on x and p_{k+1};
+    n = 3, m = 2, 3 random points): the displayed corrected equations with the blocks of H*
+    (Schur complements) against the Jacobian of the implicit advance map from scipy root and
+    implicit differentiation (largest entry of the mismatch; entries are of order 1)."""
+    return _d3_float_defect(LINEARISED, _R, "reduced")
+
+
+@D3.check(Level.FLOAT64, tol=1e-11, form="printed")
+def d3_nonlinear_printed() -> float:
+    """Same family: the printed equations with blocks of Hhat at frozen u* miss that Jacobian for
+    either index convention."""
+    return _d3_float_defect(LINEARISED_PRINTED, _P, "frozen")
+
+
+# =============================================================================================
+# D4: symplecticity of the advance map
+
+D4 = claim(
+    "D4",
+    label="eq8.13",
+    title="The advance map (x_k, p_k) -> (x_{k+1}, p_{k+1}) is symplectic",
+    statement="The implicit advance map $\\Phi$ of the extremal equations preserves "
+    "$dx\\wedge dp$: its Jacobian $D\\Phi$, obtained from the corrected linearised equations of D3 "
+    "where $H^*_{xy}$ is invertible, satisfies [[symplectic]] with [[omega]].",
+    expected="holds",
+    section="2",
+    note="Shown for every symmetric H*_xx, H*_yy and invertible H*_xy (so for every smooth H* "
+    "with invertible mixed derivative): symbolic for n = 2, exact rational random blocks for "
+    "n = 3, and on a nonlinear family solved numerically.",
+)
+_DPhi, _Omega = sp.MatrixSymbol(r"D\Phi", 2 * n, 2 * n), sp.MatrixSymbol(r"\Omega", 2 * n, 2 * n)
+OMEGA = D4.formula(
+    "omega",
+    eq(_Omega, sp.BlockMatrix([[sp.ZeroMatrix(n, n), sp.Identity(n)],
+                               [-sp.Identity(n), sp.ZeroMatrix(n, n)]])),
+)  # fmt: skip
+SYMPLECTIC = D4.formula("symplectic", eq(_DPhi.T * _Omega * _DPhi, _Omega))
+
+
+def _advance_jacobian(Hxx: sp.Matrix, Hxy: sp.Matrix, Hyy: sp.Matrix) -> sp.Matrix:
+    """D Phi obtained by solving D3's displayed corrected equations for (dx_{k+1}, dp_{k+1})."""
+    dim = Hxx.rows
+    dxk, dpk, dx1, dp1 = (_vec(s, dim) for s in ("dxk", "dpk", "dx1", "dp1"))
+    env = {"dx_k": dxk, "dp_k": dpk, "dx_{k+1}": dx1, "dp_{k+1}": dp1,
+           "H^*_{xx}": Hxx, "H^*_{xy}": Hxy, "H^*_{yy}": Hyy}  # fmt: skip
+    eqs = [e for f in LINEARISED for e in explicit(lhs_minus_rhs(f), env)]
+    sol = sp.solve(eqs, [*dx1, *dp1], dict=True)[0]
+    new = dx1.col_join(dp1).xreplace(sol)
+    return new.jacobian(dxk.col_join(dpk))
+
+
+def _symplectic_defect(J: sp.Matrix) -> sp.Matrix:
+    dim = J.rows // 2
+    om = OMEGA.rhs.subs(n, dim).as_explicit()
+    return explicit(lhs_minus_rhs(SYMPLECTIC), {r"D\Phi": J, r"\Omega": sp.Matrix(om)})
+
+
+@D4.check(Level.SYMBOLIC_FIXED_N)
+def d4_symbolic() -> sp.Expr:
+    """D Phi from D3's corrected equations with generic symmetric H*_xx, H*_yy and generic H*_xy
+    (symbolic entries, n = 2): the displayed D Phi^T Omega D Phi - Omega cancels entrywise."""
+    dim = 2
+    Hxx = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"s{min(i, j)}{max(i, j)}"))
+    Hyy = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"t{min(i, j)}{max(i, j)}"))
+    Hxy = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"a{i}{j}"))
+    return _nonzero(_symplectic_defect(_advance_jacobian(Hxx, Hxy, Hyy)).applyfunc(sp.cancel))
+
+
+@D4.check(Level.EXACT_RATIONAL)
+def d4_exact_n3() -> sp.Expr:
+    """The same for n = 3 at 4 random rational symmetric H*_xx, H*_yy and invertible rational
+    H*_xy."""
+    rng = np.random.default_rng(4)
+    total = sp.Integer(0)
+    done = 0
+    while done < 4:
+        A, B, C = (sp.Matrix(3, 3, [sp.Rational(int(v), 7) for v in rng.integers(-9, 10, 9)])
+                   for _ in range(3))  # fmt: skip
+        if C.det() == 0:  # the statement assumes an invertible H*_xy
+            continue
+        total += _nonzero(_symplectic_defect(_advance_jacobian(A + A.T, C, B + B.T)))
+        done += 1
+    return total
+
+
+def symplecticity_defects(seeds: Sequence[int] = range(5), fd: bool = False) -> list[float]:
+    """Largest entry of the displayed D Phi^T Omega D Phi - Omega on NonlinearFamily(3, 2, seed)
+    at a random point, D Phi by implicit differentiation or central differences."""
     out = []
     for seed in seeds:
-        fam = NonlinearFamily(nx, nu, seed)
+        fam = NonlinearFamily(3, 2, seed)
         rng = np.random.default_rng(100 + seed)
-        x, p = rng.standard_normal(nx), 0.5 * rng.standard_normal(nx)
-        Jac = fam.advance_jacobian_fd(x, p) if fd else fam.advance_jacobian(x, p)
-        out.append(float(np.max(np.abs(Jac.T @ omega(nx) @ Jac - omega(nx)))))
+        x, p = rng.standard_normal(3), 0.5 * rng.standard_normal(3)
+        J = fam.advance_jacobian_fd(x, p) if fd else fam.advance_jacobian(x, p)
+        out.append(float(np.max([float(abs(v)) for v in _symplectic_defect(sp.Matrix(J))])))
     return out
 
 
+@D4.check(Level.FLOAT64, tol=1e-12)
 def d4_float64() -> float:
-    return max(symplecticity_defects())
+    """f = x + 0.3 tanh(W x + B u + c), g = |u|^2/2 + |x|^2/4 (5 random families and points,
+    n = 3, m = 2): implicit step by scipy root, D Phi by implicit differentiation, largest entry of
+    the displayed D Phi^T Omega D Phi - Omega (entries of order 1)."""
+    return float(np.max(symplecticity_defects()))
 
 
+@D4.check(Level.FLOAT64, tol=1e-7)
 def d4_float64_fd() -> float:
-    return max(symplecticity_defects(range(3), fd=True))
+    """The same with D Phi by central differences of the implicit step (step 1e-6, 3 points;
+    the tolerance is the differences' truncation and round-off error)."""
+    return float(np.max(symplecticity_defects(range(3), fd=True)))
 
 
-# ---------------------------------------------------------------------------------------------
+# =============================================================================================
 # D5: multi-sample problem with terminal cost
 
+D5 = claim(
+    "D5",
+    label="prob8.1m, gendiscpropm, eq8.3m-eq8.6m, m8",
+    title="Multi-sample problem with terminal cost: shared controls, per-sample costates",
+    statement="Proposition gendiscpropm: for the problem of minimising [[cost]] subject to "
+    "[[dynamics]] and the control constraint, with controls shared by the samples, the "
+    "extremal equations of [[H]] have per-sample costates and an endpoint condition.",
+    printed="prob8.1m also fixes the endpoints $x^a_N$; eq8.3m is [[costate_printed]] with the "
+    "un-indexed $x_k$; m8 is [[m8]].",
+    corrected="The endpoint is free. The extremal equations are the critical points of [[V]]: "
+    "[[state]], [[costate]], [[stationary]] with one multiplier per step, and [[endpoint]] for this "
+    "$H$ (equivalently the costates are minus the gradients of the cost, D6).",
+    expected="holds after correction",
+    section="2",
+    note="With H = <p, f> - g and a minimisation, V = -(cost) + <p, f - x> + <sigma, h>, so "
+    "dV/dx^a_N = -p^a_N - phi'(x^a_N): the endpoint sign is minus (the paper's V carries +phi and "
+    "an extra -p_N x_N). If x^a_N is fixed, phi(x^a_N) is a constant and no endpoint condition "
+    "follows. eq8.3m must use x^a_k. The -phi(x^a_N) inside eq8.4m is harmless (constant in the "
+    "variables of H). The proof's V needs sigma_k per step, as in D1 (checked there).",
+)
+COST5 = D5.formula(
+    "cost",
+    eq(
+        _C,
+        _plus(
+            sp.Sum(sp.Sum(_g(_xa(_a, _k), _u[_k]), (_k, 0, _Nm1)), (_a, 1, _M)),
+            sp.Sum(_phi(_xa(_a, _N)), (_a, 1, _M)),
+        ),
+    ),
+)
+DYNAMICS5 = D5.formula("dynamics", _Steps([eq(_xa(_a, _k1), _f(_xa(_a, _k), _u[_k]))], _k, 0, _Nm1))
+D5.formula("H", H_DEF)
+_H_ak = _H(_pa(_a, _k1), _xa(_a, _k), _u[_k])
+V5 = D5.formula(
+    "V",
+    eq(
+        _V,
+        _plus(
+            sp.Sum(
+                sp.Sum(_plus(_Dot(_pa(_a, _k1), _plus(_f(_xa(_a, _k), _u[_k]), -_xa(_a, _k1))),
+                             -_g(_xa(_a, _k), _u[_k])), (_k, 0, _Nm1)),
+                (_a, 1, _M),
+            ),
+            sp.Sum(_Dot(_sig[_k], _h(_u[_k])), (_k, 0, _Nm1)),
+            -sp.Sum(_phi(_xa(_a, _N)), (_a, 1, _M)),
+        ),
+    ),
+)  # fmt: skip
+STATE5 = D5.formula(
+    "state", _Steps([eq(_xa(_a, _k1), sp.Derivative(_H_ak, _pa(_a, _k1)))], _k, 0, _Nm1)
+)
+_COSTATE5_EQ = eq(_pa(_a, _k), sp.Derivative(_H_ak, _xa(_a, _k)))
+COSTATE5 = D5.formula("costate", _Steps([_COSTATE5_EQ], _k, 1, _Nm1))
+COSTATE5_PRINTED = D5.formula(
+    "costate_printed",
+    _Steps(
+        [eq(_pa(_a, _k), sp.Derivative(_H(_pa(_a, _k1), _x[_k], _u[_k]), _x[_k]))],
+        _k, 0, _Nm1,
+    ),
+)  # fmt: skip
+STATIONARY5 = D5.formula(
+    "stationary",
+    _Steps(
+        [
+            eq(
+                _plus(
+                    sp.Sum(sp.Derivative(_H_ak, _u[_k]), (_a, 1, _M)),
+                    sp.Derivative(_Dot(_sig[_k], _h(_u[_k])), _u[_k]),
+                ),
+                0,
+            ),
+            eq(_h(_u[_k]), 0),
+        ],
+        _k,
+        0,
+        _Nm1,
+    ),
+)
+_dphi = sp.Derivative(_phi(_xa(_a, _N)), _xa(_a, _N))
+ENDPOINT = D5.formula("endpoint", eq(_pa(_a, _N), -_dphi))
+M8 = D5.formula("m8", eq(_pa(_a, _N), _dphi))
 
-def d5_stationarity(N: int = 2, M: int = 2) -> sp.Expr:
-    """Free endpoint, cost sum_a sum_k g(x^a_k,u_k) + sum_a phi(x^a_N), controls shared by the
-    samples.  V = sum_a sum_k [<p^a_{k+1}, f(x^a_k,u_k) - x^a_{k+1}> - g(x^a_k,u_k)]
-    + sum_k <sigma_k, h(u_k)> - sum_a phi(x^a_N) is stationary exactly when
-    x^a_{k+1} = H_y(p^a_{k+1}, x^a_k, u_k), p^a_k = H_x(p^a_{k+1}, x^a_k, u_k) (1 <= k <= N-1),
-    p^a_N = -grad phi(x^a_N), sum_a H_u(p^a_{k+1}, x^a_k, u_k) + h_u(u_k)^T sigma_k = 0, h(u_k) = 0.
-    Undefined f, g, h, phi; n = m = 2, l = 1."""
-    P = GeneralProblem(2, 2, 1)
-    xs = [[_vec(f"x{a}_{k}", P.nx) for k in range(N + 1)] for a in range(M)]
-    ps = [[None] + [_vec(f"p{a}_{k}", P.nx) for k in range(1, N + 1)] for a in range(M)]
-    us = [_vec(f"u{k}", P.nu) for k in range(N)]
-    ss = [_vec(f"s{k}", P.nl) for k in range(N)]
-    V = sp.Integer(0)
-    for a in range(M):
-        for k in range(N):
-            V += (ps[a][k + 1].T * (P.f(xs[a][k], us[k]) - xs[a][k + 1]))[0, 0]
-            V -= P.g(xs[a][k], us[k])
-        V -= P.phi(xs[a][N])
+
+def _d5_variables(N: int, M: int, nx: int, nu: int, nl: int) -> dict[Any, Any]:
+    values: dict[Any, Any] = {"N": N, "M": M}
+    for a in range(1, M + 1):
+        for k in range(N + 1):
+            values[("x", a, k)] = _vec(f"x{a}{k}", nx)
+            if k:
+                values[("p", a, k)] = _vec(f"p{a}{k}", nx)
     for k in range(N):
-        V += (ss[k].T * P.h(us[k]))[0, 0]
-    y, x, u = _vec("Y", P.nx), _vec("Xg", P.nx), _vec("Ug", P.nu)
-    H = P.H(y, x, u)
-    Hy, Hx, Hu = _grad(H, y), _grad(H, x), _grad(H, u)
-    xi = _vec("Xi", P.nx)
-    gphi = _grad(P.phi(xi), xi)
+        values[("u", k)] = _vec(f"u{k}", nu)
+        values[(r"\sigma", k)] = _vec(f"s{k}", nl)
+    return values
 
-    def at(e, a, k):
-        sub = dict(zip(y, ps[a][k + 1], strict=True))
-        sub.update(zip(x, xs[a][k], strict=True))
-        sub.update(zip(u, us[k], strict=True))
-        return e.xreplace(sub)
 
+@D5.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d5_stationarity() -> sp.Expr:
+    """The derivatives of the displayed V (free endpoint) in p^a_{k+1}, x^a_k, x^a_N, u_k and
+    sigma_k are the displayed state, costate, endpoint, stationarity and constraint equations over
+    their displayed ranges, covering every variable of V once (undefined f, g, h, phi; n = m = 2,
+    l = 1, M = 2 samples, N = 2)."""
+    N, M = 2, 2
+    values = _d5_variables(N, M, 2, 2, 1)
+    fn = _with_hamiltonians(_generic(2, 2, 1))
+    V = _value(V5.rhs, values, fn)
     total = sp.Integer(0)
-    for k in range(N):
-        hu = _jac(P.h(us[k]), us[k])
-        total += residual(
-            _grad(V, us[k])
-            - (sum((at(Hu, a, k) for a in range(M)), sp.zeros(P.nu, 1)) + hu.T * ss[k])
-        )
-        total += residual(_grad(V, ss[k]) - P.h(us[k]))
-        for a in range(M):
-            total += residual(_grad(V, ps[a][k + 1]) - (at(Hy, a, k) - xs[a][k + 1]))
-    for a in range(M):
-        for k in range(1, N):
-            total += residual(_grad(V, xs[a][k]) - (at(Hx, a, k) - ps[a][k]))
-        endpoint = -gphi.xreplace(dict(zip(xi, xs[a][N], strict=True)))
-        total += residual(_grad(V, xs[a][N]) - (-ps[a][N] + endpoint))
+    covered = []
+
+    def compare(lhs: sp.Basic, rhs: sp.Basic, var: sp.Basic, sign: int) -> sp.Expr:
+        """dV/dvar against +-(lhs - rhs): rhs - lhs of "p = dH/dx", lhs - rhs of "... = 0"."""
+        covered.append(_key(var))
+        side = _minus(_value(lhs, values, fn), _value(rhs, values, fn))
+        return _nonzero(_minus(_grad(V, values[_key(var)]), sign * side))
+
+    for a in range(1, M + 1):
+        for k in STATE5.steps(N):
+            total += compare(*STATE5.at(k, a=a), _pa(a, k + 1), -1)
+        for k in COSTATE5.steps(N):
+            total += compare(*COSTATE5.at(k, a=a), _xa(a, k), -1)
+        total += compare(*_instance(ENDPOINT, {_a: a, _N: N}), _xa(a, N), -1)
+    for k in STATIONARY5.steps(N):
+        total += compare(*STATIONARY5.at(k, 0), _u[k], 1)
+        total += compare(*STATIONARY5.at(k, 1), _sig[k], 1)
+    fixed = {("x", a, 0) for a in range(1, M + 1)}
+    total += _coverage_defect(V, values, fixed, covered)
     return total
 
 
-def example_multisample(sign: int = -1, shared_state: bool = False) -> sp.Expr:
-    """Two samples, N = 2, n = m = 1: f = x + u, g = (u^2 + x^2)/2, phi^a = (x - y^a)^2/2,
-    x^1_0 = 0, x^2_0 = 1, y = (1, -1).  The exact minimiser (u_0, u_1) solves grad C = 0.
-    Costates from p^a_N = sign * grad phi(x^a_N) and p^a_k = H_x(p^a_{k+1}, x^{b}_k, u_k) with
-    b = a (corrected) or b = 1 for all a (``shared_state``: eq8.3m's un-indexed x_k).
-    Returns |sum_a H_u(p^a_1, x^a_0, u_0)| + |sum_a H_u(p^a_2, x^a_1, u_1)| at the minimiser:
-    zero exactly when these costates satisfy the stationarity condition eq8.6m."""
-    x, u, yv = sp.symbols("x u y", real=True)
-    f, g = x + u, (u**2 + x**2) / 2
-    H = yv * f - g
-    u0, u1 = sp.symbols("u0 u1", real=True)
-    x0s, targets = [sp.Integer(0), sp.Integer(1)], [sp.Integer(1), sp.Integer(-1)]
-    traj = []
-    C = sp.Integer(0)
-    for a in range(2):
-        xa = [x0s[a]]
-        for uk in (u0, u1):
-            C += g.subs({x: xa[-1], u: uk})
-            xa.append(f.subs({x: xa[-1], u: uk}))
-        C += (xa[-1] - targets[a]) ** 2 / 2
-        traj.append(xa)
-    sol = sp.solve([sp.diff(C, u0), sp.diff(C, u1)], [u0, u1], dict=True)[0]
-    if not sp.hessian(C, (u0, u1)).is_positive_definite:
-        raise ValueError("example is not convex")
-    controls = [sol[u0], sol[u1]]
-    traj = [[sp.sympify(e).subs(sol) for e in xa] for xa in traj]
-    costates = []
-    for a in range(2):
-        pa = [None, None, sign * (traj[a][2] - targets[a])]
-        b = 0 if shared_state else a
-        pa[1] = sp.diff(H, x).subs({yv: pa[2], x: traj[b][1], u: controls[1]})
-        costates.append(pa)
+def _two_sample_example() -> tuple[dict[str, Any], dict[Any, Any]]:
+    """M = 2 samples, N = 2, n = m = 1: f = x + u, g = (u^2 + x^2)/2, phi(x) = (x - 1)^2/2,
+    x^1_0 = 0, x^2_0 = 2, no constraint.  The exact minimiser of the displayed cost along the
+    displayed dynamics, as values."""
+    N, M = 2, 2
+    fn = _with_hamiltonians({
+        "f": lambda x, u: x + u,
+        "g": lambda x, u: (u[0] ** 2 + x[0] ** 2) / 2,
+        "h": lambda u: sp.zeros(1, 1),
+        r"\phi": lambda x: (x[0] - 1) ** 2 / 2,
+    })  # fmt: skip
+    us = sp.symbols("v0 v1")
+    values: dict[Any, Any] = {"N": N, "M": M}
+    values.update({("u", k): sp.Matrix([us[k]]) for k in range(N)})
+    values.update({(r"\sigma", k): sp.zeros(1, 1) for k in range(N)})
+    for a, x0 in ((1, 0), (2, 2)):
+        values[("x", a, 0)] = sp.Matrix([x0])
+        for k in DYNAMICS5.steps(N):
+            lhs, rhs = DYNAMICS5.at(k, a=a)
+            values[_key(lhs)] = _value(rhs, values, fn)
+    cost = _value(COST5.rhs, values, fn)
+    if not sp.hessian(cost, us).is_positive_definite:
+        raise ValueError("the example is not convex")
+    best = sp.solve([sp.diff(cost, v) for v in us], us, dict=True)[0]
+    return fn, _substituted(values, best)
+
+
+def _d5_example_defect(endpoint: sp.Eq, costate: _Steps) -> sp.Expr:
+    """In the two-sample example: costates from the given endpoint condition and costate equation
+    (for the un-indexed x_k of the printed eq8.3m, sample 1's state), then sum over k of
+    |lhs - rhs| of the displayed stationarity condition at the exact minimiser."""
+    fn, values = _two_sample_example()
+    N, M = values["N"], values["M"]
+    for k in range(N + 1):
+        values[("x", k)] = values[("x", 1, k)]
+    for a in range(1, M + 1):
+        lhs, rhs = _instance(endpoint, {_a: a, _N: N})
+        values[_key(lhs)] = _value(rhs, values, fn)
+        for k in reversed([k for k in costate.steps(N) if k >= 1]):
+            lhs, rhs = costate.at(k, a=a)
+            values[_key(lhs)] = _value(rhs, values, fn)
     total = sp.Integer(0)
-    for k in range(2):
-        total += abs(
-            sum(
-                sp.diff(H, u).subs({yv: costates[a][k + 1], x: traj[a][k], u: controls[k]})
-                for a in range(2)
-            )
-        )
+    for k in STATIONARY5.steps(N):
+        lhs, rhs = STATIONARY5.at(k, 0)
+        total += sum(abs(e) for e in _value(lhs, values, fn) - sp.Matrix([_value(rhs, values, fn)]))
     return sp.nsimplify(total)
 
 
+@D5.check(Level.EXACT_RATIONAL, form="corrected")
 def d5_corrected_example() -> sp.Expr:
-    return example_multisample(sign=-1, shared_state=False)
+    """2 samples, N = 2, f = x + u, g = (u^2 + x^2)/2, phi = (x - 1)^2/2, x_0 = 0 and 2: costates
+    from the displayed endpoint condition and costate equation satisfy the displayed stationarity
+    condition at the exact minimiser (sum over k of |sum_a H_u|)."""
+    return _d5_example_defect(ENDPOINT, COSTATE5)
 
 
+@D5.check(Level.EXACT_RATIONAL, form="printed")
 def d5_printed_endpoint_sign() -> sp.Expr:
-    return example_multisample(sign=+1, shared_state=False)
+    """Same example with m8's endpoint sign: the stationarity condition fails at the minimiser."""
+    return _d5_example_defect(M8, COSTATE5)
 
 
+@D5.check(Level.EXACT_RATIONAL, form="printed")
 def d5_printed_shared_state() -> sp.Expr:
-    return example_multisample(sign=-1, shared_state=True)
+    """Same example with eq8.3m's un-indexed x_k (sample 1's state for both samples): the
+    stationarity condition fails at the minimiser."""
+    return _d5_example_defect(ENDPOINT, COSTATE5_PRINTED)
 
 
+def _d5_endpoint_defect(fixed: bool) -> sp.Expr:
+    """N = 1, one sample, f = x + u, g = u^2/2, phi(x) = (x - 3)^2/2, x_0 = 0; the control is the
+    minimiser of the displayed cost (free endpoint) or forced by x_1 = 1 (fixed endpoint); p_1
+    from the displayed stationarity condition.  Returns the smaller mismatch of the two endpoint
+    conditions, displayed corrected and m8."""
+    N, M = 1, 1
+    fn = _with_hamiltonians({
+        "f": lambda x, u: x + u,
+        "g": lambda x, u: u[0] ** 2 / 2,
+        "h": lambda u: sp.zeros(1, 1),
+        r"\phi": lambda x: (x[0] - 3) ** 2 / 2,
+    })  # fmt: skip
+    v, P = sp.symbols("v P")
+    values: dict[Any, Any] = {"N": N, "M": M, ("x", 1, 0): sp.Matrix([0]), ("u", 0): sp.Matrix([v])}
+    values[(r"\sigma", 0)] = sp.zeros(1, 1)
+    lhs, rhs = DYNAMICS5.at(0, a=1)
+    values[_key(lhs)] = _value(rhs, values, fn)
+    if fixed:
+        best = sp.solve(values[("x", 1, 1)][0] - 1, v)[0]
+    else:
+        best = sp.solve(sp.diff(_value(COST5.rhs, values, fn), v), v)[0]
+    values = _substituted(values, {v: best})
+    values[("p", 1, 1)] = sp.Matrix([P])
+    lhs, rhs = STATIONARY5.at(0, 0)
+    values[("p", 1, 1)] = sp.Matrix(
+        [sp.solve(_value(lhs, values, fn)[0] - _value(rhs, values, fn), P)[0]]
+    )
+    gaps = []
+    for condition in (ENDPOINT, M8):
+        lhs, rhs = _instance(condition, {_a: 1, _N: N})
+        gaps.append(abs((_value(lhs, values, fn) - _value(rhs, values, fn))[0]))
+    return sp.Min(*gaps)
+
+
+@D5.check(Level.EXACT_RATIONAL, form="printed")
 def d5_printed_fixed_endpoint() -> sp.Expr:
-    """prob8.1m fixes x^a_N = X^a_N *and* adds phi(x^a_N).  N = 1, f = x + u, g = u^2/2,
-    x_0 = 0, X_1 = 1, phi = (x - 3)^2/2: u_0 = 1 is forced, eq8.6m gives p_1 = u_0 = 1, while
-    grad phi(1) = -2: neither p_N = +grad phi (m8) nor -grad phi holds.  Returns
-    min(|p_1 - phi'|, |p_1 + phi'|) = 1."""
-    x, u, yv = sp.symbols("x u y", real=True)
-    H = yv * (x + u) - u**2 / 2
-    p1 = sp.solve(sp.diff(H, u).subs({u: 1}), yv)[0]
-    dphi = sp.diff((x - 3) ** 2 / 2, x).subs(x, 1)
-    return sp.Min(abs(p1 - dphi), abs(p1 + dphi))
+    """prob8.1m fixes x_N and adds phi(x_N): with N = 1, f = x + u, g = u^2/2, x_0 = 0, x_1 = 1,
+    phi = (x - 3)^2/2, the stationarity condition gives p_1 = 1 while phi'(1) = -2, so neither
+    endpoint condition holds (smaller mismatch 1)."""
+    return _d5_endpoint_defect(fixed=True)
+
+
+@D5.check(Level.EXACT_RATIONAL, form="corrected")
+def d5_free_endpoint() -> sp.Expr:
+    """The same problem with a free endpoint: at the exact minimiser one of the endpoint
+    conditions holds (the corrected one, as the stationarity check above shows in general)."""
+    return _d5_endpoint_defect(fixed=False)
+
+
+# =============================================================================================
+# D6: ResNet layers; the costate recursion is back-propagation
+
+
+D6 = claim(
+    "D6",
+    label="Remark 1, Remark 2",
+    title="ResNet layers: the costate recursion is back-propagation",
+    statement="Remark 1: in the ResNet framework of Benning et al. (2019) a layer is $f(x, u)$ "
+    "with controls $u$ the pair $(K, \\beta)$ and $\\sigma$ the sigmoid [[sigmoid]] applied "
+    "entrywise. Remark 2: the solution of Proposition gendiscpropm is back-propagation (LeCun "
+    "1988). With [[H]] and no running cost, [[no_running_cost]], the costate recursion of the "
+    "layers is [[adjoint]] (for the plain layer [[adjoint_plain]]), and for the endpoint condition "
+    "[[endpoint]] with either sign, $s=1$ or $s=-1$, the costates and weight gradients are "
+    "[[backprop]] and [[weights]] with [[cost]].",
+    printed="Remark 1: the ResNet layer is [[plain_layer]]. Remark 2, read for Proposition "
+    "gendiscpropm with its endpoint condition m8, [[m8]], and a running cost $g$: the costates "
+    "are the back-propagated gradients of the cost, [[backprop]] and [[weights]] with $s=1$.",
+    corrected="The ResNet layer of Benning et al. is the residual layer [[residual_layer]], a "
+    "perturbation of the identity, [[identity]], which the plain layer is not. The costate "
+    "recursion is back-propagation for both layers when there is no running cost, with either "
+    "endpoint sign (m8's sign gives the gradients, D5's sign minus the gradients); with a running "
+    "cost only D5's endpoint condition [[endpoint_minus]] gives the gradients of the cost, "
+    "[[backprop]] and [[weights]] with $s=-1$.",
+    expected="holds after correction",
+    section="2",
+    note="symrb implements both layers with h = 1 and the D5 sign (its costates are minus the "
+    "back-propagated gradients). For g = 0 the recursion p_k = (df/dx)^T p_{k+1} is linear and "
+    "homogeneous, so the endpoint sign is a global sign: m8 gives p_k = +dPhi/dx_k, D5 gives "
+    "p_k = -dPhi/dx_k. With g != 0 the recursion p_k = (df/dx)^T p_{k+1} - dg/dx is affine and "
+    "only p_N = -dphi/dx_N makes p_k = -dC/dx_k; with m8's sign the costates are neither plus nor "
+    "minus the gradients.",
+)
+SIGMOID_DEF = D6.formula(
+    "sigmoid", eq(sp.Function(r"\sigma")(sp.Symbol("z")), 1 / (1 + sp.exp(-sp.Symbol("z"))))
+)
+D6.formula("H", H_DEF)
+G0 = D6.formula("no_running_cost", eq(_g(_xs, _us), 0))
+
+# the matrix-level symbols of a layer (the kernels' arguments)
+_Km, _bv, _xv, _pv = matrix("K"), vector("beta"), vector("x"), vector("p")
+_hstep = sp.Symbol("h", positive=True)
+_zl = sp.Dummy("z", real=True)
+
+
+def _sigma_fdiff(self: sp.Function, argindex: int = 1) -> sp.Expr:
+    return _DSIGMA(self.args[0])
+
+
+#: a generic smooth activation, printed sigma, with derivative sigma' (both undefined)
+_DSIGMA = sp.Function(r"\sigma'")
+_SIGMA = type(r"\sigma", (sp.Function,), {"nargs": 1, "fdiff": _sigma_fdiff})
+
+
+def _activation(expr: sp.Expr) -> tuple[sp.Lambda, sp.Lambda]:
+    """sigma and sigma' as Lambdas (the derivative expanded, not simplified: SymPy would write
+    1 - tanh^2 as cosh^-2, which overflows in float64)."""
+    return sp.Lambda(_zl, expr), sp.Lambda(_zl, sp.expand(sp.diff(expr, _zl)))
+
+
+#: the activations of the kernels; the logistic function is written (1 + tanh(z/2))/2, which is
+#: 1/(1 + exp(-z)) (checked) and never overflows
+ACTIVATIONS: dict[str, tuple[sp.Lambda, sp.Lambda]] = {
+    "tanh": _activation(sp.tanh(_zl)),
+    "logistic": _activation((1 + sp.tanh(_zl / 2)) / 2),
+}
+_GENERIC = (sp.Lambda(_zl, _SIGMA(_zl)), sp.Lambda(_zl, _DSIGMA(_zl)))
+
+
+class _Shown(ElementwiseApplyFunction):
+    """A function applied entrywise, printed sigma(K x + beta) rather than SymPy's
+    (z -> sigma(z))_o(K x + beta); evaluated like any ElementwiseApplyFunction.  Only the
+    displayed generic layer uses it (the kernels use entrywise(), which codegen prints)."""
+
+    def _latex(self, printer: Any) -> str:
+        return rf"{self.function.expr.func}\left({printer._print(self.expr)}\right)"
+
+
+def _apply(name: str, fn: sp.Lambda, z: sp.MatrixExpr) -> sp.MatrixExpr:
+    """fn entrywise on z: through codegen's entrywise() for a kernel's activation, as _Shown for
+    the generic sigma of the displayed formulas."""
+    return _Shown(fn, z) if name in ("sigma", "dsigma") else entrywise(name, fn, z)
+
+
+def layer(act: str, residual_layer: bool, h: sp.Expr = sp.S.One) -> dict[str, sp.MatrixExpr]:
+    """One layer and its adjoint at matrix level, for H(p, x, u) = <p, f(x, u)>, u = (K, beta):
+
+    z = K x + beta, s = sigma'(z) o p (entrywise),
+    x_next = x + h sigma(z) (residual) or sigma(z) (plain),
+    p_prev = dH/dx = p + h K^T s or K^T s,  dH/dK = h s x^T or s x^T,  dH/dbeta = h s or s.
+
+    ``act`` is ``"tanh"``, ``"logistic"`` (the kernels) or ``"sigma"`` (a generic activation, for
+    the displayed formulas).
+    """
+    sig, dsig = _GENERIC if act == "sigma" else ACTIVATIONS[act]
+    z = _Km * _xv + _bv
+    s = sp.HadamardProduct(_apply("d" + act, dsig, z), _pv)
+    c = h if residual_layer else sp.Integer(1)
+    # the displayed sums keep the order x + h sigma(z) (a kernel's are printed sorted anyway)
+    add = functools.partial(sp.MatAdd, evaluate=act != "sigma")
+    return {
+        "x_next": add(_xv, h * _apply(act, sig, z)) if residual_layer else _apply(act, sig, z),
+        "p_prev": add(_pv, c * _Km.T * s) if residual_layer else _Km.T * s,
+        "dH_dK": c * s * _xv.T,
+        "dH_dbeta": c * s,
+    }
+
+
+_fxu = vector("f(x,u)")
+PLAIN_LAYER = D6.formula("plain_layer", eq(_fxu, layer("sigma", False)["x_next"]))
+RESIDUAL_LAYER = D6.formula("residual_layer", eq(_fxu, layer("sigma", True, _hstep)["x_next"]))
+IDENTITY = D6.formula(
+    "identity", eq(matrix(r"\left.\partial f/\partial x\right|_{K=0}"), sp.Identity(n))
+)
+_ADJ_NAMES = {
+    "p_prev": vector(r"\partial H/\partial x"),
+    "dH_dK": matrix(r"\partial H/\partial K"),
+    "dH_dbeta": vector(r"\partial H/\partial \beta"),
+}
+ADJOINT = D6.formula(
+    "adjoint",
+    tuple(eq(_ADJ_NAMES[k], v) for k, v in layer("sigma", True, _hstep).items() if k in _ADJ_NAMES),
+)
+ADJOINT_PLAIN = D6.formula(
+    "adjoint_plain",
+    tuple(eq(_ADJ_NAMES[k], v) for k, v in layer("sigma", False).items() if k in _ADJ_NAMES),
+)
+_s = sp.Symbol("s")
+ENDPOINT_S = D6.formula("endpoint", eq(_pa(_a, _N), _s * _dphi))
+D6.formula("m8", M8)
+D6.formula("endpoint_minus", ENDPOINT)
+_dCdx, _dCdu = sp.IndexedBase(r"\partial C/\partial x"), sp.IndexedBase(r"\partial C/\partial u")
+BACKPROP = D6.formula("backprop", eq(_pa(_a, _k), _s * _Sample(_dCdx, _a, _k)))
+WEIGHTS = D6.formula(
+    "weights", eq(_dCdu[_k], _s * sp.Sum(sp.Derivative(_H_ak, _u[_k]), (_a, 1, _M)))
+)
+D6.formula("cost", COST5)
+
+# ---------------------------------------------------------------------------------------------
+# the kernels
+
+ARG_K = Arg("K", "(..., n, n)", "layer weight K_k")
+ARG_BETA = Arg("beta", "(..., n, 1)", "layer bias beta_k")
+ARG_X = Arg("x", "(..., n, 1)", "state x_k")
+ARG_P = Arg("p", "(..., n, 1)", "costate p_{k+1}")
+STEP_KERNELS: dict[tuple[str, bool], Kernel] = {}
+ADJOINT_KERNELS: dict[tuple[str, bool], Kernel] = {}
+for _act, _res in itertools.product(ACTIVATIONS, (True, False)):
+    _exprs = layer(_act, _res)
+    _suffix = _act + ("" if _res else "_plain")
+    _form = f"x + {_act}(K x + beta)" if _res else f"{_act}(K x + beta)"
+    STEP_KERNELS[(_act, _res)] = Kernel(
+        name=f"resnet_step_{_suffix}",
+        target="discrete_control",
+        args=[ARG_K, ARG_BETA, ARG_X],
+        outputs={"x_next": _exprs["x_next"]},
+        doc=f"One {'residual' if _res else 'plain'} layer x_(k+1) = f(x_k, u_k) = {_form}.\n\n"
+        "The control is u = (K, beta); the activation acts entrywise.",
+        claims=("D6",),
+    )
+    ADJOINT_KERNELS[(_act, _res)] = Kernel(
+        name=f"resnet_adjoint_{_suffix}",
+        target="discrete_control",
+        args=[ARG_K, ARG_BETA, ARG_X, ARG_P],
+        outputs={k: _exprs[k] for k in ("p_prev", "dH_dK", "dH_dbeta")},
+        doc=f"Adjoint step of the layer f(x, u) = {_form} for H = <p, f(x, u)>.\n\n"
+        f"With z = K x + beta and s = {_act}'(z) * p (entrywise):\n"
+        + ("p_k = dH/dx = p + K^T s" if _res else "p_k = dH/dx = K^T s")
+        + ", dH/dK = s x^T, dH/dbeta = s.",
+        claims=("D6",),
+    )
 
 
 # ---------------------------------------------------------------------------------------------
-# D6: the costate recursion is back-propagation
+# D6 evidence
 
 
-class _act(sp.Function):
-    """A generic smooth activation sigma with derivative dsigma (both undefined)."""
-
-    nargs = 1
-
-    def fdiff(self, argindex=1):
-        return sp.Function("dsigma")(self.args[0])
-
-
-def _layer(x: sp.Matrix, K: sp.Matrix, b: sp.Matrix, residual_layer: bool) -> sp.Matrix:
-    z = K * x + b
-    out = z.applyfunc(_act)
-    return x + out if residual_layer else out
+def _layer_env(dim: int) -> dict[str, sp.Matrix]:
+    return {
+        "K": sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"k{i}{j}", real=True)),
+        "x": _vec("x", dim),
+        "beta": _vec("b", dim),
+        "p": _vec("p", dim),
+    }
 
 
-def d6_symbolic(residual_layer: bool = True, N: int = 2, M: int = 2, dim: int = 2) -> sp.Expr:
-    """For a generic activation (n = 2, N = 2, M = 2 samples), Phi = sum_a |x^a_N - y^a|^2/2:
-    with p^a_N = -(x^a_N - y^a) and p^a_k = H_x(p^a_{k+1}, x^a_k, u_k), H = <p, f(x, u)>:
-    -p^a_k = dPhi/dx^a_k (k = 0..N), and dPhi/dK_k = -sum_a dH/dK_k, dPhi/dbeta_k likewise."""
-    Ks = [sp.Matrix(dim, dim, lambda i, j, k=k: sp.Symbol(f"K{k}_{i}{j}")) for k in range(N)]
-    bs = [_vec(f"beta{k}", dim) for k in range(N)]
-    x0 = [_vec(f"xa{a}", dim) for a in range(M)]
-    ys = [_vec(f"ya{a}", dim) for a in range(M)]
-    states = []
-    for a in range(M):
-        xa = [x0[a]]
-        for k in range(N):
-            xa.append(_layer(xa[-1], Ks[k], bs[k], residual_layer))
-        states.append(xa)
-    Phi = sum(((states[a][N] - ys[a]).T * (states[a][N] - ys[a]))[0, 0] / 2 for a in range(M))
-    # costate recursion from H(y, x, u) = <y, f(x, u)> at generic points, then substituted
-    Y, X = _vec("Y", dim), _vec("X", dim)
-    Hk = [(Y.T * _layer(X, Ks[k], bs[k], residual_layer))[0, 0] for k in range(N)]
-    total = sp.Integer(0)
-    for a in range(M):
-        p = [None] * (N + 1)
-        p[N] = -(states[a][N] - ys[a])
-        for k in range(N - 1, -1, -1):
-            sub = {**dict(zip(Y, p[k + 1], strict=True)), **dict(zip(X, states[a][k], strict=True))}
-            p[k] = _grad(Hk[k], X).xreplace(sub)
-        for k in range(N + 1):
-            # Phi as a function of a free state xi at layer k, differentiated, then xi = x^a_k
-            xi = _vec("xi", dim)
-            xk = xi
-            for j in range(k, N):
-                xk = _layer(xk, Ks[j], bs[j], residual_layer)
-            tail = ((xk - ys[a]).T * (xk - ys[a]))[0, 0] / 2
-            grad = _grad(tail, xi).xreplace(dict(zip(xi, states[a][k], strict=True)))
-            total += residual(grad + p[k])
-        if a == 0:
-            costates = [p]
-        else:
-            costates.append(p)
-    for k in range(N):
-        params = list(Ks[k]) + list(bs[k])
-        for w in params:
-            dH = sp.Integer(0)
-            for a in range(M):
-                sub = {
-                    **dict(zip(Y, costates[a][k + 1], strict=True)),
-                    **dict(zip(X, states[a][k], strict=True)),
-                }
-                dH += sp.diff(Hk[k], w).xreplace(sub)
-            total += residual(sp.diff(Phi, w) + dH)
-    return total
-
-
-def d6_symbolic_residual() -> sp.Expr:
-    return d6_symbolic(residual_layer=True)
-
-
-def d6_symbolic_plain() -> sp.Expr:
-    return d6_symbolic(residual_layer=False)
-
-
-ACTIVATIONS = ("tanh", "logistic")
-
-
-def activation(name: str) -> sp.Lambda:
-    """sigma as a SymPy Lambda; the logistic function is written (1 + tanh(z/2))/2, which equals
-    1/(1 + exp(-z)) and never overflows in floating point."""
-    z = sp.Dummy("z", real=True)
-    if name == "tanh":
-        return sp.Lambda(z, sp.tanh(z))
-    if name == "logistic":
-        return sp.Lambda(z, (1 + sp.tanh(z / 2)) / 2)
-    raise KeyError(name)
-
-
-def activation_derivative(name: str) -> sp.Lambda:
-    lam = activation(name)
-    (z,) = lam.variables
-    # no simplification: sympy would turn 1 - tanh^2 into cosh^-2, which overflows in float64
-    return sp.Lambda(z, sp.expand(sp.diff(lam.expr, z)))
-
-
-def d6_logistic_form() -> sp.Expr:
-    """(1 + tanh(z/2))/2 = 1/(1 + exp(-z)) and sigma' = sigma (1 - sigma) (logistic);
-    tanh' = 1 - tanh^2."""
+@D6.check(Level.SYMBOLIC_FIXED_N)
+def d6_sigmoid() -> sp.Expr:
+    """The activation of the logistic kernels is the displayed sigmoid 1/(1 + e^-z) (read from the
+    emitted step's expression; symbolic z)."""
     z = sp.Symbol("z", real=True)
-    s = activation("logistic")(z)
-    r = residual(sp.simplify((s - 1 / (1 + sp.exp(-z))).rewrite(sp.exp)))
-    r += residual(activation_derivative("logistic")(z) - s * (1 - s))
-    r += residual(activation_derivative("tanh")(z) - (1 - sp.tanh(z) ** 2))
-    return r
-
-
-def layer_exprs(size, act: str, residual_layer: bool):
-    """Matrix-level expressions of one layer and its adjoint (size n symbolic or an integer).
-
-    z = K x + beta; x_next = [x +] sigma(z); s = sigma'(z) o p;
-    p_prev = dH/dx = [p +] K^T s; dH/dK = s x^T; dH/dbeta = s, for H = <p, x_next>.
-    """
-    K = sp.MatrixSymbol("K", size, size)
-    x = sp.MatrixSymbol("x", size, 1)
-    b = sp.MatrixSymbol("beta", size, 1)
-    p = sp.MatrixSymbol("p", size, 1)
-    z = K * x + b
-    sig = ElementwiseApplyFunction(activation(act), z)
-    dsig = ElementwiseApplyFunction(activation_derivative(act), z)
-    s = sp.HadamardProduct(dsig, p)
-    x_next = x + sig if residual_layer else sig
-    p_prev = p + K.T * s if residual_layer else K.T * s
-    syms = {"K": K, "x": x, "beta": b, "p": p, "z": z, "s": s}
-    return syms, x_next, p_prev, s * x.T, s
-
-
-def d6_emitted_formulas(size: int = 3) -> sp.Expr:
-    """The emitted layer formulas equal the explicit derivatives of H = <p, f(x, K, beta)>
-    (n = 3, both activations, residual and plain)."""
     total = sp.Integer(0)
-    for act, res in itertools.product(ACTIVATIONS, (True, False)):
-        syms, x_next, p_prev, dK, db = layer_exprs(size, act, res)
-        exp = {
-            "K": sp.Matrix(size, size, lambda i, j: sp.Symbol(f"k{i}{j}", real=True)),
-            "x": _vec("x", size),
-            "beta": _vec("b", size),
-            "p": _vec("p", size),
-        }
-        sub = {syms[name]: exp[name] for name in exp}
-
-        def explicit(e, sub=sub):
-            return sp.Matrix(e.subs(sub).doit())
-
-        xn = explicit(x_next)
-        H = (exp["p"].T * xn)[0, 0]
-        total += residual(explicit(p_prev) - _grad(H, exp["x"]))
-        total += residual(explicit(db) - _grad(H, exp["beta"]))
-        dK_true = sp.Matrix(size, size, lambda i, j, H=H, Km=exp["K"]: sp.diff(H, Km[i, j]))
-        total += residual(explicit(dK) - dK_true)
+    for res in (True, False):
+        step = STEP_KERNELS[("logistic", res)]["x_next"]
+        (fn,) = {e.function for e in step.atoms(ElementwiseApplyFunction)}
+        want = SIGMOID_DEF.rhs.xreplace({sp.Symbol("z"): z})
+        total += residual(sp.simplify((fn(z) - want).rewrite(sp.exp)))
     return total
+
+
+@D6.check(Level.SYMBOLIC_FIXED_N)
+def d6_kernels() -> sp.Expr:
+    """Each emitted step equals the displayed layer with sigma its activation and h = 1, and each
+    emitted adjoint returns the explicit gradients in x, K and beta of the displayed H with f the
+    emitted step and g = 0 (symbolic entries, n = 3, tanh and logistic, residual and plain)."""
+    env = _layer_env(3)
+    total = sp.Integer(0)
+    for (act, res), kernel in STEP_KERNELS.items():
+        x_next = explicit(kernel["x_next"], env)
+        shown = RESIDUAL_LAYER if res else PLAIN_LAYER
+        want = explicit(shown.rhs, {**env, "h": 1}).replace(_SIGMA, ACTIVATIONS[act][0])
+        total += _nonzero(x_next - want)
+        fn = {"f": lambda x, u, x_next=x_next: x_next, "g": _define(G0, {})}
+        H = _define(H_DEF, fn)(env["p"], env["x"], sp.Symbol("u"))
+        adjoint = ADJOINT_KERNELS[(act, res)]
+        grads = {
+            "p_prev": _grad(H, env["x"]),
+            "dH_dK": env["K"].applyfunc(lambda kij, H=H: sp.diff(H, kij)),
+            "dH_dbeta": _grad(H, env["beta"]),
+        }
+        for name, value in grads.items():
+            total += _nonzero(explicit(adjoint[name], env) - value)
+    return total
+
+
+def _unflatten(u: sp.Matrix, dim: int) -> tuple[sp.Matrix, sp.Matrix]:
+    return sp.Matrix(dim, dim, list(u[: dim * dim])), sp.Matrix(list(u[dim * dim :]))
+
+
+def _layer_function(shown: sp.Eq, dim: int, h: Any) -> Callable[..., Any]:
+    """f(x, u) of a displayed layer, u the vector of the entries of K (row-major) and beta."""
+
+    def f(x: sp.Matrix, u: sp.Matrix) -> sp.Matrix:
+        K, beta = _unflatten(u, dim)
+        return explicit(shown.rhs, {"x": x, "K": K, "beta": beta, "h": h})
+
+    return f
+
+
+@D6.check(Level.SYMBOLIC_FIXED_N)
+def d6_adjoint_formulas() -> sp.Expr:
+    """The displayed adjoint formulas of both layers (generic activation sigma, step h) are the
+    gradients in x, K and beta of the displayed H with f the displayed layer and g = 0 (symbolic
+    entries, n = 2)."""
+    dim = 2
+    env = _layer_env(dim)
+    u = sp.Matrix([*env["K"], *env["beta"]])
+    total = sp.Integer(0)
+    for shown, adjoint in ((RESIDUAL_LAYER, ADJOINT), (PLAIN_LAYER, ADJOINT_PLAIN)):
+        fn = {"f": _layer_function(shown, dim, _hstep), "g": _define(G0, {})}
+        H = _define(H_DEF, fn)(env["p"], env["x"], u)
+        du = _grad(H, u)
+        grads = {
+            r"\partial H/\partial x": _grad(H, env["x"]),
+            r"\partial H/\partial K": _unflatten(du, dim)[0],
+            r"\partial H/\partial \beta": _unflatten(du, dim)[1],
+        }
+        for formula in adjoint:
+            total += _nonzero(explicit(lhs_minus_rhs(formula), {**env, **grads, "h": _hstep}))
+    return total
+
+
+def _cost_gradient(
+    functions: dict[str, Any],
+    values: dict[Any, Any],
+    tails: list[tuple[int, int]],
+    run: Callable[..., None],
+    fresh: sp.Matrix,
+    key: tuple[Any, ...],
+) -> sp.Matrix:
+    """Gradient of the displayed cost in the value ``key`` (a state x^a_k or a control u_k), the
+    states of the given (sample, step) tails recomputed as functions of it.  The other values
+    are constants of this partial derivative and are hidden behind symbols while differentiating.
+    """
+    hidden: dict[sp.Basic, sp.Basic] = {}
+
+    def hide(v: Any) -> Any:
+        if isinstance(v, sp.MatrixBase):
+            return v.applyfunc(hide)
+        if isinstance(v, sp.Basic) and not v.is_Atom:
+            return hidden.setdefault(v, sp.Dummy(f"c{len(hidden)}"))
+        return v
+
+    tail = {k: hide(v) for k, v in values.items()}
+    tail[key] = fresh
+    for a, k in tails:
+        run(tail, a, k, tail[("x", a, k)])
+    grad = _grad(_value(COST5.rhs, tail, functions), fresh)
+    grad = grad.xreplace({d: v for v, d in hidden.items()})
+    return grad.xreplace(dict(zip(fresh, values[key], strict=True)))
+
+
+def _backprop_defect(
+    endpoint: sp.Eq,
+    signs: Sequence[int],
+    running_cost: bool,
+    layers: Sequence[sp.Eq] = (RESIDUAL_LAYER, PLAIN_LAYER),
+    M: int = 2,
+) -> int:
+    """Networks of N = 2 displayed layers (generic sigma, h = 1), M samples, n = 2, random
+    rational weights, inputs and target c, terminal cost phi(x) = |x - c|^2/2 and running cost
+    g = 0 (the displayed no_running_cost) or g = (|x|^2 + |u|^2)/3.  Costates from the given
+    endpoint condition and the costate equation p^a_k = dH/dx(p^a_{k+1}, x^a_k, u_k) of the
+    displayed H; gradients of the displayed cost C in x^a_k and in u_k, the later states as
+    functions of them.  Returns the number of entries of the displayed backprop and weights
+    relations that fail for each sign s in ``signs``."""
+    dim, N = 2, 2
+    rng = np.random.default_rng(6)
+
+    def rational(*shape: int) -> sp.Matrix:
+        return sp.Matrix(
+            *shape, [sp.Rational(int(v), 5) for v in rng.integers(-7, 8, int(np.prod(shape)))]
+        )
+
+    c = rational(dim, 1)
+    if running_cost:
+
+        def g(x: Any, u: Any) -> Any:
+            return (_dot(x, x) + _dot(u, u)) / 3
+    else:
+        g = _define(G0, {})
+    total = 0
+    for shown in layers:
+        f = _layer_function(shown, dim, sp.Integer(1))
+        fn = _with_hamiltonians({"f": f, "g": g, "h": lambda u: sp.zeros(1, 1)})
+        fn[r"\phi"] = lambda x: _dot(x - c, x - c) / 2
+        values: dict[Any, Any] = {"N": N, "M": M, "s": _s}
+        values.update({("u", k): rational(dim * dim + dim, 1) for k in range(N)})
+
+        def run(values: dict[Any, Any], a: int, k: int, start: sp.Matrix, f: Any = f) -> None:
+            values[("x", a, k)] = start
+            for j in range(k, N):
+                values[("x", a, j + 1)] = f(values[("x", a, j)], values[("u", j)])
+
+        for a in range(1, M + 1):
+            run(values, a, 0, rational(dim, 1))
+        checks = []
+        for a in range(1, M + 1):
+            lhs, rhs = _instance(endpoint, {_a: a, _N: N})
+            values[_key(lhs)] = _value(rhs, values, fn)
+            for k in reversed(range(N)):
+                lhs, rhs = _instance(_COSTATE5_EQ, {_a: a, _k: k})
+                values[_key(lhs)] = _value(rhs, values, fn)
+            for k in range(N + 1):
+                xi = _vec("xi", dim)
+                grad = _cost_gradient(fn, values, [(a, k)], run, xi, ("x", a, k))
+                values[(str(_dCdx.label), a, k)] = grad
+                checks.append(_instance(BACKPROP, {_a: a, _k: k}))
+        for k in range(N):
+            w = _vec("w", dim * dim + dim)
+            grad = _cost_gradient(fn, values, [(a, k) for a in range(1, M + 1)], run, w, ("u", k))
+            values[(str(_dCdu.label), k)] = grad
+            checks.append(_instance(WEIGHTS, {_k: k}))
+        for lhs, rhs in checks:
+            gap = _minus(_value(lhs, values, fn), _value(rhs, values, fn))
+            total += sum(_nonzero(gap.xreplace({_s: sign})) for sign in signs)
+    return total
+
+
+@D6.check(Level.EXACT_RATIONAL)
+def d6_backprop_no_running_cost() -> int:
+    """Both layers with a generic activation sigma, N = 2 layers, M = 2 samples, n = 2, random
+    rational weights, inputs and target, phi = |x - c|^2/2, g = 0: with the displayed endpoint
+    condition, the costates satisfy the displayed backprop relation at every layer and the weight
+    gradients of the cost the displayed weights relation, for s = 1 (m8) and s = -1 (D5)."""
+    return _backprop_defect(ENDPOINT_S, (1, -1), running_cost=False)
+
+
+@D6.check(Level.EXACT_RATIONAL, form="printed")
+def d6_printed_m8_running_cost() -> int:
+    """The same computation (residual layer, one sample) with a running cost
+    g = (|x|^2 + |u|^2)/3 and m8's endpoint condition: the backprop and weights relations with
+    s = 1 fail (count of failing entries)."""
+    return _backprop_defect(M8, (1,), running_cost=True, layers=(RESIDUAL_LAYER,), M=1)
+
+
+@D6.check(Level.EXACT_RATIONAL, form="corrected")
+def d6_corrected_running_cost() -> int:
+    """The same with D5's endpoint condition: the backprop and weights relations with s = -1
+    hold."""
+    return _backprop_defect(ENDPOINT, (-1,), running_cost=True, layers=(RESIDUAL_LAYER,), M=1)
+
+
+def _identity_defect(shown: sp.Eq) -> sp.Expr:
+    """The displayed property of a residual layer evaluated on a displayed layer: its Jacobian in
+    x at K = 0 (generic sigma, symbolic beta and h, n = 2) minus the identity (count of entries)."""
+    env = _layer_env(2)
+    J = (
+        explicit(shown.rhs, {**env, "h": _hstep})
+        .jacobian(env["x"])
+        .xreplace({kij: 0 for kij in env["K"]})
+    )
+    return _nonzero(explicit(lhs_minus_rhs(IDENTITY), {IDENTITY.lhs.name: J}))
+
+
+@D6.check(Level.SYMBOLIC_FIXED_N, form="printed")
+def d6_printed_plain_is_not_residual() -> sp.Expr:
+    """Remark 1's layer sigma(K x + beta) is not a perturbation of the identity: its Jacobian in x
+    at K = 0 is 0, not I (count of mismatching entries, generic sigma, n = 2)."""
+    return _identity_defect(PLAIN_LAYER)
+
+
+@D6.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d6_residual_layer_is_residual() -> sp.Expr:
+    """The residual layer x + h sigma(K x + beta) has Jacobian I in x at K = 0, for every beta and
+    h (generic sigma, n = 2)."""
+    return _identity_defect(RESIDUAL_LAYER)
+
+
+def _reference_forward(x0, Ks, bs, act: str, residual_layer: bool) -> np.ndarray:
+    """Independent plain-NumPy forward pass (complex-safe; no generated code): all states."""
+    sig = np.tanh if act == "tanh" else (lambda z: 1.0 / (1.0 + np.exp(-z)))
+    states = [x0]
+    for K, b in zip(Ks, bs, strict=True):
+        y = sig(states[-1] @ K.T + b)
+        states.append(states[-1] + y if residual_layer else y)
+    return np.stack(states)
 
 
 def _reference_loss(x0, Ks, bs, targets, act: str, residual_layer: bool):
-    """Independent plain-NumPy forward pass (complex-safe, no generated code) and loss."""
-    sig = np.tanh if act == "tanh" else (lambda z: 1.0 / (1.0 + np.exp(-z)))
-    x = x0
-    for K, b in zip(Ks, bs, strict=True):
-        y = sig(x @ K.T + b)
-        x = x + y if residual_layer else y
-    return 0.5 * np.sum((x - targets) ** 2)
+    return 0.5 * np.sum((_reference_forward(x0, Ks, bs, act, residual_layer)[-1] - targets) ** 2)
 
 
-def complex_step_gradients(x0, Ks, bs, targets, act, residual_layer, h=1e-30):
+def complex_step_gradients(x0, Ks, bs, targets, act: str, residual_layer: bool, h: float = 1e-30):
     """dPhi/dK_k, dPhi/dbeta_k by the complex step Im Phi(w + i h e)/h (exact to round-off)."""
-    Ks = np.asarray(Ks, dtype=complex)
-    bs = np.asarray(bs, dtype=complex)
+    Ks, bs = np.asarray(Ks, dtype=complex), np.asarray(bs, dtype=complex)
     gK, gb = np.zeros(Ks.shape), np.zeros(bs.shape)
-    for idx in np.ndindex(Ks.shape):
-        Kp = Ks.copy()
-        Kp[idx] += 1j * h
-        gK[idx] = _reference_loss(x0, Kp, bs, targets, act, residual_layer).imag / h
-    for idx in np.ndindex(bs.shape):
-        bp = bs.copy()
-        bp[idx] += 1j * h
-        gb[idx] = _reference_loss(x0, Ks, bp, targets, act, residual_layer).imag / h
+    for arr, out in ((Ks, gK), (bs, gb)):
+        for idx in np.ndindex(arr.shape):
+            old = arr[idx]
+            arr[idx] = old + 1j * h
+            out[idx] = _reference_loss(x0, Ks, bs, targets, act, residual_layer).imag / h
+            arr[idx] = old
     return gK, gb
 
 
-def complex_step_state_gradients(states, Ks, bs, targets, act, residual_layer, h=1e-30):
+def complex_step_state_gradients(states, Ks, bs, targets, act: str, residual_layer: bool,
+                                 h: float = 1e-30) -> np.ndarray:  # fmt: skip
     """dPhi/dx^a_k for every layer k and sample a, by the complex step on the tail network."""
     out = np.zeros(states.shape)
-    N = len(Ks)
-    for k in range(N + 1):
+    for k in range(len(Ks) + 1):
         for idx in np.ndindex(states.shape[1:]):
             xk = states[k].astype(complex)
             xk[idx] += 1j * h
@@ -895,6 +1773,7 @@ def complex_step_state_gradients(states, Ks, bs, targets, act, residual_layer, h
 
 
 def random_network(seed: int, N: int = 4, M: int = 5, dim: int = 3, scale: float = 0.8):
+    """(x0, K, beta, targets) with M samples of dimension dim and N layers."""
     rng = np.random.default_rng(seed)
     return (
         rng.standard_normal((M, dim)),
@@ -904,401 +1783,23 @@ def random_network(seed: int, N: int = 4, M: int = 5, dim: int = 3, scale: float
     )
 
 
+@D6.check(Level.FLOAT64, tol=1e-12)
 def d6_float64() -> float:
-    """Relative error of symrb.learning's costates and weight gradients (generated kernels)
-    against complex-step derivatives of an independent forward pass (n = 3, N = 4, M = 5)."""
-    from symrb import learning
+    """symrb.resnet_forward, symrb.costate_sweep and symrb.loss_gradients (both activations, both
+    layers; n = 3, N = 4, M = 5, 2 random networks) against an independent NumPy forward pass and
+    complex-step derivatives of its loss: states, -p (D5's sign) against dPhi/dx^a_k, and the
+    weight gradients; largest error relative to the largest reference entry."""
+    import symrb
 
-    worst = 0.0
+    errors = []
     for seed, act, res in itertools.product(range(2), ACTIVATIONS, (True, False)):
         x0, Ks, bs, ys = random_network(seed)
-        states = learning.resnet_forward(x0, Ks, bs, activation=act, residual=res)
-        p = learning.costate_sweep(states, Ks, bs, ys, activation=act, residual=res)
-        _loss, gK, gb = learning.loss_gradients(x0, Ks, bs, ys, activation=act, residual=res)
+        states = symrb.resnet_forward(x0, Ks, bs, activation=act, residual=res)
+        p = symrb.costate_sweep(states, Ks, bs, ys, activation=act, residual=res)
+        _loss, gK, gb = symrb.loss_gradients(x0, Ks, bs, ys, activation=act, residual=res)
+        ref_states = _reference_forward(x0, Ks, bs, act, res)
         cK, cb = complex_step_gradients(x0, Ks, bs, ys, act, res)
-        cx = complex_step_state_gradients(states, Ks, bs, ys, act, res)
-        for got, ref in ((gK, cK), (gb, cb), (-p, cx)):
-            worst = max(worst, float(np.max(np.abs(got - ref)) / np.max(np.abs(ref))))
-    return worst
-
-
-# ---------------------------------------------------------------------------------------------
-
-_D1_PRINTED = (
-    r"eq8.3 for $k=0,\dots,N$ with $p_{N+1}=0$, i.e. also $p_N=\partial H/\partial x_N(0,x_N,u_N)"
-    r"=-\partial g/\partial x(x_N,u_N)$; the proof's augmented functional $V$ carries one "
-    r"multiplier $\sigma$ for all $k$ (the proposition itself lets $\sigma=\sigma(p_{k+1},x_k)$ "
-    r"vary, but a single $\sigma$ in $V$ only yields $\sum_k h(u_k)=0$); the "
-    r"proof rewrites $\sum_{k=0}^{N-1}(-\langle p_{k+1},x_{k+1}\rangle+\hat H_k)$ as "
-    r"$\langle p_0,x_0\rangle+\sum_{k=0}^{N}(-\langle p_k,x_k\rangle+\hat H(p_{k+1},x_k,u_k,\sigma))$."
-)
-_D1_CORRECTED = (
-    r"$x_{k+1}=\partial H/\partial p_{k+1}$ for $k=0,\dots,N-1$; $p_k=\partial H/\partial x_k"
-    r"(p_{k+1},x_k,u_k)$ for $k=1,\dots,N-1$ ($k=0$ merely defines $p_0$); $p_N$ is free, fixed "
-    r"by $x_N=X_N$; $\partial\hat H/\partial u_k(p_{k+1},x_k,u_k,\sigma_k)=0$, $h(u_k)=0$ with one "
-    r"multiplier $\sigma_k\in\mathbb R^l$ per step; the rewrite has the extra term "
-    r"$\hat H(0,x_N,u_N,\sigma)$ and must stop at $k=N-1$."
-)
-
-CLAIMS = [
-    Claim(
-        id="D1",
-        label="prob8.1, gendiscprop, eq8.3-eq8.6",
-        title="Discrete maximum principle (fixed endpoints, control constraint)",
-        statement=r"A solution of $\min\sum_{k<N}g(x_k,u_k)$, $x_{k+1}=f(x_k,u_k)$, $x_0=X_0$, "
-        r"$x_N=X_N$, $h(u_k)=0$ satisfies $p_k=\partial H/\partial x_k$, $x_{k+1}=\partial H/"
-        r"\partial p_{k+1}$ with $H=\langle p_{k+1},f\rangle-g$, and $\partial\hat H/\partial u_k=0$, "
-        r"$h(u_k)=0$ with $\hat H=H+\langle\sigma,h\rangle$.",
-        printed=_D1_PRINTED,
-        corrected=_D1_CORRECTED,
-        expected="holds after correction",
-        section="2",
-        note="The structure of the principle is right (stationarity of the augmented functional, "
-        "derived here for undefined f, g, h), but three details are not: (i) the costate equation "
-        "at k = N with p_{N+1} = 0 would force p_N = -dg/dx(x_N, u_N) for a phantom control u_N; for "
-        "a fixed endpoint p_N is free (exact example: p_2 = 1/2, the printed form gives 0); "
-        "(ii) in the proof's functional V the multiplier must depend on k (the proposition's "
-        "text, sigma = sigma(p_{k+1}, x_k), already allows that; V does not): in an exact example "
-        "the minimiser has sigma_0 = -3/7, sigma_1 = -1/7, and with one shared sigma the "
-        "extremal system has no solution at all; (iii) the proof's rewriting of V with the sum up to N adds "
-        "Hhat(0, x_N, u_N, sigma) = -g(x_N, u_N) + <sigma, h(u_N)>.",
-        evidence=(
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "stationarity of V (sigma_k per step, x_0 and x_N fixed) equals the corrected "
-                "system; undefined f, g, h, n = m = 2, l = 1, N = 3",
-                d1_stationarity,
-                form="corrected",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "f = x + u1, g = (u1^2 + (u2 - x)^2)/2, h = u1 - u2, N = 2: the KKT system with "
-                "sigma_k has one solution, the direct minimiser v_0 = 3/7",
-                d1_corrected_multipliers,
-                form="corrected",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "same example: |sigma_0 - sigma_1| = 2/7 at the minimiser (one sigma cannot serve)",
-                d1_printed_single_sigma,
-                form="printed",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "f = x + u, g = u^2/2, x_0 = 0, x_2 = 1: interior costate equation holds",
-                d1_corrected_costate_interior,
-                form="corrected",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "same example: |p_N - dH/dx(p_{N+1} = 0, x_N, u_N)| = |1/2 - 0|",
-                d1_printed_costate_at_N,
-                form="printed",
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "the proof's rewrite with sum to N and p_{N+1} = 0 differs from V by "
-                "Hhat(0, x_N, u_N, sigma) (undefined g, h)",
-                d1_printed_rewrite,
-                form="printed",
-            ),
-        ),
-    ),
-    Claim(
-        id="D2",
-        label="remark after gendiscprop",
-        title="The implicit step needs an invertible mixed second derivative",
-        statement=r"Computing $p_{k+1}$ from $p_k=\partial H/\partial x(p_{k+1},x_k,u^*_k)$ needs "
-        r"the matrix $\partial^2H/\partial y_i\partial x_j$ invertible.",
-        printed=r"invertibility of $\left(\partial^2H/\partial y_i\partial x_j(y,x,u)\right)$ at "
-        r"every $(y,x,u)$ (u held fixed) lets one compute $p_{k+1}$.",
-        corrected=r"by the implicit function theorem the step is locally unique when "
-        r"$\partial^2H^*/\partial y\,\partial x$ is invertible, where $H^*(y,x)=\hat H(y,x,u^*(y,x),"
-        r"\sigma(y,x))$ is the reduced Hamiltonian ($\partial H^*/\partial x=\partial H/\partial x$ at "
-        r"$u^*$, so this is the Jacobian of $y\mapsto\partial H/\partial x(y,x,u^*(y,x))$); it equals "
-        r"the printed matrix only when $u^*$ does not depend on $y$.",
-        expected="holds after correction",
-        section="2",
-        note="u*_k depends on p_{k+1}, so the implicit equation's Jacobian picks up "
-        "H_xu du*/dy. Exact counterexample: f = x + u, g = (u + x)^2/2 >= 0 has d^2H/dy dx = 1 "
-        "everywhere, yet u* = y - x and p_k = 0 for every p_{k+1}: the step does not determine "
-        "p_{k+1}. The index order (y_i x_j vs x_i y_j) is a transpose and does not matter for "
-        "invertibility.",
-        evidence=(
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "f = a(x) + b(x) u, g = u^2/2 + V(x) (undefined a, b, V): envelope H*_x = H_x(u*), "
-                "d/dy H_x(y, x, u*) = H*_xy = a' + 2 b b' y",
-                d2_envelope_family,
-                form="corrected",
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "f = u, g = (u^2 + x^2)/2: H*_xy = 0 and p_k = -x_k whatever p_{k+1} (not unique)",
-                d2_singular_not_unique,
-                form="corrected",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "f = x + u, g = (u + x)^2/2: printed matrix = 1 everywhere but d p_k/d p_{k+1} = 0 "
-                "(1 = counterexample confirmed)",
-                d2_printed_condition_insufficient,
-                form="printed",
-            ),
-        ),
-    ),
-    Claim(
-        id="D3",
-        label="C:8.3",
-        title="Linearised extremal equations",
-        statement=r"$dp_k=\hat H_{xx}dx_k+\hat H_{px}dp_{k+1}$, $dx_{k+1}=\hat H_{px}dx_k+"
-        r"\hat H_{pp}dp_{k+1}$.",
-        printed=r"$dp_k=\frac{\partial^2\hat H}{\partial x_k^2}dx_k+\frac{\partial^2\hat H}"
-        r"{\partial p_{k+1}\partial x_k}dp_{k+1}$, $dx_{k+1}=\frac{\partial^2\hat H}{\partial p_{k+1}"
-        r"\partial x_k}dx_k+\frac{\partial^2\hat H}{\partial p_{k+1}^2}dp_{k+1}$, derivatives of "
-        r"$\hat H$ at $(p_{k+1},x_k,u^*_k)$.",
-        corrected=r"$dp_k=H^*_{xx}dx_k+H^*_{xy}dp_{k+1}$, $dx_{k+1}=(H^*_{xy})^Tdx_k+H^*_{yy}"
-        r"dp_{k+1}$ with $H^*(y,x)=\hat H(y,x,u^*(y,x),\sigma(y,x))$ and "
-        r"$(H^*_{xy})_{ij}=\partial^2H^*/\partial x_i\partial y_j$.",
-        expected="holds after correction",
-        section="2",
-        note="Two slips. (i) Second derivatives must be those of the reduced Hamiltonian H* "
-        "(u* and sigma depend on (p_{k+1}, x_k)); at frozen u*, Hhat is linear in p, so the printed "
-        "coefficient of dp_{k+1} in dx_{k+1} is always 0, while it is H*_yy = B B^T in the family "
-        "f = a(x) + B u, g = |u|^2/2 + V(x). (ii) For n > 1 the two lines need transposed mixed "
-        "matrices; the printed form uses the same one (if the printed symbol is read as the mixed "
-        "derivative contracted in the right slot, this second point is notation only). In the "
-        "symbolic family u* does not depend on x, so there only the H*_yy block separates H* from "
-        "frozen Hhat; the float64 family with u*(x, p_{k+1}) separates every block.",
-        evidence=(
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "Jacobians of the true maps (x_k, p_{k+1}) -> (p_k, x_{k+1}) equal the corrected "
-                "blocks; f = a(x) + B u, g = |u|^2/2 + V(x), undefined a, V, n = m = 2",
-                d3_corrected,
-                form="corrected",
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "same family: blocks of Hhat at frozen u* mismatch (count of entries)",
-                d3_printed_frozen_control,
-                form="printed",
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "same family with H*: one mixed matrix in both lines mismatches for either index "
-                "convention (min count of entries)",
-                d3_printed_same_matrix,
-                form="printed",
-            ),
-            Evidence(
-                Level.FLOAT64,
-                "f = x + 0.3 tanh(Wx + Bu + c), g = |u|^2/2 + |x|^2/4 (u* depends on x and p_{k+1}; "
-                "n = 3, m = 2, 3 random points): corrected blocks of H* give the Jacobian of the "
-                "implicit advance map",
-                lambda: _d3_nonlinear_gap("reduced"),
-                tol=1e-11,
-                form="corrected",
-            ),
-            Evidence(
-                Level.FLOAT64,
-                "same family: blocks of Hhat at frozen u* (printed reading) miss that Jacobian",
-                lambda: _d3_nonlinear_gap("frozen"),
-                tol=1e-11,
-                form="printed",
-            ),
-        ),
-    ),
-    Claim(
-        id="D4",
-        label="eq8.13",
-        title="The advance map (x_k, p_k) -> (x_{k+1}, p_{k+1}) is symplectic",
-        statement=r"$\Phi^*(dx_{k+1}\wedge dp_{k+1})=dx_k\wedge dp_k$, i.e. $D\Phi^T\Omega\, D\Phi="
-        r"\Omega$ with $\Omega=\begin{pmatrix}0&I\\-I&0\end{pmatrix}$ (where $H^*_{xy}$ is "
-        r"invertible).",
-        expected="holds",
-        section="2",
-        evidence=(
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "Jac from the corrected D3 blocks with generic symmetric H*_xx, H*_yy and generic "
-                "H*_xy: det^2 (Jac^T Omega Jac - Omega) expands to 0, n = 2",
-                d4_symbolic,
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "the same, n = 3",
-                lambda: d4_symbolic(3),
-            ),
-            Evidence(
-                Level.FLOAT64,
-                "f = x + 0.3 tanh(Wx + Bu + c), g = |u|^2/2 + |x|^2/4 (5 random, n = 3, m = 2): "
-                "implicit step by scipy root, Jacobian by implicit differentiation, "
-                "max |Jac^T Omega Jac - Omega|",
-                d4_float64,
-                tol=1e-12,
-            ),
-            Evidence(
-                Level.FLOAT64,
-                "the same with central finite differences (step 1e-6; 3 random examples)",
-                d4_float64_fd,
-                tol=1e-7,
-            ),
-        ),
-    ),
-    Claim(
-        id="D5",
-        label="prob8.1m, gendiscpropm, eq8.3m-eq8.6m, m8",
-        title="Multi-sample problem with terminal cost: shared controls, per-sample costates",
-        statement=r"$\min\sum_a\sum_k g(x^a_k,u_k)+\sum_a\phi(x^a_N)$: $p^a_k=\partial H/\partial "
-        r"x_k(p^a_{k+1},x_k,u_k)$, $x^a_{k+1}=\partial H/\partial p$, $\partial\hat H/\partial u_k=0$, "
-        r"and $p^a_N=\partial\phi/\partial x^a_N$.",
-        printed=r"prob8.1m fixes $x^a_N=X^a_N$ and adds $\sum_a\phi(x^a_N)$; eq8.3m evaluates "
-        r"$\partial H/\partial x$ at the un-indexed $x_k$; one $\sigma$ for all $k$ in the proof's $V$; "
-        r"m8: $p^a_N=+\partial\phi/\partial x^a_N$.",
-        corrected=r"free endpoint (no $x^a_N=X^a_N$); $p^a_k=\partial H/\partial x(p^a_{k+1},x^a_k,"
-        r"u_k)$ for $1\le k\le N-1$; $\sum_a\partial H/\partial u(p^a_{k+1},x^a_k,u_k)+h'(u_k)^T"
-        r"\sigma_k=0$, $h(u_k)=0$; $p^a_N=-\partial\phi/\partial x^a_N$ for $H=\langle p,f\rangle-g$ "
-        r"(equivalently $p^a_k=-\partial C/\partial x^a_k$).",
-        expected="holds after correction",
-        section="2",
-        note="With H = <p, f> - g and a minimisation, V = -(cost) + <p, f - x> + <sigma, h>, so "
-        "dV/dx^a_N = -p^a_N - phi'(x^a_N): the endpoint sign is minus (the paper's V carries "
-        "+phi and an extra -p_N x_N). If x^a_N is fixed, phi is a constant and no endpoint "
-        "condition follows. eq8.3m must use x^a_k. The -phi(x^a_N) inside eq8.4m is harmless "
-        "(constant in the variables of H). sigma must be sigma_k in the proof's V, as in D1.",
-        evidence=(
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "stationarity of the corrected V equals the corrected system; undefined f, g, h, "
-                "phi, n = m = 2, l = 1, M = 2 samples, N = 2",
-                d5_stationarity,
-                form="corrected",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "2 samples, f = x + u, g = (u^2 + x^2)/2, phi = (x - y^a)^2/2: corrected costates "
-                "satisfy sum_a H_u = 0 at the exact minimiser",
-                d5_corrected_example,
-                form="corrected",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "same example with p^a_N = +phi'(x^a_N) (m8): sum_k |sum_a H_u| = 4/5",
-                d5_printed_endpoint_sign,
-                form="printed",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "same example with eq8.3m's shared x_k (sample 1's state for all): |sum_a H_u| = 1",
-                d5_printed_shared_state,
-                form="printed",
-            ),
-            Evidence(
-                Level.EXACT_RATIONAL,
-                "fixed x_1 = 1 plus phi = (x - 3)^2/2: p_1 = 1 but phi'(1) = -2, "
-                "min |p_1 -+ phi'| = 1",
-                d5_printed_fixed_endpoint,
-                form="printed",
-            ),
-        ),
-    ),
-    Claim(
-        id="D6",
-        label="Remark 1, Remark 2",
-        title="ResNet layers: the costate recursion is back-propagation",
-        statement=r"For $f(x,u)=x+\sigma(Kx+\beta)$ or $\sigma(Kx+\beta)$, $u=(K,\beta)$, "
-        r"$g=0$, loss $\Phi=\sum_a\phi(x^a_N)$: with $p^a_N=-\nabla\phi(x^a_N)$ (D5, corrected "
-        r"sign), $-p^a_k=\partial\Phi/\partial x^a_k$ and $\partial\Phi/\partial K_k="
-        r"-\sum_a\partial H/\partial K_k=-\sum_a(\sigma'(z^a_k)\odot p^a_{k+1})(x^a_k)^T$, "
-        r"$\partial\Phi/\partial\beta_k=-\sum_a\sigma'(z^a_k)\odot p^a_{k+1}$, $z^a_k=K_kx^a_k+"
-        r"\beta_k$; $p^a_k=(\partial f/\partial x)^Tp^a_{k+1}=p^a_{k+1}+K_k^T(\sigma'(z^a_k)\odot "
-        r"p^a_{k+1})$ (residual; without the first term for the plain layer).",
-        expected="holds",
-        section="2",
-        note="Remark 1 calls sigma(Kx + beta) the ResNet layer; the residual network of "
-        "BeCeEhOwSc2019 is x + h sigma(Kx + beta). Both are checked. Sign convention: the paper's "
-        "costates are minus the back-propagated gradients (adjoints).",
-        evidence=(
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "generic activation sigma (undefined, derivative dsigma), residual layer, n = 2, "
-                "N = 2, M = 2: costates = -state gradients, -sum_a dH/du = weight gradients",
-                d6_symbolic_residual,
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "the same for the plain layer sigma(Kx + beta)",
-                d6_symbolic_plain,
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "logistic = (1 + tanh(z/2))/2 = 1/(1 + e^-z), sigma' = sigma(1 - sigma); "
-                "tanh' = 1 - tanh^2",
-                d6_logistic_form,
-            ),
-            Evidence(
-                Level.SYMBOLIC_FIXED_N,
-                "emitted layer/adjoint formulas equal explicit derivatives of <p, f> (n = 3, both "
-                "activations, residual and plain)",
-                d6_emitted_formulas,
-            ),
-            Evidence(
-                Level.FLOAT64,
-                "symrb.learning costates and weight gradients vs complex-step derivatives of an "
-                "independent forward pass (n = 3, N = 4, M = 5; max relative error)",
-                d6_float64,
-                tol=1e-12,
-            ),
-        ),
-    ),
-]
-
-
-# ---------------------------------------------------------------------------------------------
-# code emission
-
-
-def emit() -> tuple[str, list[Kernel]]:
-    kernels = []
-    z_sym = sp.MatrixSymbol("z", n, 1)
-    s_sym = sp.MatrixSymbol("s", n, 1)
-    args_fwd = [
-        Arg("K", "(..., n, n)", "layer weight K_k"),
-        Arg("beta", "(..., n, 1)", "layer bias beta_k"),
-        Arg("x", "(..., n, 1)", "state x_k"),
-    ]
-    arg_p = Arg("p", "(..., n, 1)", "costate p_{k+1}")
-    for act, res in itertools.product(ACTIVATIONS, (True, False)):
-        syms, x_next, p_prev, dK, db = layer_exprs(n, act, res)
-        z_expr, s_expr = syms.pop("z"), syms.pop("s")
-        suffix = act + ("" if res else "_plain")
-        layer = f"x + {act}(K x + beta)" if res else f"{act}(K x + beta)"
-        kernels.append(
-            Kernel(
-                name=f"resnet_step_{suffix}",
-                args=args_fwd,
-                intermediates={"z": z_expr},
-                outputs={"x_next": x_next.xreplace({z_expr: z_sym})},
-                doc=f"One layer x_(k+1) = f(x_k, u_k) = {layer}, u = (K, beta).",
-            )
-        )
-        rep = {s_expr: s_sym}
-        kernels.append(
-            Kernel(
-                name=f"resnet_adjoint_{suffix}",
-                args=[*args_fwd, arg_p],
-                intermediates={"z": z_expr, "s": s_expr.xreplace({z_expr: z_sym})},
-                outputs={
-                    "p_prev": p_prev.xreplace(rep),
-                    "dH_dK": dK.xreplace(rep),
-                    "dH_dbeta": db.xreplace(rep),
-                },
-                doc=f"Adjoint of the layer f(x, u) = {layer} for H = <p, f(x, u)>: with "
-                f"z = K x + beta and s = {act}'(z) * p (entrywise), returns "
-                "p_k = dH/dx = "
-                + ("p + K^T s" if res else "K^T s")
-                + ", dH/dK = s x^T and dH/dbeta = s.",
-            )
-        )
-    return "discrete_control", kernels
+        cx = complex_step_state_gradients(ref_states, Ks, bs, ys, act, res)
+        for got, want in ((states, ref_states), (gK, cK), (gb, cb), (-p, cx)):
+            errors.append(np.max(np.abs(got - want)) / np.max(np.abs(want)))
+    return float(np.max(errors))

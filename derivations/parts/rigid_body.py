@@ -99,7 +99,8 @@ S2 = claim(
     label="rbl",
     title="Rigid body equations; J symmetric positive definite; n = 3 moments",
     statement="[[Qdot]], [[Mdot]], [[J]]; $J$ is symmetric for the pairing, [[J_symmetric]], and "
-    "positive definite when [[positive]] for $i\\neq j$; for $n=3$, [[moment]] and cyclic.",
+    "positive definite when [[positive]] for every pair of distinct indices $i$, $j$; for $n=3$, "
+    "[[moment]] and cyclic.",
     expected="holds",
     section="3.1",
     note="The equations are the definitions of the flow; what is checked is that the emitted field "
@@ -463,22 +464,22 @@ def _degree(name: str) -> int:
     return int(name[1]) if name.startswith("k") else int(name[4:])
 
 
-def _integrals(k: int, max_degree: int, lam: list[sp.Expr], Ms: sp.Matrix) -> list[sp.Expr]:
-    """The emitted Manakov integrals and Casimirs of degree <= max_degree, on explicit M."""
+def _integrals(max_degree: int, lam: list[sp.Expr], Ms: sp.Matrix) -> list[sp.Expr]:
+    """The emitted Manakov integrals of degree <= max_degree, on an explicit M (the Casimirs of
+    these degrees are among them: (k, j) = (2, 0), (4, 0))."""
     return [
-        sp.expand(explicit(kernel[name], {"M": Ms}, lam))
-        for kernel in (MANAKOV_INTEGRALS, CASIMIR_TRACES)
-        for name in kernel.outputs
+        sp.expand(explicit(MANAKOV_INTEGRALS[name], {"M": Ms}, lam))
+        for name in MANAKOV_INTEGRALS.outputs
         if _degree(name) <= max_degree
     ]
 
 
-def _conservation(lam: list[sp.Expr], Ms: sp.Matrix, Mvars: sp.Matrix, max_degree: int) -> sp.Expr:
+def _conservation(lam: list[sp.Expr], Ms: sp.Matrix, max_degree: int) -> sp.Expr:
     k = Ms.rows
     Mdot = explicit(RIGID_BODY_RHS["Mdot"], {"Q": sp.eye(k), "M": Ms}, lam)
     total = sp.Integer(0)
-    for F in _integrals(k, max_degree, lam, Mvars):
-        G = skew_gradient(F, Mvars).xreplace(dict(zip(Mvars, Ms, strict=True)))
+    for F in _integrals(max_degree, lam, Ms):
+        G = skew_gradient(F, Ms)
         total += residual(sp.together(explicit(Pair(M, Om), {"M": G, "Omega": Mdot})))
     return total
 
@@ -488,7 +489,7 @@ def s4_integrals_conserved() -> sp.Expr:
     """d/dt F = <grad F, Mdot> vanishes identically for the emitted integrals of degree <= 4,
     with Mdot from the emitted rigid body field (symbolic M and Lambda, n = 4)."""
     lam, Ms = _lam(4), skew_matrix("m", 4)
-    return _conservation(lam, Ms, Ms, 4)
+    return _conservation(lam, Ms, 4)
 
 
 def _derivative_at_zero(values: list[sp.Rational]) -> sp.Rational:
@@ -523,7 +524,7 @@ def s4_integrals_in_involution() -> sp.Expr:
     """Lie-Poisson brackets {F, G}(M) = -<M, [grad F, grad G]> of the emitted Manakov integrals
     of degree <= 4 vanish pairwise (symbolic, n = 4)."""
     lam, Ms = _lam(4), skew_matrix("m", 4)
-    grads = [skew_gradient(F, Ms) for F in _integrals(4, 4, lam, Ms)]
+    grads = [skew_gradient(F, Ms) for F in _integrals(4, lam, Ms)]
     total = sp.Integer(0)
     for a, b in itertools.combinations(range(len(grads)), 2):
         bracket = explicit(

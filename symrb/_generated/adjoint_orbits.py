@@ -37,7 +37,8 @@ def optimal_control(x, p):
 
     Notes
     -----
-    Checked by claims S13, S15 (``symrb verify S13 S15``); expressions from ``derivations.parts.adjoint_orbits``.
+    Checked by claims S13, S15 (``symrb verify S13 S15``);
+    expressions from ``derivations.parts.adjoint_orbits``.
 
     Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2).
     """
@@ -64,7 +65,8 @@ def brockett_potential(x, N):
 
     Notes
     -----
-    Checked by claim S14 (``symrb verify S14``); expressions from ``derivations.parts.adjoint_orbits``.
+    Checked by claim S14 (``symrb verify S14``);
+    expressions from ``derivations.parts.adjoint_orbits``.
 
     Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2), 1 trace (n^2), 1 scalar.
     """
@@ -94,7 +96,8 @@ def orbit_hamiltonian(x, p, N):
 
     Notes
     -----
-    Checked by claims S13, S14 (``symrb verify S13 S14``); expressions from ``derivations.parts.adjoint_orbits``.
+    Checked by claims S13, S14 (``symrb verify S13 S14``);
+    expressions from ``derivations.parts.adjoint_orbits``.
 
     Total ops per batch item: 6 matrix products (n^3), 3 elementwise (n^2), 2 traces (n^2), 3 scalar.
     """
@@ -129,7 +132,8 @@ def orbit_extremal_rhs(x, p, N):
 
     Notes
     -----
-    Checked by claims S14, S15 (``symrb verify S14 S15``); expressions from ``derivations.parts.adjoint_orbits``.
+    Checked by claims S14, S15 (``symrb verify S14 S15``);
+    expressions from ``derivations.parts.adjoint_orbits``.
 
     Total ops per batch item: 10 matrix products (n^3), 6 elementwise (n^2).
     """
@@ -157,7 +161,8 @@ def double_bracket_rhs(x, N):
 
     Notes
     -----
-    Checked by claims S14, S15 (``symrb verify S14 S15``); expressions from ``derivations.parts.adjoint_orbits``.
+    Checked by claims S14, S15 (``symrb verify S14 S15``);
+    expressions from ``derivations.parts.adjoint_orbits``.
 
     Total ops per batch item: 4 matrix products (n^3), 2 elementwise (n^2).
     """
@@ -191,7 +196,8 @@ def orbit_rhs_with_control(x, p, u, N):
 
     Notes
     -----
-    Checked by claim S15 (``symrb verify S15``); expressions from ``derivations.parts.adjoint_orbits``.
+    Checked by claim S15 (``symrb verify S15``);
+    expressions from ``derivations.parts.adjoint_orbits``.
 
     Total ops per batch item: 8 matrix products (n^3), 5 elementwise (n^2).
     """

@@ -30,7 +30,8 @@ def jd(U, lam):
 
     Notes
     -----
-    Checked by claims D7, D8, D10, D12 (``symrb verify D7 D8 D10 D12``); expressions from ``derivations.parts.discrete_rigid_body``.
+    Checked by claims D7, D8, D10, D12 (``symrb verify D7 D8 D10 D12``);
+    expressions from ``derivations.parts.discrete_rigid_body``.
 
     Total ops per batch item: 3 elementwise (n^2).
     """
@@ -55,7 +56,8 @@ def mv_momentum(Omega, lam):
 
     Notes
     -----
-    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``); expressions from ``derivations.parts.discrete_rigid_body``.
+    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``);
+    expressions from ``derivations.parts.discrete_rigid_body``.
 
     Total ops per batch item: 3 elementwise (n^2).
     """
@@ -80,7 +82,8 @@ def mv_transport(Omega, M):
 
     Notes
     -----
-    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``); expressions from ``derivations.parts.discrete_rigid_body``.
+    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``);
+    expressions from ``derivations.parts.discrete_rigid_body``.
 
     Total ops per batch item: 2 matrix products (n^3).
     """

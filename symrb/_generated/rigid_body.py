@@ -39,7 +39,8 @@ def rigid_body_rhs(Q, M, lam):
 
     Notes
     -----
-    Checked by claim S2 (``symrb verify S2``); expressions from ``derivations.parts.rigid_body``.
+    Checked by claim S2 (``symrb verify S2``);
+    expressions from ``derivations.parts.rigid_body``.
 
     Total ops per batch item: 3 matrix products (n^3), 2 elementwise (n^2).
     """
@@ -71,7 +72,8 @@ def euler_rhs_so3(m, lam):
 
     Notes
     -----
-    Checked by claim S2 (``symrb verify S2``); expressions from ``derivations.parts.rigid_body``.
+    Checked by claim S2 (``symrb verify S2``);
+    expressions from ``derivations.parts.rigid_body``.
 
     Total ops per batch item: 18 scalar.
     """
@@ -112,7 +114,8 @@ def kinetic_energy(M, lam):
 
     Notes
     -----
-    Checked by claim S3 (``symrb verify S3``); expressions from ``derivations.parts.rigid_body``.
+    Checked by claim S3 (``symrb verify S3``);
+    expressions from ``derivations.parts.rigid_body``.
 
     Total ops per batch item: 1 elementwise (n^2), 1 trace (n^2), 1 scalar.
     """
@@ -149,7 +152,8 @@ def manakov_integrals(M, lam):
 
     Notes
     -----
-    Checked by claim S4 (``symrb verify S4``); expressions from ``derivations.parts.rigid_body``.
+    Checked by claim S4 (``symrb verify S4``);
+    expressions from ``derivations.parts.rigid_body``.
 
     Total ops per batch item: 1 matrix product (n^3), 3 elementwise (n^2), 8 traces (n^2), 8 scalar.
     """
@@ -189,7 +193,8 @@ def casimir_traces(M):
 
     Notes
     -----
-    Checked by claim S4 (``symrb verify S4``); expressions from ``derivations.parts.rigid_body``.
+    Checked by claim S4 (``symrb verify S4``);
+    expressions from ``derivations.parts.rigid_body``.
 
     Total ops per batch item: 2 matrix products (n^3), 3 traces (n^2).
     """

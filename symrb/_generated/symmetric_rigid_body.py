@@ -37,7 +37,8 @@ def symmetric_momentum(Q, P):
 
     Notes
     -----
-    Checked by claims S6, S9, S11 (``symrb verify S6 S9 S11``); expressions from ``derivations.parts.symmetric_rigid_body``.
+    Checked by claims S6, S9, S11 (``symrb verify S6 S9 S11``);
+    expressions from ``derivations.parts.symmetric_rigid_body``.
 
     Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2).
     """
@@ -67,7 +68,8 @@ def symmetric_rigid_body_rhs(Q, P, lam):
 
     Notes
     -----
-    Checked by claims S5, S6, S7, S11, S12 (``symrb verify S5 S6 S7 S11 S12``); expressions from ``derivations.parts.symmetric_rigid_body``.
+    Checked by claims S5, S6, S7, S11, S12 (``symrb verify S5 S6 S7 S11 S12``);
+    expressions from ``derivations.parts.symmetric_rigid_body``.
 
     Total ops per batch item: 4 matrix products (n^3), 2 elementwise (n^2).
     """
@@ -100,7 +102,8 @@ def mclachlan_scovel_rhs(Q, B, lam):
 
     Notes
     -----
-    Checked by claim S7 (``symrb verify S7``); expressions from ``derivations.parts.symmetric_rigid_body``.
+    Checked by claim S7 (``symrb verify S7``);
+    expressions from ``derivations.parts.symmetric_rigid_body``.
 
     Total ops per batch item: 3 matrix products (n^3), 1 elementwise (n^2).
     """
@@ -133,7 +136,8 @@ def control_rhs(Q, P, U):
 
     Notes
     -----
-    Checked by claim S8 (``symrb verify S8``); expressions from ``derivations.parts.symmetric_rigid_body``.
+    Checked by claim S8 (``symrb verify S8``);
+    expressions from ``derivations.parts.symmetric_rigid_body``.
 
     Total ops per batch item: 2 matrix products (n^3).
     """
@@ -164,7 +168,8 @@ def gl_hamiltonian(Q, P, lam):
 
     Notes
     -----
-    Checked by claim S12 (``symrb verify S12``); expressions from ``derivations.parts.symmetric_rigid_body``.
+    Checked by claim S12 (``symrb verify S12``);
+    expressions from ``derivations.parts.symmetric_rigid_body``.
 
     Total ops per batch item: 2 matrix products (n^3), 2 elementwise (n^2), 1 trace (n^2), 1 scalar.
     """
