@@ -247,6 +247,25 @@ def s2_symrb_field_pointwise() -> float:
     return worst
 
 
+@S2.check(Level.FLOAT64, tol=1e-14)
+def s2_symrb_inertia_operators() -> float:
+    """symrb.J and symrb.J_inv against the reference operators (explicit diagonal matrices, and
+    an n^2 x n^2 linear solve), n = 2..6, 20 random skew matrices each: max relative difference."""
+    import symrb
+
+    rng = np.random.default_rng(21)
+    worst = []
+    for k in range(2, 7):
+        lam = rng.uniform(0.3, 2.0, k)
+        X = np.stack([ref.random_skew(k, rng) for _ in range(20)])
+        JX = ref.J(X, lam)
+        worst.append(np.abs(symrb.J(X, lam) - JX).max() / np.abs(JX).max())
+        worst.append(
+            np.abs(symrb.J_inv(X, lam) - ref.J_inv(X, lam)).max() / np.abs(X).max() * lam.min()
+        )
+    return float(np.max(worst))
+
+
 @S2.check(Level.FLOAT64, tol=1e-9)
 def s2_flow_against_elliptic() -> float:
     """symrb.integrate(RigidBody) (n = 3, DOP853, rtol 1e-12) against the Jacobi elliptic solution
