@@ -32,6 +32,7 @@ __all__ = [
     "explicit",
     "Words",
     "trace_words_of",
+    "letters_of",
     "trace_residual",
     "latex",
     "Bracket",
@@ -300,7 +301,7 @@ class Words:
         """The transpose: words reversed, letters transposed."""
         total = sp.Integer(0)
         for term in sp.Add.make_args(sp.expand(expr)):
-            c, word = _letters_of(term)
+            c, word = letters_of(term)
             total += c * sp.Mul(*[self._T[x] for x in reversed(word)])
         return total
 
@@ -312,7 +313,7 @@ class Words:
             pairs |= {(x, self._T[x]), (self._T[x], x)}
         total = sp.Integer(0)
         for term in sp.Add.make_args(sp.expand(expr)):
-            c, word = _letters_of(term)
+            c, word = letters_of(term)
             changed = True
             while changed:
                 changed = False
@@ -388,7 +389,7 @@ class Words:
         return total
 
 
-def _letters_of(term: sp.Expr) -> tuple[sp.Expr, list[sp.Symbol]]:
+def letters_of(term: sp.Expr) -> tuple[sp.Expr, list[sp.Symbol]]:
     """A monomial as (commutative coefficient, list of noncommutative letters), powers unrolled."""
     c, nc = term.args_cnc()
     word: list[sp.Symbol] = []
@@ -408,7 +409,7 @@ def trace_words_of(expr: sp.Expr) -> dict[tuple[str, ...], sp.Expr]:
     """
     acc: dict[tuple[str, ...], sp.Expr] = defaultdict(lambda: sp.Integer(0))
     for term in sp.Add.make_args(sp.expand(expr)):
-        coeff, word = _letters_of(term)
+        coeff, word = letters_of(term)
         names = tuple(str(x) for x in word)
         canon = min(names[i:] + names[:i] for i in range(len(names))) if names else ()
         acc[canon] += coeff

@@ -196,6 +196,21 @@ def _value(e: Any, values: dict[Any, Any], functions: dict[str, Callable[..., An
     raise TypeError(f"_value: no rule for {type(e).__name__} ({e})")
 
 
+def _hider() -> tuple[Callable[[Any], Any], dict[sp.Basic, sp.Basic]]:
+    """A function that replaces compound values (entrywise in matrices) by dummy symbols, and the
+    dict it fills (value -> dummy), so that a derivative does not expand constants."""
+    hidden: dict[sp.Basic, sp.Basic] = {}
+
+    def hide(v: Any) -> Any:
+        if isinstance(v, sp.MatrixBase):
+            return v.applyfunc(hide)
+        if isinstance(v, sp.Basic) and not v.is_Atom:
+            return hidden.setdefault(v, sp.Dummy(f"c{len(hidden)}"))
+        return v
+
+    return hide, hidden
+
+
 def _derivative(e: sp.Derivative, values: dict[Any, Any], functions: dict[str, Any]) -> Any:
     """d/dv_m ... d/dv_1 of the inner expression at the values of v_1, ..., v_m: each variable is
     replaced by fresh symbols (all its occurrences: a partial derivative), the result is
@@ -208,15 +223,7 @@ def _derivative(e: sp.Derivative, values: dict[Any, Any], functions: dict[str, A
             fresh[key] = _fresh(values[key], len(fresh))
         order += [key] * int(count)
     # the other values are constants of a partial derivative: hide large ones behind symbols
-    hidden: dict[sp.Basic, sp.Basic] = {}
-
-    def hide(v: Any) -> Any:
-        if isinstance(v, sp.MatrixBase):
-            return v.applyfunc(hide)
-        if isinstance(v, sp.Basic) and not v.is_Atom:
-            return hidden.setdefault(v, sp.Dummy(f"c{len(hidden)}"))
-        return v
-
+    hide, hidden = _hider()
     held = {k: hide(v) for k, v in values.items() if k not in fresh}
     result = _value(e.expr, {**held, **fresh}, functions)
     for key in order:
@@ -1596,15 +1603,7 @@ def _cost_gradient(
     states of the given (sample, step) tails recomputed as functions of it.  The other values
     are constants of this partial derivative and are hidden behind symbols while differentiating.
     """
-    hidden: dict[sp.Basic, sp.Basic] = {}
-
-    def hide(v: Any) -> Any:
-        if isinstance(v, sp.MatrixBase):
-            return v.applyfunc(hide)
-        if isinstance(v, sp.Basic) and not v.is_Atom:
-            return hidden.setdefault(v, sp.Dummy(f"c{len(hidden)}"))
-        return v
-
+    hide, hidden = _hider()
     tail = {k: hide(v) for k, v in values.items()}
     tail[key] = fresh
     for a, k in tails:

@@ -41,6 +41,7 @@ from derivations.symbolic import (
     eq,
     explicit,
     general_matrix,
+    letters_of,
     skew_matrix,
     trace_residual,
 )
@@ -141,18 +142,6 @@ class SymplecticForm(sp.Expr):
         return rf"\Omega_{{\mathfrak{{gl}}(n)}}\left(({x1},{y1}),({x2},{y2})\right)"
 
 
-def _split(term: sp.Expr) -> tuple[sp.Expr, list[sp.Symbol]]:
-    """A monomial in noncommutative letters as (commutative coefficient, list of letters)."""
-    c, nc = term.args_cnc()
-    word: list[sp.Symbol] = []
-    for f in nc:
-        if isinstance(f, sp.Pow):
-            word.extend([f.base] * int(f.exp))
-        else:
-            word.append(f)
-    return sp.Mul(*c), word
-
-
 def _reduce(
     w: Words, expr: sp.Expr, rules: Mapping[tuple[sp.Symbol, sp.Symbol], sp.Expr]
 ) -> sp.Expr:
@@ -162,7 +151,7 @@ def _reduce(
     for _ in range(50):
         total = sp.Integer(0)
         for term in sp.Add.make_args(sp.expand(current)):
-            c, word = _split(term)
+            c, word = letters_of(term)
             for i in range(len(word) - 1):
                 if (word[i], word[i + 1]) in rules:
                     repl = rules[(word[i], word[i + 1])]
@@ -178,7 +167,7 @@ def _reduce(
 
 def _rule(w: Words, relation: sp.Eq) -> dict[tuple[sp.Symbol, sp.Symbol], sp.Expr]:
     """A displayed relation ``X Y = poly`` (its left side one word of two letters) as a rule."""
-    c, word = _split(sp.expand(w.of(relation.lhs.doit())))
+    c, word = letters_of(sp.expand(w.of(relation.lhs.doit())))
     if len(word) != 2:
         raise ValueError(f"relation {relation} is not a rule on a pair of letters")
     return {(word[0], word[1]): sp.expand(w.of(relation.rhs.doit()) / c)}
@@ -190,9 +179,9 @@ def _ratio(x: sp.Expr, t: sp.Expr) -> sp.Expr | None:
     if t == 0:
         return None
     lead = sp.Add.make_args(t)[0]
-    coeff_t, word = _split(lead)
+    coeff_t, word = letters_of(lead)
     coeff_x = sum(
-        (cx for cx, wx in map(_split, sp.Add.make_args(x)) if wx == word),
+        (cx for cx, wx in map(letters_of, sp.Add.make_args(x)) if wx == word),
         sp.Integer(0),
     )
     c = sp.nsimplify(coeff_x / coeff_t)
@@ -251,7 +240,7 @@ def _ddt(w: Words, poly: sp.Expr, rates: Mapping[str, sp.Expr]) -> sp.Expr:
             table[xt] = w.T(rate)
     total = sp.Integer(0)
     for term in sp.Add.make_args(sp.expand(poly)):
-        c, word = _split(term)
+        c, word = letters_of(term)
         for i, x in enumerate(word):
             if x in table:
                 total += c * sp.Mul(*word[:i]) * table[x] * sp.Mul(*word[i + 1 :])
