@@ -55,6 +55,8 @@ S1 = claim(
     statement="[[pairing]]; for $n=3$, [[pair_is_dot]] where [[hat]].",
     expected="holds",
     section="3.1",
+    note="The pairing and the hat map are definitions; what is checked is that they agree with the "
+    "dot and cross products of R^3, and that symrb's hat and pairing implement them.",
 )
 _xi, _eta = matrix("xi"), matrix("eta")
 _u, _v = vector("u"), vector("v")
@@ -308,7 +310,8 @@ S3 = claim(
     "[[coadjoint]], so the Euler-Poincare equation reads [[euler_poincare]].",
     expected="holds",
     section="3.1",
-    note="The kinetic energy kernel is the Lagrangian evaluated at Omega = J^-1(M).",
+    note="The Lagrangian is the paper's definition; the kinetic energy kernel is that Lagrangian "
+    "evaluated at Omega = J^-1(M), which the evidence checks.",
 )
 _eta3 = matrix("eta")
 _ell = sp.Function("l")

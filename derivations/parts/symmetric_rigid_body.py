@@ -1244,7 +1244,8 @@ S12 = claim(
     note="With the convention Omega(X_H, .) = dH the equations are exactly the symmetric rigid "
     "body equations (the factor 1/2 of the form and the 1/8 of H match); the opposite convention "
     "reverses time. H is half the kinetic energy 1/2 <J^-1 M, M>, consistent with the cost "
-    "1/4 <U, JU> of S5.",
+    "1/4 <U, JU> of S5. The symplectic form and H are the paper's definitions (gln_symp, ourHam): "
+    "what is checked is what follows from them.",
 )
 _xi, _eta = matrix("xi"), matrix("eta")
 _x1, _y1, _x2, _y2 = (matrix(s) for s in ("xi_1", "eta_1", "xi_2", "eta_2"))
