@@ -62,7 +62,13 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     unchecked = []
     if complete:
         unchecked = [k for k in kernels if set(k["claims"]) - set(k["checked_by"])]
-    payload = {"claims": [r.to_dict() for r in results], "kernels": kernels}
+    from derivations.report import source_hash
+
+    payload = {
+        "source_hash": source_hash(),
+        "claims": [r.to_dict() for r in results],
+        "kernels": kernels,
+    }
     if args.output:
         Path(args.output).parent.mkdir(parents=True, exist_ok=True)
         Path(args.output).write_text(json.dumps(payload, indent=1) + "\n")

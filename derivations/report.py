@@ -1,20 +1,31 @@
 """How the book shows a claim: one function, so every page renders claims the same way.
 
-``check("S4")`` runs the registered evidence of a claim (exactly what ``symrb verify S4`` runs),
-displays the statement, the printed and corrected forms of an erratum, the note and a table of
-the evidence, and raises ``AssertionError`` when the computed outcome differs from the recorded
-one, which fails the book build.
+``check("S4")`` displays a claim's statement, the printed and corrected forms of an erratum, the
+note and a table of its evidence, from the one run of every claim's evidence that the build makes
+(``symrb verify --output book/_build/verify.json``, reused when it was written for the current
+code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
+which fails the book build.
 """
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from derivations.registry import ClaimResult, EvidenceResult, get_claim, verify_claim
+from derivations.registry import ClaimResult, EvidenceResult, get_claim
 
-__all__ = ["plain", "evidence_table", "claim_markdown", "check", "load_results"]
+__all__ = [
+    "plain",
+    "evidence_table",
+    "claim_markdown",
+    "check",
+    "load_results",
+    "result_of",
+    "source_hash",
+    "verify_json_path",
+]
 
 
 def plain(text: str) -> str:
@@ -68,9 +79,83 @@ def claim_markdown(result: ClaimResult) -> str:
     return "\n\n".join(parts)
 
 
+def source_hash() -> str:
+    """SHA-256 of every Python file of ``derivations`` and ``symrb`` (paths and contents): the
+    code a verify run checked.  Results recorded with another hash are stale."""
+    import hashlib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    h = hashlib.sha256()
+    for package in ("derivations", "symrb"):
+        for path in sorted((root / package).rglob("*.py")):
+            h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
+
+
+def verify_json_path() -> Any:
+    """Where the book build writes ``symrb verify --output``: ``book/_build/verify.json``."""
+    from pathlib import Path
+
+    return Path(__file__).resolve().parent.parent / "book" / "_build" / "verify.json"
+
+
+@functools.cache
+def _run_all() -> dict[str, Any]:
+    from derivations.registry import kernel_report, verify
+
+    results = verify()
+    return {
+        "source_hash": source_hash(),
+        "claims": [r.to_dict() for r in results],
+        "kernels": kernel_report(),
+    }
+
+
+def load_results() -> tuple[dict[str, Any], str]:
+    """Every claim's results, computed once: read from ``book/_build/verify.json`` when that file
+    was written for the current code (same :func:`source_hash`), else by running the evidence
+    here (once per process).  Checked against the registry; asserts that every outcome is as
+    recorded.
+
+    Returns ``(payload, source)`` with ``payload = {"claims": [...], "kernels": [...], ...}``
+    and ``source`` saying where the results come from.
+    """
+    import json
+
+    from derivations.registry import all_claims
+
+    path = verify_json_path()
+    payload = json.loads(path.read_text()) if path.exists() else None
+    if payload is not None and payload.get("source_hash") == source_hash():
+        source = "`book/_build/verify.json`, written by `symrb verify` for this code"
+    else:
+        payload = _run_all()
+        source = "a run of the evidence in this process (no current verify.json was found)"
+    ids = [r["id"] for r in payload["claims"]]
+    registered = [c.id for c in all_claims()]
+    assert ids == registered, f"results cover {ids}, the registry has {registered}"
+    bad = [r["id"] for r in payload["claims"] if not r["ok"]]
+    assert not bad, f"computed outcome differs from the record for {bad}"
+    return payload, source
+
+
+def result_of(cid: str) -> ClaimResult:
+    """The recorded run of claim ``cid`` (see :func:`load_results`) as a :class:`ClaimResult`."""
+    payload, _source = load_results()
+    (r,) = [r for r in payload["claims"] if r["id"] == cid.upper()]
+    fields = ("level", "description", "form", "residual", "tol", "seconds", "name", "error")
+    evidence = [EvidenceResult(**{k: e.get(k) for k in fields}) for e in r["evidence"]]
+    return ClaimResult(
+        id=r["id"], label=r["label"], title=r["title"], expected=r["expected"],
+        outcome=r["outcome"], evidence=evidence,
+    )  # fmt: skip
+
+
 def check(cid: str, show: bool = True) -> ClaimResult:
-    """Run claim ``cid``'s evidence, display it (in a notebook), and assert the recorded outcome."""
-    result = verify_claim(get_claim(cid))
+    """Show claim ``cid`` (statement, printed and corrected forms, note, evidence) from the run of
+    :func:`load_results` and assert its recorded outcome (which fails the book build)."""
+    result = result_of(cid)
     if show:
         from IPython.display import Markdown, display
 
@@ -84,30 +169,3 @@ def check(cid: str, show: bool = True) -> ClaimResult:
         f"{cid}: outcome {result.outcome!r}, recorded {result.expected!r}; " + "; ".join(failing)
     )
     return result
-
-
-def load_results(build_dir: str = "_build") -> tuple[dict[str, Any], str]:
-    """The results of ``symrb verify --output <build_dir>/verify.json`` (written before the book
-    build), or of a run here when that file is missing; checked against the registry.
-
-    Returns ``(payload, source)`` with ``payload = {"claims": [...], "kernels": [...]}``.
-    """
-    import json
-    from pathlib import Path
-
-    from derivations.registry import all_claims, kernel_report, verify
-
-    path = Path(build_dir) / "verify.json"
-    if path.exists():
-        payload = json.loads(path.read_text())
-        source = f"`{path.as_posix()}`, written by `symrb verify` before this build"
-    else:
-        results = verify()
-        payload = {"claims": [r.to_dict() for r in results], "kernels": kernel_report()}
-        source = "a run of the evidence during this build (no verify.json was found)"
-    ids = [r["id"] for r in payload["claims"]]
-    registered = [c.id for c in all_claims()]
-    assert ids == registered, f"{path} covers {ids}, the registry has {registered}: rerun verify"
-    bad = [r["id"] for r in payload["claims"] if not r["ok"]]
-    assert not bad, f"computed outcome differs from the record for {bad}"
-    return payload, source
