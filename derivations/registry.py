@@ -109,7 +109,9 @@ class Claim:
     """A statement of the paper (see the module docstring for how it is declared).
 
     ``statement`` is the statement in our words; for an erratum ``printed`` is the form printed in
-    the paper and ``corrected`` the form that holds; ``note`` says what was found.  ``expected`` is
+    the paper and ``corrected`` the form that holds; ``note`` says what was found.  ``label`` is
+    the paper's LaTeX label; ``where`` says where a reader of the paper finds the statement
+    (section and the numbered item or equation).  ``expected`` is
     the outcome recorded for the claim: :func:`verify` reports a mismatch as a failure.
     """
 
@@ -122,6 +124,7 @@ class Claim:
     corrected: str | None = None
     note: str = ""
     section: str = ""
+    where: str = ""
     evidence: list[Evidence] = field(default_factory=list)
     formulas: dict[str, Any] = field(default_factory=dict)
     module: str = ""
@@ -207,6 +210,7 @@ def claim(
     corrected: str | None = None,
     note: str = "",
     section: str = "",
+    where: str = "",
 ) -> Claim:
     """Declare a claim in the calling module (see the module docstring)."""
     frame = inspect.currentframe()
@@ -221,6 +225,7 @@ def claim(
         corrected=corrected,
         note=" ".join(note.split()),
         section=section,
+        where=where,
         module=module,
     )
 
