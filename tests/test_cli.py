@@ -1,0 +1,395 @@
+"""The command line as a reader meets it: ``symrb --version``, ``--help``, ``claims``, ``show``,
+``verify`` and their exit statuses (0 as recorded, 1 a surprise, 2 usage or environment).
+
+Commands are called through ``main([...])`` with captured output; where the environment matters
+(no SymPy, no derivations, a fresh interpreter) they run in a subprocess.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.metadata
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+import sympy as sp
+
+import derivations.registry as registry
+from derivations import cli as dcli
+from derivations.codegen import W
+from derivations.registry import ClaimResult, EvidenceResult, all_claims, get_claim
+from derivations.symbolic import Bracket, Pair
+from symrb import cli as launcher
+
+ROOT = Path(__file__).resolve().parents[1]
+CLAIMS = all_claims()
+IDS = [c.id for c in CLAIMS]
+
+
+def _run(code: str, *args: str) -> subprocess.CompletedProcess[str]:
+    """``python -c code args`` in the repository, with the repository first on the path."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run(
+        [sys.executable, "-c", code, *args], capture_output=True, text=True, cwd=ROOT, env=env
+    )
+
+
+def _call(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = launcher.main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _too_wide(text: str, width: int = 100) -> list[str]:
+    return [line for line in text.splitlines() if len(line) > width]
+
+
+# ---------------------------------------------------------------------------------------------
+# --version and --help
+
+
+def test_version_is_the_installed_version(capsys: pytest.CaptureFixture[str]) -> None:
+    expected = f"symrb {importlib.metadata.version('symrb')}\n"
+    for flag in ("--version", "-V"):
+        code, out, _ = _call(capsys, flag)
+        assert (code, out) == (0, expected)
+
+
+def test_version_and_help_need_neither_sympy_nor_the_numerics() -> None:
+    code = (
+        "import sys; sys.modules['sympy'] = None\n"
+        "from symrb.cli import main\n"
+        "assert main(['--version']) == 0\n"
+        "assert main(['--help']) == 0\n"
+        "loaded = [m for m in ('numpy', 'scipy', 'symrb.algebra', 'derivations.registry')\n"
+        "          if m in sys.modules]\n"
+        "assert not loaded, loaded\n"
+    )
+    proc = _run(code)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("symrb ") and "exit status:" in proc.stdout
+
+
+def test_python_m_derivations_version() -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "derivations", "--version"],
+        capture_output=True, text=True, cwd=ROOT,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == f"symrb {importlib.metadata.version('symrb')}\n"
+
+
+@pytest.mark.parametrize("command", [[], ["claims"], ["show"], ["verify"], ["derive"]])
+def test_help_is_plain_text_with_the_exit_status(
+    capsys: pytest.CaptureFixture[str], command: list[str]
+) -> None:
+    code, out, _ = _call(capsys, *command, "--help")
+    assert code == 0
+    assert "`" not in out, "reST markup in the help"
+    assert re.search(r"^exit status:\n  0 .*\n(.*\n)*  1 .*\n(.*\n)*  2 ", out, re.M), out
+    assert "pip install -e '.[derive]'" in out
+    assert not _too_wide(out)
+
+
+def test_bad_usage_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = _call(capsys)
+    assert code == 2 and "usage: symrb" in err and "exit status" in err
+    code, _, err = _call(capsys, "frobnicate")
+    assert code == 2 and "invalid choice: 'frobnicate'" in err
+    code, _, err = _call(capsys, "verify", "--no-such-option")
+    assert code == 2 and "unrecognized arguments: --no-such-option" in err
+
+
+@pytest.mark.parametrize("argv", [["claims"], ["show", "S1"], ["verify", "S1"], ["derive"]])
+def test_without_sympy_every_command_exits_2_and_says_what_to_install(argv: list[str]) -> None:
+    for module in ("symrb.cli", "derivations.cli"):
+        code = (
+            f"import sys; sys.modules['sympy'] = None; from {module} import main; "
+            "sys.exit(main(sys.argv[1:]))"
+        )
+        proc = _run(code, *argv)
+        assert proc.returncode == 2, proc.stdout + proc.stderr
+        assert "pip install -e '.[derive]'" in proc.stderr
+
+
+def test_without_the_derivations_help_works_and_commands_exit_2() -> None:
+    """As from a wheel: ``derivations`` cannot be imported."""
+    code = (
+        "import sys; sys.modules['derivations'] = None; sys.modules['derivations.cli'] = None\n"
+        "from symrb.cli import main; sys.exit(main(sys.argv[1:]))"
+    )
+    proc = _run(code, "--help")
+    assert proc.returncode == 0, proc.stderr
+    assert "claims" in proc.stdout and "pip install -e '.[derive]'" in proc.stdout
+    for argv in (["claims"], []):
+        proc = _run(code, *argv)
+        assert proc.returncode == 2, proc.stdout + proc.stderr
+        assert "pip install -e '.[derive]'" in proc.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# claims
+
+
+def test_claims_lists_every_claim_on_one_line_within_100_columns(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def no_evidence(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("symrb claims ran evidence")
+
+    monkeypatch.setattr(registry, "_run_evidence", no_evidence)
+    code, out, _ = _call(capsys, "claims")
+    assert code == 0
+    rows = [line for line in out.splitlines() if re.match(r"[DS]\d+ ", line)]
+    assert [r.split()[0] for r in rows] == IDS
+    for row, c in zip(rows, CLAIMS, strict=True):
+        assert row[5:].startswith(c.expected + " "), row
+    assert not _too_wide(out)
+
+
+def test_claims_json(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = _call(capsys, "claims", "--json")
+    assert code == 0
+    rows = json.loads(out)
+    assert [r["id"] for r in rows] == IDS
+    assert [r["expected"] for r in rows] == [c.expected for c in CLAIMS]
+    assert [r["erratum"] for r in rows] == [bool(c.printed) for c in CLAIMS]
+    assert [r["checks"] for r in rows] == [len(c.evidence) for c in CLAIMS]
+
+
+# ---------------------------------------------------------------------------------------------
+# plain text of formulas and LaTeX
+
+#: What must not reach a reader: placeholders, LaTeX, control characters, Python powers, SymPy
+#: class names printed as calls.
+_LEFTOVERS = re.compile(
+    r"\[\[[A-Za-z_]\w*\]\]|\$|\\|[\x00-\x02\x1f]|\*\*"
+    r"|\b(Bracket|Pair|GlPair|HadamardProduct|Transpose|Eq|Derivative|Sum|Integral|Subs|Trace"
+    r"|Indexed|MatFn|OpNorm|Ddt|Lambda\(|_[A-Z][A-Za-z]+)\("
+)
+
+
+@pytest.mark.parametrize("claim", CLAIMS, ids=IDS)
+def test_every_claim_text_renders_as_plain_text(claim: Any) -> None:
+    for which in ("title", "statement", "printed", "corrected", "note"):
+        if not getattr(claim, which):
+            continue
+        text = dcli.claim_text(claim, which)
+        bad = _LEFTOVERS.search(re.sub(r"`[^`]*`", "", text))  # quoted source may hold LaTeX
+        assert bad is None, f"{claim.id} {which}: {bad.group()!r} in {text}"
+    for key, expr in claim.formulas.items():
+        text = dcli.formula_text(expr)
+        assert text and _LEFTOVERS.search(text) is None, f"{claim.id} [[{key}]]: {text}"
+
+
+def test_formula_text_writes_the_papers_notation() -> None:
+    n = sp.Symbol("n")
+    Q, P, M, X = (sp.MatrixSymbol(s, n, n) for s in "QPMX")
+    m_def = sp.Eq(M, Q.T * P - P.T * Q, evaluate=False)
+    assert dcli.formula_text(m_def) == "M = Q^T P - P^T Q"
+    assert dcli.formula_text(Bracket(M, X)) == "[M, X]"
+    assert dcli.formula_text(Pair(M, X)) == "<M, X>"
+    assert dcli.formula_text(sp.HadamardProduct(W, M)) == "J^-1(M)"
+    assert dcli.formula_text(sp.HadamardProduct(M, X)) == "M o X"
+    assert dcli.formula_text(sp.Transpose(Q * X)) == "(Q X)^T"
+    assert dcli.formula_text((Q * X).T) == "X^T Q^T"
+    assert dcli.formula_text(sp.Rational(1, 2) * Q * M) == "(1/2) Q M"
+    k, N = sp.symbols("k N", integer=True)
+    x = sp.IndexedBase("x")
+    assert dcli.formula_text(sp.Sum(x[k + 1], (k, 0, N - 1))) == "sum_{k=0..N-1} x_{k+1}"
+    y = sp.Symbol("y")
+    f = sp.Function("f")(y)
+    assert dcli.formula_text(sp.Derivative(f, y)) == "d/dy f(y)"
+    assert dcli.formula_text((Q, P)) == "Q,  P"
+
+
+@pytest.mark.parametrize(
+    ("latex", "text"),
+    [
+        (r"\left\|M\right\|_{\rm op} < 2", "||M||_op < 2"),
+        (r"Q, P\in SO(n)", "Q, P in SO(n)"),
+        (r"\mathfrak{so}(n)", "so(n)"),
+        (r"\hat H", "Hhat"),
+        (r"\dot{x}^a", "xdot^a"),
+        (r"\frac{d}{dt}\left(Q M Q^{T}\right)", "d/dt(Q M Q^T)"),
+        (r"\left(I + X^2\right)^{1/2}", "(I + X^2)^(1/2)"),
+        (r"p_{k+1}", "p_{k+1}"),
+        (r"\partial\phi/\partial Q", "dphi/dQ"),
+        (r"U_k\Lambda", "U_k Lambda"),
+        (r"\sum_a\phi(Q^a_T)", "sum_a phi(Q^a_T)"),
+        (r"Q^TB", "Q^T B"),
+        (r"\left\langle x, y \right\rangle", "<x, y>"),
+        (r"a\quad b", "a  b"),
+        (r"\sinh^{-1}M", "sinh^-1 M"),
+    ],
+)
+def test_latex_to_text(latex: str, text: str) -> None:
+    assert dcli.latex_to_text(latex) == text
+
+
+# ---------------------------------------------------------------------------------------------
+# show
+
+
+def _assert_readable(out: str) -> None:
+    assert not _too_wide(out)
+    for line in out.splitlines():
+        assert _LEFTOVERS.search(line) is None, line
+
+
+def test_show_an_erratum(capsys: pytest.CaptureFixture[str]) -> None:
+    claim = get_claim("S10")
+    code, out, _ = _call(capsys, "show", "s10", "--run")
+    assert code == 0
+    _assert_readable(out)
+    assert out.startswith("S10: " + dcli.claim_text(claim, "title"))
+    heads = [line for line in out.splitlines() if line and not line.startswith(" ")]
+    for head in ("Statement", "Printed in the paper", "Corrected", "Note", "Evidence"):
+        assert head in heads, head
+    assert "Run now in" in out
+    flat = " ".join(out.split())
+    assert dcli.claim_text(claim, "corrected") in flat
+    assert f"Computed outcome: {claim.expected}, as recorded." in flat
+    checks = re.findall(r"^ +\d+\. \[(\w+)\] (.+?), .*?: residual (\S+) (<=|>) tolerance (\S+)",
+                        out, re.M)  # fmt: skip
+    assert [c[0] for c in checks] == [e.form for e in claim.evidence]
+    for (form, _level, _res, rel, _tol), e in zip(checks, claim.evidence, strict=True):
+        assert rel == (">" if form == "printed" else "<="), e.name
+    assert "symrb verify S10" in out
+
+
+def test_show_reads_the_recorded_run_when_it_is_current(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from derivations import report
+
+    result = registry.verify_claim(get_claim("S1"))
+    record = result.to_dict()
+    float_check = next(i for i, e in enumerate(result.evidence) if e.level == "float64")
+    record["evidence"][float_check]["residual"] = 1.234e-15
+    path = tmp_path / "verify.json"
+    path.write_text(json.dumps({"source_hash": report.source_hash(), "claims": [record]}))
+    monkeypatch.setattr(report, "verify_json_path", lambda: path)
+
+    def no_evidence(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("show ran evidence although a current record exists")
+
+    monkeypatch.setattr(registry, "_run_evidence", no_evidence)
+    code, out, _ = _call(capsys, "show", "S1")
+    assert code == 0
+    assert "Recorded in book/_build/verify.json for this code." in out
+    tol = result.evidence[float_check].tol
+    assert f"residual 1.2e-15 <= tolerance {tol:.0e}: passes" in out
+
+    path.write_text(json.dumps({"source_hash": "another", "claims": [record]}))
+    monkeypatch.undo()
+    monkeypatch.setattr(report, "verify_json_path", lambda: path)
+    code, out, _ = _call(capsys, "show", "S1")
+    assert code == 0 and "written for other code" in out and "1.2e-15" not in out
+
+
+@pytest.mark.parametrize("argv", [["show", "X99"], ["verify", "S1", "X99"]])
+def test_unknown_claim_exits_2(capsys: pytest.CaptureFixture[str], argv: list[str]) -> None:
+    code, out, err = _call(capsys, *argv)
+    assert code == 2
+    assert "unknown claim id 'X99'" in err and "S15" in err
+    assert "X99" not in out
+
+
+# ---------------------------------------------------------------------------------------------
+# verify
+
+
+def _table_row(out: str, cid: str) -> str:
+    (row,) = [line for line in out.splitlines() if re.match(rf"{cid} +[a-z]", line)]
+    return row
+
+
+def test_verify_progress_and_table(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = _call(capsys, "verify", "S1", "S11")
+    assert code == 0
+    progress = err.splitlines()
+    assert re.match(r"\[1/2\] S1 +holds +\(3 checks, .+\)$", progress[0]), progress
+    assert re.match(r"\[2/2\] S11 +holds +\(1 check, .+\)$", progress[1]), progress
+    assert not _too_wide(out) and not _too_wide(err)
+    s1 = get_claim("S1")
+    worst = max((e for e in s1.evidence if e.form != "printed"), key=lambda e: e.tol)
+    row = _table_row(out, "S1")
+    assert re.match(rf"S1 +holds +yes +{len(s1.evidence)} +\S+ / {worst.tol:.0e} +float64", row)
+    assert re.match(r"S11 +holds +yes +1 +0 \(exact\) +symbolic", _table_row(out, "S11"))
+    last = out.rstrip().splitlines()[-1]
+    assert re.fullmatch(r"2 claims checked in \S+ m?s: every outcome as recorded", last), last
+
+
+def test_verify_quiet_json_and_output(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    target = tmp_path / "sub" / "verify.json"
+    code, out, err = _call(capsys, "verify", "S11", "--quiet", "--json", "--output", str(target))
+    assert code == 0 and err == ""
+    payload = json.loads(out)
+    assert [r["id"] for r in payload["claims"]] == ["S11"]
+    assert payload["claims"][0]["outcome"] == get_claim("S11").expected
+    assert json.loads(target.read_text())["claims"] == payload["claims"]
+
+
+def _break(monkeypatch: pytest.MonkeyPatch, cid: str, value: float) -> registry.Evidence:
+    """Make the first float64 check of claim ``cid`` return ``value``."""
+    claim = get_claim(cid)
+    i = next(i for i, e in enumerate(claim.evidence) if e.level == "float64")
+    broken = list(claim.evidence)
+    broken[i] = dataclasses.replace(broken[i], func=lambda: value)
+    monkeypatch.setattr(claim, "evidence", broken)
+    return broken[i]
+
+
+def test_verify_surprise_exits_1_and_names_it(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    ev = _break(monkeypatch, "S1", 0.5)
+    code, out, err = _call(capsys, "verify", "S1", "S11")
+    assert code == 1
+    assert "SURPRISE: recorded holds" in err
+    assert re.match(r"S1 +fails +NO ", _table_row(out, "S1"))
+    assert re.match(r"S11 +holds +yes ", _table_row(out, "S11"))
+    assert "Evidence not as recorded:" in out
+    assert f"residual 5.0e-01 > tolerance {ev.tol:.0e}: fails, NOT as expected" in out
+    assert "differs from the record for S1" in out
+    assert not _too_wide(out)
+
+
+def test_verify_fail_fast_stops_at_the_first_surprise(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _break(monkeypatch, "S1", 0.5)
+    code, out, err = _call(capsys, "verify", "S1", "S11", "--fail-fast", "--quiet")
+    assert code == 1 and err == ""
+    assert "S11" not in out
+
+
+def test_verify_table_fits_100_columns_with_every_kind_of_line() -> None:
+    long = "x" * 30
+    bad = EvidenceResult(
+        level="symbolic, general n", description="a long description " * 12, form="printed",
+        residual=0.0, tol=0.0, seconds=12.5, name="a_very_long_evidence_function_name_" + long,
+    )  # fmt: skip
+    crashed = dataclasses.replace(bad, form="corrected", error="ValueError: " + "y" * 150)
+    results = [
+        ClaimResult(id="D12", label=long, title=long, expected="holds after correction",
+                    outcome="fails", evidence=[bad, crashed]),
+        ClaimResult(id="S15", label=long, title=long, expected="holds", outcome="holds",
+                    evidence=[dataclasses.replace(bad, form="claim", residual=3e-11, tol=1e-9)]),
+    ]  # fmt: skip
+    unchecked = [{"kernel": "rigid_body." + long, "claims": ["S1", "S2"], "checked_by": []}]
+    lines = dcli.verify_table(results, unchecked)
+    assert not [line for line in lines if len(line) > 100]
+    text = "\n".join(lines)
+    assert re.search(r"^S15 +holds +yes +1 +3\.0e-11 / 1e-09 +symbolic, general n +12\.5 s$",
+                     text, re.M), text  # fmt: skip
+    assert "D12 [printed] symbolic, general n: residual 0 <= tolerance 0: passes" in text
+    assert "error: ValueError" in text
+    assert "kernel rigid_body." + long + " names claims S1, S2 but no claim evaluated" in text
