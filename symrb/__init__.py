@@ -29,7 +29,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "discrete": (
         "jd_residual", "symmetric_step", "symmetric_flow", "mv_algorithm1", "mv_algorithm2",
-        "discrete_rigid_body_flow",
+        "discrete_rigid_body_flow", "DiscreteFlowSolution",
     ),
     "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
     "learning": (

@@ -11,9 +11,26 @@ Array = NDArray[np.float64]
 
 
 def as_float_array(x: ArrayLike, name: str) -> Array:
-    """``x`` as a float64 array (a copy only when needed); rejects non-finite entries."""
+    """``x`` as a float64 array (a copy only when needed).
+
+    Integer and boolean input is converted; complex input is rejected rather than cast (NumPy
+    would drop the imaginary part with only a warning), and so are strings and non-finite entries.
+    """
     try:
-        a = np.asarray(x, dtype=float)
+        raw = np.asarray(x)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be a real array, got {type(x).__name__}: {exc}") from None
+    kind = raw.dtype.kind
+    if kind == "c":
+        imag = float(np.max(np.abs(raw.imag), initial=0.0))
+        raise InputError(
+            f"{name} must be real, got a complex array (dtype {raw.dtype}, max |imag| = "
+            f"{imag:.3g}); pass {name}.real if the imaginary part is meant to be dropped"
+        )
+    if kind not in "biufO":
+        raise InputError(f"{name} must be a real array of numbers, got dtype {raw.dtype}")
+    try:
+        a = np.asarray(raw, dtype=float)
     except (TypeError, ValueError) as exc:
         raise InputError(f"{name} must be a real array, got {type(x).__name__}: {exc}") from None
     if not np.all(np.isfinite(a)):
@@ -58,18 +75,47 @@ def orthogonal(x: ArrayLike, name: str, n: int | None = None, atol: float = 1e-8
     return a
 
 
+def _brief(a: Array) -> str:
+    """A one-line summary of an array's entries for error messages."""
+    return " ".join(np.array2string(a, precision=4, threshold=12, edgeitems=2).split())
+
+
+def _looks_like_matrix(a: Array) -> bool:
+    """True when a lam of shape (..., n, n) has zero off-diagonal entries: the matrix Lambda."""
+    if a.ndim < 2 or a.shape[-1] != a.shape[-2]:
+        return False
+    off = ~np.eye(a.shape[-1], dtype=bool)
+    return bool(np.all(a[..., off] == 0))
+
+
 def inertia(lam: ArrayLike, name: str = "lam", positive: bool = False) -> Array:
     """The diagonal of Lambda, shape (..., n), with lam_i + lam_j > 0 for i != j.
 
     With ``positive=True`` every lam_i > 0 is required (Lambda positive definite, as the discrete
-    problems of Section 2 assume).
+    problems of Section 2 assume).  Leading axes of ``lam`` are batch axes, so a matrix cannot be
+    told from a batch of diagonals by its shape alone: a square ``lam`` with zero off-diagonal
+    entries (the matrix Lambda itself) is rejected, and any other square ``lam`` that fails the
+    checks gets a hint in the message.
     """
     a = as_float_array(lam, name)
+    what = f"{name} is the 1-D diagonal of Lambda, shape (n,) or (..., n) for a batch"
+    if _looks_like_matrix(a) and a.shape[-1] >= 2:
+        raise InputError(
+            f"{what}; got shape {a.shape} with zero off-diagonal entries, which looks like the "
+            f"matrix Lambda itself: pass its diagonal, np.diag({name})"
+        )
+    hint = ""
+    if a.ndim >= 2 and a.shape[-1] == a.shape[-2]:
+        hint = (
+            f" ({what}; got the square shape {a.shape}, read as {a.shape[-2]} diagonals of "
+            f"length {a.shape[-1]}: if it is the matrix Lambda, pass its diagonal)"
+        )
     if a.ndim < 1 or a.shape[-1] < 2:
-        raise InputError(f"{name} must have shape (..., n) with n >= 2, got {a.shape}")
+        raise InputError(f"{what}, with n >= 2; got shape {a.shape}")
     if positive and np.any(a <= 0):
         raise InputError(
-            f"{name} must be positive (Lambda positive definite); min lam_i = {float(np.min(a)):.6g}"
+            f"{name} must be positive (Lambda positive definite); min lam_i = "
+            f"{float(np.min(a)):.6g}{hint}"
         )
     s = a[..., :, None] + a[..., None, :]
     nn = a.shape[-1]
@@ -78,6 +124,26 @@ def inertia(lam: ArrayLike, name: str = "lam", positive: bool = False) -> Array:
     if worst <= 0:
         raise InputError(
             f"{name} must satisfy lam_i + lam_j > 0 for i != j (J positive definite); "
-            f"min lam_i + lam_j = {worst:.6g}, lam = {np.array2string(a, precision=4)}"
+            f"min lam_i + lam_j = {worst:.6g}, lam = {_brief(a)}{hint}"
         )
     return a
+
+
+def real_scalar(x: object, name: str) -> float:
+    """``x`` as a finite Python float; rejects complex numbers, strings, booleans and arrays."""
+    if isinstance(x, bool | np.bool_) or not isinstance(x, int | float | np.integer | np.floating):
+        raise InputError(f"{name} must be a real number, got {type(x).__name__} {x!r}")
+    value = float(x)
+    if not np.isfinite(value):
+        raise InputError(f"{name} must be finite, got {x!r}")
+    return value
+
+
+def count(x: object, name: str, minimum: int = 0) -> int:
+    """``x`` as an int >= ``minimum``; an integral float (``1e4``) is accepted, a bool is not."""
+    ok = isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_)
+    if isinstance(x, float | np.floating) and float(x).is_integer():
+        ok = True
+    if not ok or int(x) < minimum:  # type: ignore[call-overload]
+        raise InputError(f"{name} must be an integer >= {minimum}, got {x!r}")
+    return int(x)  # type: ignore[call-overload]

@@ -40,7 +40,28 @@ __all__ = [
 
 
 def as_generator(seed: int | np.random.Generator | None) -> np.random.Generator:
-    """A :class:`numpy.random.Generator` from a seed or an existing generator."""
+    """A :class:`numpy.random.Generator` from a seed or an existing generator.
+
+    Parameters
+    ----------
+    seed : int, numpy.random.Generator or None
+        A seed for :func:`numpy.random.default_rng`, or a generator (returned as is).
+
+    Returns
+    -------
+    numpy.random.Generator
+        The generator.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> rng = np.random.default_rng(1)
+    >>> symrb.as_generator(rng) is rng
+    True
+    >>> print(symrb.as_generator(1).integers(10) == np.random.default_rng(1).integers(10))
+    True
+    """
     if isinstance(seed, np.random.Generator):
         return seed
     return np.random.default_rng(seed)
@@ -49,7 +70,26 @@ def as_generator(seed: int | np.random.Generator | None) -> np.random.Generator:
 def hat(v: ArrayLike) -> Array:
     r"""The hat map :math:`\mathbb R^3 \to \mathfrak{so}(3)`, :math:`\hat v w = v \times w`.
 
-    ``v`` has shape (..., 3); the result has shape (..., 3, 3).
+    Parameters
+    ----------
+    v : array_like, shape (..., 3)
+        Vectors.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The skew-symmetric matrices :math:`\hat v`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> print(symrb.hat([1, 2, 3]))
+    [[ 0. -3.  2.]
+     [ 3.  0. -1.]
+     [-2.  1.  0.]]
+    >>> print(symrb.hat([1, 2, 3]) @ [4, 5, 6], np.cross([1, 2, 3], [4, 5, 6]))
+    [-3.  6. -3.] [-3  6 -3]
     """
     a = _v.as_float_array(v, "v")
     if a.ndim < 1 or a.shape[-1] != 3:
@@ -63,15 +103,50 @@ def hat(v: ArrayLike) -> Array:
 
 
 def vee(m: ArrayLike) -> Array:
-    """The inverse of :func:`hat`: a skew (..., 3, 3) array to its (..., 3) vector."""
+    r"""The inverse of :func:`hat`.
+
+    Parameters
+    ----------
+    m : array_like, shape (..., 3, 3)
+        Skew-symmetric matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The vectors v with :math:`\hat v = m`.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.vee(symrb.hat([1, 2, 3])))
+    [1. 2. 3.]
+    """
     a = _v.skew(m, "m", 3)
     return np.stack([a[..., 2, 1], a[..., 0, 2], a[..., 1, 0]], axis=-1)
 
 
 def pairing(xi: ArrayLike, eta: ArrayLike) -> Array:
-    r""":math:`\langle\xi,\eta\rangle = -\tfrac12\operatorname{trace}(\xi\eta)`, batched.
+    r"""The pairing :math:`\langle\xi,\eta\rangle = -\tfrac12\operatorname{trace}(\xi\eta)` on
+    :math:`\mathfrak{so}(n)`.
 
     For n = 3 it equals the dot product of the vectors :math:`\check\xi\cdot\check\eta` (claim S1).
+
+    Parameters
+    ----------
+    xi, eta : array_like, shape (..., n, n)
+        Matrices (skew-symmetric for the pairing of :math:`\mathfrak{so}(n)`); batch axes
+        broadcast.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The pairings.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.pairing(symrb.hat([1, 2, 3]), symrb.hat([4, 5, 6])))  # = 1*4 + 2*5 + 3*6
+    32.0
     """
     a = _v.square(xi, "xi")
     b = _v.square(eta, "eta", a.shape[-1])
@@ -79,14 +154,50 @@ def pairing(xi: ArrayLike, eta: ArrayLike) -> Array:
 
 
 def commutator(a: ArrayLike, b: ArrayLike) -> Array:
-    """The matrix commutator [a, b] = a b - b a, batched."""
+    """The matrix commutator :math:`[a, b] = ab - ba`.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., n, n)
+        Square matrices; batch axes broadcast.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        The commutators.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> e1, e2 = symrb.hat([1, 0, 0]), symrb.hat([0, 1, 0])
+    >>> print(symrb.vee(symrb.commutator(e1, e2)))  # [hat u, hat w] = hat(u x w)
+    [0. 0. 1.]
+    """
     x = _v.square(a, "a")
     y = _v.square(b, "b", x.shape[-1])
     return x @ y - y @ x
 
 
 def skew_part(a: ArrayLike) -> Array:
-    """(a - a^T)/2, batched."""
+    """The skew-symmetric part :math:`(a - a^T)/2`.
+
+    Parameters
+    ----------
+    a : array_like, shape (..., n, n)
+        Square matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        Their skew-symmetric parts.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.skew_part([[1, 2], [0, 1]]))
+    [[ 0.  1.]
+     [-1.  0.]]
+    """
     x = _v.square(a, "a")
     return 0.5 * (x - np.swapaxes(x, -1, -2))
 
@@ -96,12 +207,24 @@ def J(Omega: ArrayLike, lam: ArrayLike) -> Array:
 
     Parameters
     ----------
-    Omega : array (..., n, n), skew-symmetric (the body angular velocity)
-    lam : array (..., n), the diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0`
+    Omega : array_like, shape (..., n, n)
+        Skew-symmetric matrices (body angular velocities).
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda` (a 1-D array, not the matrix), with
+        :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
 
     Returns
     -------
-    M : array (..., n, n), :math:`M_{ij} = (\lambda_i+\lambda_j)\Omega_{ij}`.
+    M : ndarray, shape (..., n, n)
+        :math:`M_{ij} = (\lambda_i+\lambda_j)\Omega_{ij}`.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.J(symrb.hat([1, 1, 1]), [1, 2, 3]))
+    [[ 0. -3.  4.]
+     [ 3.  0. -5.]
+     [-4.  5.  0.]]
     """
     L = _v.inertia(lam)
     W = _v.skew(Omega, "Omega", L.shape[-1])
@@ -116,7 +239,25 @@ def _Jinv_weights(lam: Array) -> Array:
 def J_inv(M: ArrayLike, lam: ArrayLike) -> Array:
     r"""The inverse inertia operator, :math:`J^{-1}(M)_{ij} = M_{ij}/(\lambda_i+\lambda_j)`.
 
-    Shapes as in :func:`J`; ``M`` must be skew-symmetric.
+    Parameters
+    ----------
+    M : array_like, shape (..., n, n)
+        Skew-symmetric matrices (body momenta).
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    Omega : ndarray, shape (..., n, n)
+        The body angular velocities.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> lam = [1, 2, 3]
+    >>> M = symrb.J(symrb.hat([1, 1, 1]), lam)
+    >>> print(symrb.vee(symrb.J_inv(M, lam)))
+    [1. 1. 1.]
     """
     L = _v.inertia(lam)
     A = _v.skew(M, "M", L.shape[-1])
@@ -126,8 +267,30 @@ def J_inv(M: ArrayLike, lam: ArrayLike) -> Array:
 def J_D(U: ArrayLike, lam: ArrayLike) -> Array:
     r"""The discrete inertia operator :math:`J_D(U) = U\Lambda - \Lambda U^T` (paper, eq. Ukdef1).
 
-    ``U`` has shape (..., n, n) (any square matrix; for U in SO(n) the result is in so(n)).  Its
-    derivative at the identity is :math:`J` (claim D8).
+    Its derivative at the identity is :math:`J` (claim D8).
+
+    Parameters
+    ----------
+    U : array_like, shape (..., n, n)
+        Square matrices (for U in SO(n) the result is in so(n)).
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        :math:`U\Lambda - \Lambda U^T`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([1.0, 2.0, 3.0])
+    >>> Om = symrb.hat([1, 1, 1])
+    >>> e = 1e-6  # the derivative at U = I along Omega is J(Omega)
+    >>> dJD = (symrb.J_D(np.eye(3) + e * Om, lam) - symrb.J_D(np.eye(3) - e * Om, lam)) / (2 * e)
+    >>> bool(np.allclose(dJD, symrb.J(Om, lam)))
+    True
     """
     L = _v.inertia(lam)
     A = _v.square(U, "U", L.shape[-1])
@@ -135,7 +298,25 @@ def J_D(U: ArrayLike, lam: ArrayLike) -> Array:
 
 
 def inertia_from_lam(lam: ArrayLike) -> Array:
-    """For n = 3: the principal moments I = (lam2+lam3, lam3+lam1, lam1+lam2) (claim S2)."""
+    r"""For n = 3: the principal moments of inertia
+    :math:`I = (\lambda_2+\lambda_3, \lambda_3+\lambda_1, \lambda_1+\lambda_2)` (claim S2).
+
+    Parameters
+    ----------
+    lam : array_like, shape (..., 3)
+        The diagonal of :math:`\Lambda`.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The principal moments.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.inertia_from_lam([1, 2, 3]))
+    [5. 4. 3.]
+    """
     L = _v.as_float_array(lam, "lam")
     if L.shape[-1:] != (3,):
         raise InputError(f"lam must have shape (..., 3), got {L.shape}")
@@ -143,7 +324,25 @@ def inertia_from_lam(lam: ArrayLike) -> Array:
 
 
 def lam_from_inertia(inertia: ArrayLike) -> Array:
-    """For n = 3: the inverse of :func:`inertia_from_lam`, lam_i = (I_1+I_2+I_3)/2 - I_i."""
+    r"""For n = 3: the inverse of :func:`inertia_from_lam`,
+    :math:`\lambda_i = (I_1+I_2+I_3)/2 - I_i`.
+
+    Parameters
+    ----------
+    inertia : array_like, shape (..., 3)
+        Principal moments of inertia.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The diagonal of :math:`\Lambda`.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.lam_from_inertia([5, 4, 3]))
+    [1. 2. 3.]
+    """
     Ii = _v.as_float_array(inertia, "inertia")
     if Ii.shape[-1:] != (3,):
         raise InputError(f"inertia must have shape (..., 3), got {Ii.shape}")
@@ -156,7 +355,32 @@ def random_so(
     scale: float = 1.0,
     seed: int | np.random.Generator | None = None,
 ) -> Array:
-    """Random skew-symmetric matrices of shape ``size + (n, n)`` with standard normal entries times ``scale``."""
+    """Random skew-symmetric matrices :math:`a - a^T`, :math:`a` with normal entries.
+
+    Parameters
+    ----------
+    n : int
+        The matrix size, >= 2.
+    size : tuple of int, optional
+        The batch shape.
+    scale : float, optional
+        The standard deviation of the entries of :math:`a`.
+    seed : int, numpy.random.Generator or None, optional
+        The random source (see :func:`as_generator`).
+
+    Returns
+    -------
+    ndarray, shape size + (n, n)
+        Skew-symmetric matrices.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> A = symrb.random_so(4, size=(2,), seed=0)
+    >>> A.shape, bool(np.array_equal(A, -np.swapaxes(A, -1, -2)))
+    ((2, 4, 4), True)
+    """
     if n < 2:
         raise InputError(f"n must be >= 2, got {n}")
     rng = as_generator(seed)
@@ -167,7 +391,30 @@ def random_so(
 def random_SO(
     n: int, size: tuple[int, ...] = (), seed: int | np.random.Generator | None = None
 ) -> Array:
-    """Haar-random rotations of shape ``size + (n, n)`` (scipy.stats.special_ortho_group)."""
+    """Haar-random rotations (``scipy.stats.special_ortho_group``).
+
+    Parameters
+    ----------
+    n : int
+        The matrix size, >= 2.
+    size : tuple of int, optional
+        The batch shape.
+    seed : int, numpy.random.Generator or None, optional
+        The random source (see :func:`as_generator`).
+
+    Returns
+    -------
+    ndarray, shape size + (n, n)
+        Matrices in SO(n).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> Q = symrb.random_SO(3, seed=0)
+    >>> bool(np.allclose(Q.T @ Q, np.eye(3))), round(float(np.linalg.det(Q)), 12)
+    (True, 1.0)
+    """
     from scipy.stats import special_ortho_group
 
     if n < 2:
@@ -181,7 +428,28 @@ def random_SO(
 def random_lam(
     n: int, low: float = 0.5, high: float = 2.0, seed: int | np.random.Generator | None = None
 ) -> Array:
-    """A random positive diagonal of Lambda with distinct entries in [low, high)."""
+    r"""A random positive diagonal of :math:`\Lambda`, sorted, with entries in [low, high).
+
+    Parameters
+    ----------
+    n : int
+        The number of entries.
+    low, high : float, optional
+        The range, ``0 < low < high``.
+    seed : int, numpy.random.Generator or None, optional
+        The random source (see :func:`as_generator`).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The diagonal.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.random_lam(4, seed=0).round(3))
+    [0.525 0.561 0.905 1.455]
+    """
     if not 0 < low < high:
         raise InputError(f"need 0 < low < high, got low={low}, high={high}")
     rng = as_generator(seed)

@@ -33,6 +33,7 @@ from scipy.linalg import schur
 from . import _validate as v
 from ._generated import rigid_body as _rb
 from ._generated import symmetric_rigid_body as _gen
+from ._results import Trajectory
 from ._validate import Array
 from .algebra import _Jinv_weights
 from .errors import InputError, OutOfDomainError
@@ -66,7 +67,24 @@ def symmetric_momentum(Q: ArrayLike, P: ArrayLike) -> Array:
     r"""The body momentum :math:`M = Q^TP - P^TQ` of the symmetric representation (claims S6, S9,
     S11).
 
-    ``Q``, ``P`` have shape (..., n, n) (any square matrices); the result is skew, same shape.
+    Parameters
+    ----------
+    Q, P : array_like, shape (..., n, n)
+        Square matrices (the attitude and the costate); batch axes broadcast.
+
+    Returns
+    -------
+    M : ndarray, shape (..., n, n)
+        Skew-symmetric.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> print(symrb.symmetric_momentum(np.eye(3), symrb.hat([0.1, 0.2, 0.3])))
+    [[ 0.  -0.6  0.4]
+     [ 0.6  0.  -0.2]
+     [-0.4  0.2  0. ]]
     """
     a, b = _pair(Q, P, "Q", "P")
     return _gen.symmetric_momentum(a, b)
@@ -81,8 +99,26 @@ def symmetric_rigid_body_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tupl
 
     Parameters
     ----------
-    Q, P : arrays (..., n, n)
-    lam : array (..., n), diagonal of :math:`\Lambda` with :math:`\lambda_i+\lambda_j>0`
+    Q, P : array_like, shape (..., n, n)
+        The state (any square matrices); batch axes broadcast.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    Qdot, Pdot : ndarray, shape (..., n, n)
+        The vector field.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> Q, P = np.eye(3), symrb.hat([0.1, 0.2, 0.3])
+    >>> Qdot, Pdot = symrb.symmetric_rigid_body_rhs(Q, P, lam)
+    >>> U = symrb.J_inv(symrb.symmetric_momentum(Q, P), lam)
+    >>> bool(np.allclose(Qdot, Q @ U) and np.allclose(Pdot, P @ U))
+    True
     """
     L = v.inertia(lam)
     a, b = _pair(Q, P, "Q", "P", L.shape[-1])
@@ -98,6 +134,29 @@ def mclachlan_scovel_rhs(Q: ArrayLike, B: ArrayLike, lam: ArrayLike) -> tuple[Ar
     symmetric rigid body with :math:`Q^TP` skew, the extremal flow is this field for
     :math:`B = 2P` (the paper's (rbnlms) with :math:`B = P` runs it at half speed); for any
     :math:`P`, :math:`B = P - QP^TQ` maps the symmetric flow with :math:`Q` orthogonal to it.
+
+    Parameters
+    ----------
+    Q, B : array_like, shape (..., n, n)
+        The state, with :math:`Q^TB` skew-symmetric; batch axes broadcast.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    Qdot, Bdot : ndarray, shape (..., n, n)
+        The vector field.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> Q, P = np.eye(3), symrb.hat([0.1, 0.2, 0.3])  # Q^T P is skew
+    >>> a = symrb.symmetric_rigid_body_rhs(Q, P, lam)
+    >>> b = symrb.mclachlan_scovel_rhs(Q, 2 * P, lam)  # the same flow for B = 2P (claim S7)
+    >>> bool(np.allclose(a[0], b[0]) and np.allclose(2 * a[1], b[1]))
+    True
     """
     L = v.inertia(lam)
     a, b = _pair(Q, B, "Q", "B", L.shape[-1])
@@ -118,8 +177,27 @@ def _samples(Q: ArrayLike, P: ArrayLike, lam: ArrayLike):
 def multi_sample_control(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     r"""The shared optimal control :math:`U = \sum_a J^{-1}((Q^a)^TP^a - (P^a)^TQ^a)` (claim S8).
 
-    ``Q``, ``P`` have shape (..., m, n, n) (axis -3 runs over the m samples); ``lam`` (..., n).
-    Returns U of shape (..., n, n).
+    Parameters
+    ----------
+    Q, P : array_like, shape (..., m, n, n)
+        The states and costates of the m samples (axis -3 runs over the samples).
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    U : ndarray, shape (..., n, n)
+        The shared control (skew-symmetric).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> Q = np.stack([np.eye(3), np.eye(3)])
+    >>> P = np.stack([symrb.hat([0.1, 0, 0]), symrb.hat([0, 0.1, 0])])
+    >>> print(symrb.vee(symrb.multi_sample_control(Q, P, lam)).round(4))
+    [0.0741 0.087  0.    ]
     """
     a, b, L = _samples(Q, P, lam)
     return _shared_control(a, b, L)
@@ -132,7 +210,30 @@ def _shared_control(Q: Array, P: Array, lam: Array) -> Array:
 
 def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:
     r"""The learning flow :math:`\dot Q^a = Q^aU`, :math:`\dot P^a = P^aU` with the shared
-    control of :func:`multi_sample_control` (claim S8).  Shapes (..., m, n, n)."""
+    control of :func:`multi_sample_control` (claim S8).
+
+    Parameters
+    ----------
+    Q, P : array_like, shape (..., m, n, n)
+        The states and costates of the m samples (axis -3 runs over the samples).
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    Qdot, Pdot : ndarray, shape (..., m, n, n)
+        The vector field.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> Q = np.stack([np.eye(3), np.eye(3)])
+    >>> P = np.stack([symrb.hat([0.1, 0, 0]), symrb.hat([0, 0.1, 0])])
+    >>> Qdot, Pdot = symrb.multi_sample_rhs(Q, P, [0.7, 1.1, 1.6])
+    >>> Qdot.shape
+    (2, 3, 3)
+    """
     a, b, L = _samples(Q, P, lam)
     U = multi_sample_control(a, b, L)
     return _gen.control_rhs(a, b, U[..., None, :, :])
@@ -145,6 +246,29 @@ def gl_hamiltonian(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
               \qquad M = Q^TP - P^TQ,
 
     half the rigid body kinetic energy.  Conserved by :func:`symmetric_rigid_body_rhs`.
+
+    Parameters
+    ----------
+    Q, P : array_like, shape (..., n, n)
+        The state (any square matrices); batch axes broadcast.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    H : ndarray, shape (...)
+        The Hamiltonian.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> Q, P = np.eye(3), symrb.hat([0.1, 0.2, 0.3])
+    >>> H = symrb.gl_hamiltonian(Q, P, lam)
+    >>> T = symrb.kinetic_energy(symrb.symmetric_momentum(Q, P), lam)
+    >>> print(round(float(H), 6), round(float(T / 2), 6))
+    0.071095 0.071095
     """
     L = v.inertia(lam)
     a, b = _pair(Q, P, "Q", "P", L.shape[-1])
@@ -166,12 +290,15 @@ def P_from_M(Q: ArrayLike, M: ArrayLike) -> Array:
 
     Parameters
     ----------
-    Q : array (..., n, n) in SO(n)
-    M : array (..., n, n), skew, with :math:`\|M\|_{op} < 2`
+    Q : array_like, shape (..., n, n)
+        Attitudes, in SO(n).
+    M : array_like, shape (..., n, n)
+        Skew-symmetric body momenta with :math:`\|M\|_{op} < 2`.
 
     Returns
     -------
-    P : array (..., n, n) in SO(n)
+    P : ndarray, shape (..., n, n)
+        Costates in SO(n) with :math:`Q^TP - P^TQ = M`.
 
     Raises
     ------
@@ -190,6 +317,15 @@ def P_from_M(Q: ArrayLike, M: ArrayLike) -> Array:
     about :math:`10^{-12}` at :math:`\delta = 10^{-8}`, :math:`4\cdot10^{-9}` at
     :math:`\delta = 10^{-15}`.  The Schur form is computed per matrix (about 70 microseconds
     each for n = 4).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> Q, M = np.eye(3), symrb.hat([0.2, 0.4, 0.6])
+    >>> P = symrb.P_from_M(Q, M)
+    >>> bool(np.allclose(symrb.symmetric_momentum(Q, P), M) and np.allclose(P.T @ P, np.eye(3)))
+    True
     """
     Qa = v.orthogonal(Q, "Q")
     Ma = v.skew(M, "M", Qa.shape[-1])
@@ -235,11 +371,30 @@ def _exp_asinh_half(M: Array) -> Array:
 
 
 class Flow:
-    """A vector field on named (..., n, n) matrix variables.
+    r"""A vector field on named (..., n, n) matrix variables.
 
     Subclasses set ``name``, ``state`` (the names of the variables, in order) and implement
     :meth:`rhs` (raw, unvalidated: used inside the integrator), :meth:`check` (validation of an
     initial state) and optionally :meth:`derived` (quantities computed from a state, e.g. M).
+    :func:`integrate` runs any of them.
+
+    Examples
+    --------
+    A flow of one variable, :math:`\dot Q = QA` for a fixed skew :math:`A` (rotation at a constant
+    body rate):
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> class ConstantRate(symrb.Flow):
+    ...     name = "constant rate"
+    ...     state = ("Q",)
+    ...     def rhs(self, y, lam):
+    ...         return (y["Q"] @ symrb.hat([0.0, 0.0, 1.0]),)
+    >>> sol = symrb.integrate(ConstantRate, (0, np.pi / 2), {"Q": np.eye(3)}, lam=[1, 1, 1])
+    >>> print(sol.y.Q[-1].round(6) + 0.0)
+    [[ 0. -1.  0.]
+     [ 1.  0.  0.]
+     [ 0.  0.  1.]]
     """
 
     name: str = "flow"
@@ -254,6 +409,7 @@ class Flow:
         """Validate an initial state (shapes are checked by :func:`integrate`)."""
 
     def derived(self, y: Mapping[str, Array], lam: Array) -> dict[str, Array]:
+        """Quantities computed from the states along a solution (none by default)."""
         return {}
 
     def __repr__(self) -> str:
@@ -261,8 +417,23 @@ class Flow:
 
 
 class RigidBody(Flow):
-    r"""The rigid body :math:`\dot Q = Q\Omega`, :math:`\dot M = [M,\Omega]`, :math:`\Omega = J^{-1}M`;
-    state ``("Q", "M")``; derived ``Omega``."""
+    r"""The rigid body :math:`\dot Q = Q\Omega`, :math:`\dot M = [M,\Omega]`,
+    :math:`\Omega = J^{-1}M`.
+
+    State ``("Q", "M")`` with Q in SO(n) and M skew-symmetric; derived ``Omega``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> y0 = {"Q": np.eye(3), "M": symrb.hat([0.5, 1.0, 1.5])}
+    >>> sol = symrb.integrate(symrb.RigidBody, (0, 10), y0, lam=lam, t_eval=[0, 5, 10])
+    >>> sorted(sol.y), sol.y.M.shape
+    (['M', 'Omega', 'Q'], (3, 3, 3))
+    >>> print(np.ptp(symrb.kinetic_energy(sol.y.M, lam)) < 1e-9)
+    True
+    """
 
     name = "rigid body"
     state = ("Q", "M")
@@ -271,15 +442,32 @@ class RigidBody(Flow):
         return _rb.rigid_body_rhs(y["Q"], y["M"], lam)
 
     def check(self, y, lam):
-        v.skew(y["M"], "M")
+        v.orthogonal(y["Q"], "y0['Q']")
+        v.skew(y["M"], "y0['M']")
 
     def derived(self, y, lam):
         return {"Omega": _Jinv_weights(lam) * y["M"]}
 
 
 class SymmetricRigidBody(Flow):
-    r"""The symmetric rigid body :math:`\dot Q = QU`, :math:`\dot P = PU`; state ``("Q", "P")``;
-    derived ``M`` :math:`= Q^TP - P^TQ` and the Hamiltonian ``H``."""
+    r"""The symmetric rigid body :math:`\dot Q = QU`, :math:`\dot P = PU`,
+    :math:`U = J^{-1}(Q^TP - P^TQ)`.
+
+    State ``("Q", "P")`` (any square matrices: the field is defined on
+    :math:`\mathfrak{gl}(n)\times\mathfrak{gl}(n)`); derived ``M`` :math:`= Q^TP - P^TQ` and the
+    Hamiltonian ``H``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> Q0 = np.eye(3)
+    >>> P0 = symrb.P_from_M(Q0, symrb.hat([0.5, 1.0, 1.5]))
+    >>> sol = symrb.integrate(symrb.SymmetricRigidBody, (0, 10), {"Q": Q0, "P": P0}, lam=lam)
+    >>> sorted(sol.y), bool(np.ptp(sol.y.H) < 1e-9)
+    (['H', 'M', 'P', 'Q'], True)
+    """
 
     name = "symmetric rigid body"
     state = ("Q", "P")
@@ -295,9 +483,24 @@ class SymmetricRigidBody(Flow):
 
 
 class McLachlanScovel(Flow):
-    r"""The McLachlan-Scovel equations :math:`\dot Q = QJ^{-1}(Q^TB)`, :math:`\dot B = BJ^{-1}(Q^TB)`;
-    state ``("Q", "B")`` with :math:`Q^TB` skew; derived ``M`` :math:`= Q^TB` (it follows the
-    rigid body equations, claim S7)."""
+    r"""The McLachlan-Scovel equations :math:`\dot Q = QJ^{-1}(Q^TB)`,
+    :math:`\dot B = BJ^{-1}(Q^TB)`.
+
+    State ``("Q", "B")`` with Q in SO(n) and :math:`Q^TB` skew; derived ``M`` :math:`= Q^TB`
+    (it follows the rigid body equations, claim S7).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> M0 = symrb.hat([0.5, 1.0, 1.5])
+    >>> kw = dict(lam=lam, rtol=1e-12, atol=1e-12, t_eval=[0, 5])
+    >>> ms = symrb.integrate(symrb.McLachlanScovel, (0, 5), {"Q": np.eye(3), "B": M0}, **kw)
+    >>> rb = symrb.integrate(symrb.RigidBody, (0, 5), {"Q": np.eye(3), "M": M0}, **kw)
+    >>> bool(np.allclose(ms.y.M, rb.y.M, atol=1e-9))
+    True
+    """
 
     name = "McLachlan-Scovel"
     state = ("Q", "B")
@@ -306,6 +509,7 @@ class McLachlanScovel(Flow):
         return _gen.mclachlan_scovel_rhs(y["Q"], y["B"], lam)
 
     def check(self, y, lam):
+        v.orthogonal(y["Q"], "y0['Q']")
         v.skew(np.swapaxes(y["Q"], -1, -2) @ y["B"], "Q^T B")
 
     def derived(self, y, lam):
@@ -314,8 +518,22 @@ class McLachlanScovel(Flow):
 
 class MultiSampleSymmetricRigidBody(Flow):
     r"""The learning flow :math:`\dot Q^a = Q^aU`, :math:`\dot P^a = P^aU`,
-    :math:`U = \sum_aJ^{-1}((Q^a)^TP^a - (P^a)^TQ^a)`; state ``("Q", "P")`` of shape
-    (..., m, n, n); derived ``U`` (..., n, n)."""
+    :math:`U = \sum_aJ^{-1}((Q^a)^TP^a - (P^a)^TQ^a)`.
+
+    State ``("Q", "P")`` of shape (..., m, n, n) (m samples, each :math:`Q^a` in SO(n));
+    derived ``U`` of shape (..., n, n).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> Q0 = symrb.random_SO(3, (4,), seed=1)
+    >>> P0 = 0.3 * np.random.default_rng(2).standard_normal((4, 3, 3))
+    >>> sol = symrb.integrate(symrb.MultiSampleSymmetricRigidBody, (0, 1), {"Q": Q0, "P": P0},
+    ...                       lam=[0.7, 1.1, 1.6], t_eval=[0, 0.5, 1])
+    >>> sol.y.Q.shape, sol.y.U.shape
+    ((3, 4, 3, 3), (3, 3, 3))
+    """
 
     name = "multi-sample symmetric rigid body"
     state = ("Q", "P")
@@ -326,27 +544,43 @@ class MultiSampleSymmetricRigidBody(Flow):
             y["Q"], y["P"], _shared_control(y["Q"], y["P"], lam)[..., None, :, :]
         )
 
+    def check(self, y, lam):
+        v.orthogonal(y["Q"], "y0['Q']")
+
     def derived(self, y, lam):
         return {"U": _shared_control(y["Q"], y["P"], lam)}
-
-
-class Trajectory(dict):
-    """The state along a solution: a dict of arrays with time as the leading axis, also readable as
-    attributes (``sol.y.Q``)."""
-
-    def __getattr__(self, key: str) -> Array:
-        try:
-            return self[key]
-        except KeyError:
-            raise AttributeError(f"trajectory has no variable {key!r}; has {list(self)}") from None
 
 
 @dataclass
 class FlowSolution:
     """Result of :func:`integrate` (modelled on :func:`scipy.integrate.solve_ivp`'s result).
 
-    ``t`` (k,); ``y`` a :class:`Trajectory` with each state variable and each derived quantity of
-    the flow as an array of shape (k, ..., n, n); ``success``, ``status``, ``message``, ``nfev``.
+    Attributes
+    ----------
+    t : ndarray, shape (K,)
+        The output times.
+    y : Trajectory
+        Each state variable and each derived quantity of the flow, time first: shape
+        ``(K, ..., n, n)`` for matrices.
+    success : bool
+        False when the solver stopped early.
+    status : int
+        ``solve_ivp``'s status (0: reached the end, -1: failed).
+    message : str
+        Why the solver stopped.
+    nfev : int
+        The number of evaluations of the vector field.
+    flow : Flow
+        The flow that was integrated.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> y0 = {"Q": np.eye(3), "M": symrb.hat([0.5, 1.0, 1.5])}
+    >>> sol = symrb.integrate(symrb.RigidBody, (0, 1), y0, lam=[0.7, 1.1, 1.6], t_eval=[0, 1])
+    >>> sol.success, sol.t, sol.y.Q.shape
+    (True, array([0., 1.]), (2, 3, 3))
     """
 
     t: Array
@@ -383,22 +617,47 @@ def integrate(
 
     Parameters
     ----------
-    flow : a :class:`Flow` instance or class (:class:`RigidBody`, :class:`SymmetricRigidBody`,
-        :class:`McLachlanScovel`, :class:`MultiSampleSymmetricRigidBody`)
-    t_span : (t0, t1)
-    y0 : mapping from the flow's state names to arrays (..., n, n) (with a sample axis
-        (..., m, n, n) for the multi-sample flow), or a sequence in the order of ``flow.state``.
-        Leading batch axes broadcast; the whole batch is integrated with one step-size sequence.
-    lam : array (..., n), diagonal of :math:`\Lambda` (broadcast against the batch)
-    method, rtol, atol, t_eval : as in :func:`scipy.integrate.solve_ivp` (``t_eval=None`` keeps
-        the solver's steps)
+    flow : Flow or type of Flow
+        The flow: :class:`RigidBody`, :class:`SymmetricRigidBody`, :class:`McLachlanScovel`,
+        :class:`MultiSampleSymmetricRigidBody` (a class or an instance) or a subclass of
+        :class:`Flow`.
+    t_span : tuple of float
+        The interval ``(t0, t1)``.
+    y0 : mapping or sequence of array_like
+        The initial state: a mapping from the flow's state names to arrays of shape
+        ``(..., n, n)`` (``(..., m, n, n)`` with a sample axis for the multi-sample flow), or a
+        sequence in the order of ``flow.state``.  Leading batch axes broadcast; the whole batch
+        is integrated with one step-size sequence.  An attitude ``Q`` of :class:`RigidBody`,
+        :class:`McLachlanScovel` and :class:`MultiSampleSymmetricRigidBody` must be in SO(n).
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda` (broadcast against the batch).
+    method : str, optional
+        The ``solve_ivp`` method (default ``"DOP853"``).
+    rtol, atol : float, optional
+        The relative and absolute tolerances of ``solve_ivp``.
+    t_eval : array_like, optional
+        Times at which to store the solution; ``None`` keeps the solver's steps.
 
     Returns
     -------
     FlowSolution
-        with ``y`` holding each state variable and the flow's derived quantities, time first.
-        ``success`` is False (and ``message`` says why) when the solver stops early; inputs are
+        ``y`` holds each state variable and the flow's derived quantities, time first.
+        ``success`` is False (and ``message`` says why) when the solver stops early.  Inputs are
         never mutated.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> M0 = symrb.hat([0.5, 1.0, 1.5])
+    >>> sol = symrb.integrate(symrb.RigidBody, (0, 10), {"Q": np.eye(3), "M": M0}, lam=lam,
+    ...                       t_eval=np.linspace(0, 10, 11))
+    >>> sol.y.Q.shape
+    (11, 3, 3)
+    >>> casimir = symrb.casimir_traces(sol.y.M)[:, 0]  # tr M^2 is conserved
+    >>> bool(np.ptp(casimir) < 1e-8)
+    True
     """
     fl = _as_flow(flow)
     L = v.inertia(lam)
@@ -434,7 +693,7 @@ def integrate(
     ts = v.as_float_array(t_span, "t_span")
     if ts.shape != (2,):
         raise InputError(f"t_span must be (t0, t1), got shape {ts.shape}")
-    if not (rtol > 0 and atol >= 0):
+    if not (v.real_scalar(rtol, "rtol") > 0 and v.real_scalar(atol, "atol") >= 0):
         raise InputError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
     te = None if t_eval is None else v.as_float_array(t_eval, "t_eval")
     size = int(np.prod(shape))

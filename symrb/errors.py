@@ -10,19 +10,74 @@ __all__ = ["SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"]
 
 
 class SymrbError(Exception):
-    """Base class of every error raised by symrb."""
+    """Base class of every error raised by symrb.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> try:
+    ...     symrb.J(symrb.hat([1, 2, 3]), [1.0, 2.0])
+    ... except symrb.SymrbError as exc:
+    ...     print(type(exc).__name__, exc)
+    InputError Omega must be 2 x 2 to match lam, got (3, 3)
+    """
 
 
 class InputError(SymrbError, ValueError):
-    """An argument violates a documented precondition (shape, skew-symmetry, positivity, ...)."""
+    """An argument violates a documented precondition (shape, skew-symmetry, positivity, ...).
+
+    A subclass of :class:`ValueError`; the message names the argument, the condition and the
+    offending value.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> symrb.J_inv(np.ones((3, 3)), [0.7, 1.1, 1.6])
+    Traceback (most recent call last):
+    ...
+    symrb.errors.InputError: M must be skew-symmetric; max |M + M^T| = 2.000e+00
+    >>> symrb.J_inv(symrb.hat([1, 2, 3]), np.diag([0.7, 1.1, 1.6]))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    symrb.errors.InputError: lam is the 1-D diagonal of Lambda, ...: pass its diagonal, np.diag(lam)
+    """
 
 
 class OutOfDomainError(SymrbError, ValueError):
-    """The input lies outside the set where the requested map is defined (e.g. ||M||_op >= 2)."""
+    """The input lies outside the set where the requested map is defined (e.g. ||M||_op >= 2).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> symrb.P_from_M(np.eye(3), symrb.hat([0.0, 0.0, 2.5]))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    symrb.errors.OutOfDomainError: P_from_M needs ||M||_op < 2 ...; got ||M||_op = 2.5 ...
+    """
 
 
 class NotConvergedError(SymrbError, RuntimeError):
-    """An iterative solver stopped without meeting its tolerance; carries the final residual."""
+    """An iterative solver stopped without meeting its tolerance; carries the final residual.
+
+    Attributes
+    ----------
+    residual : float
+        The residual when the solver stopped.
+    iterations : int
+        The iterations it used.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> M = symrb.hat([0.5, 1.0, 1.5])
+    >>> try:
+    ...     symrb.solve_moser_veselov(M, [0.7, 1.1, 1.6], tol=0.0, maxiter=2)
+    ... except symrb.NotConvergedError as exc:
+    ...     print(exc.iterations, exc.residual > 0)
+    2 True
+    """
 
     def __init__(self, message: str, residual: float, iterations: int) -> None:
         super().__init__(message)

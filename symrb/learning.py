@@ -45,6 +45,7 @@ from numpy.typing import ArrayLike
 
 from . import _validate as v
 from ._generated import discrete_control as _gen
+from ._progress import progress_bar
 from ._validate import Array
 from .errors import InputError
 
@@ -106,15 +107,34 @@ def resnet_forward(
 
     Parameters
     ----------
-    x0 : array (..., n), initial states (one per sample; any leading sample axes)
-    K : array (N, n, n), layer weights
-    beta : array (N, n), layer biases
-    activation : ``"tanh"`` or ``"logistic"``
-    residual : ``True`` for :math:`x + \sigma(Kx + \beta)`, ``False`` for :math:`\sigma(Kx + \beta)`
+    x0 : array_like, shape (..., n)
+        Initial states, one per sample (any leading sample axes).
+    K : array_like, shape (N, n, n)
+        Layer weights.
+    beta : array_like, shape (N, n)
+        Layer biases.
+    activation : {"tanh", "logistic"}, optional
+        The activation :math:`\sigma`.
+    residual : bool, optional
+        True for the layer :math:`x + \sigma(Kx + \beta)`, False for :math:`\sigma(Kx + \beta)`.
 
     Returns
     -------
-    array (N + 1, ..., n): ``states[k]`` is :math:`x_k`.
+    states : ndarray, shape (N + 1, ..., n)
+        ``states[k]`` is :math:`x_k`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0 = np.array([[0.5, -0.5], [1.0, 0.0]])  # two samples in the plane
+    >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))  # three layers
+    >>> states = symrb.resnet_forward(x0, K, beta)
+    >>> states.shape
+    (4, 2, 2)
+    >>> print(states[-1].round(4))
+    [[ 0.5    -0.5   ]
+     [ 1.3619  0.3619]]
     """
     step, _ = _kernels(activation, residual)
     KK, bb = _weights(K, beta)
@@ -127,7 +147,26 @@ def resnet_forward(
 
 
 def squared_error(xN: ArrayLike, targets: ArrayLike) -> float:
-    r"""The terminal loss :math:`\Phi = \sum_a \tfrac12 |x^a_N - y^a|^2` (summed, not averaged)."""
+    r"""The terminal loss :math:`\Phi = \sum_a \tfrac12 |x^a_N - y^a|^2` (summed, not averaged).
+
+    Parameters
+    ----------
+    xN : array_like, shape (..., n)
+        The final states.
+    targets : array_like, shape (..., n)
+        The targets :math:`y^a`, of the shape of ``xN``.
+
+    Returns
+    -------
+    float
+        The loss.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.squared_error([[1.0, 2.0], [0.0, 0.0]], [[1.0, 0.0], [0.0, 1.0]]))
+    2.5
+    """
     a = v.as_float_array(xN, "xN")
     y = v.as_float_array(targets, "targets")
     if a.shape != y.shape:
@@ -182,7 +221,37 @@ def costate_sweep(
 
     :math:`p^a_N = -(x^a_N - y^a)` and :math:`p^a_k = \partial_x H(p^a_{k+1}, x^a_k, u_k)`; they
     equal :math:`-\partial\Phi/\partial x^a_k` (back-propagation with the opposite sign).
-    ``states`` comes from :func:`resnet_forward` with the same weights and layer type.
+
+    Parameters
+    ----------
+    states : array_like, shape (N + 1, ..., n)
+        The states from :func:`resnet_forward` with the same weights and layer type.
+    K : array_like, shape (N, n, n)
+        Layer weights.
+    beta : array_like, shape (N, n)
+        Layer biases.
+    targets : array_like, shape (..., n)
+        The targets :math:`y^a`.
+    activation : {"tanh", "logistic"}, optional
+        The activation :math:`\sigma`.
+    residual : bool, optional
+        True for residual layers, False for plain ones.
+
+    Returns
+    -------
+    p : ndarray, shape (N + 1, ..., n)
+        The costates.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0, y = np.array([[0.5, -0.5], [1.0, 0.0]]), np.array([[1.0, 0.0], [0.0, 1.0]])
+    >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))
+    >>> states = symrb.resnet_forward(x0, K, beta)
+    >>> p = symrb.costate_sweep(states, K, beta, y)
+    >>> bool(np.allclose(p[-1], y - states[-1]))  # p_N = -(x_N - y)
+    True
     """
     st, KK, bb, y = _check_sweep_inputs(states, K, beta, targets)
     return _sweep(st, KK, bb, y, activation, residual)[0]
@@ -198,8 +267,48 @@ def loss_gradients(
 ) -> tuple[float, Array, Array]:
     r"""Loss and weight gradients through the maximum principle.
 
-    Returns ``(Phi, dPhi/dK, dPhi/dbeta)`` with :math:`\partial\Phi/\partial u_k = -\sum_a
-    \partial_u H(p^a_{k+1}, x^a_k, u_k)` (shapes (N, n, n) and (N, n)).
+    The gradients are :math:`\partial\Phi/\partial u_k = -\sum_a \partial_u H(p^a_{k+1}, x^a_k,
+    u_k)` (module docstring).
+
+    Parameters
+    ----------
+    x0 : array_like, shape (..., n)
+        Initial states, one per sample.
+    K : array_like, shape (N, n, n)
+        Layer weights.
+    beta : array_like, shape (N, n)
+        Layer biases.
+    targets : array_like, shape (..., n)
+        The targets :math:`y^a`.
+    activation : {"tanh", "logistic"}, optional
+        The activation :math:`\sigma`.
+    residual : bool, optional
+        True for residual layers, False for plain ones.
+
+    Returns
+    -------
+    Phi : float
+        The loss :func:`squared_error`.
+    dK : ndarray, shape (N, n, n)
+        :math:`\partial\Phi/\partial K`.
+    dbeta : ndarray, shape (N, n)
+        :math:`\partial\Phi/\partial\beta`.
+
+    Examples
+    --------
+    The gradient agrees with a central difference:
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0, y = np.array([[0.5, -0.5], [1.0, 0.0]]), np.array([[1.0, 0.0], [0.0, 1.0]])
+    >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))
+    >>> Phi, dK, dbeta = symrb.loss_gradients(x0, K, beta, y)
+    >>> E = np.zeros_like(K)
+    >>> E[0, 0, 1] = 1e-6
+    >>> fd = (symrb.loss_gradients(x0, K + E, beta, y)[0]
+    ...       - symrb.loss_gradients(x0, K - E, beta, y)[0]) / 2e-6
+    >>> print(round(float(dK[0, 0, 1]), 6), round(fd, 6))
+    0.36 0.36
     """
     states = resnet_forward(x0, K, beta, activation, residual)
     st, KK, bb, y = _check_sweep_inputs(states, K, beta, targets)
@@ -209,7 +318,26 @@ def loss_gradients(
 
 @dataclass(frozen=True)
 class TrainResult:
-    """Outcome of :func:`train`: final weights and the loss before each step and at the end."""
+    """Outcome of :func:`train`.
+
+    Attributes
+    ----------
+    K : ndarray, shape (N, n, n)
+        The final weights.
+    beta : ndarray, shape (N, n)
+        The final biases.
+    losses : ndarray, shape (steps + 1,)
+        The loss before each step and at the end.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0, y, _ = symrb.toy_classification(50, seed=0)
+    >>> result = symrb.train(x0, y, np.zeros((2, 2, 2)), np.zeros((2, 2)), steps=10, lr=0.01)
+    >>> result.K.shape, result.losses.shape
+    ((2, 2, 2), (11,))
+    """
 
     K: Array
     beta: Array
@@ -230,31 +358,65 @@ def train(
     r"""Plain gradient descent :math:`u_k \leftarrow u_k - \eta\,\partial\Phi/\partial u_k`.
 
     The gradients come from :func:`loss_gradients` (costates and :math:`\partial H/\partial u`).
-    ``losses`` has ``steps + 1`` entries.  With ``progress=True`` a tqdm bar is shown when tqdm is
-    installed (it is optional).  The initial ``K`` and ``beta`` are copied, never modified.
+    The initial ``K`` and ``beta`` are copied, never modified.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (..., n)
+        Initial states, one per sample.
+    targets : array_like, shape (..., n)
+        The targets :math:`y^a`.
+    K : array_like, shape (N, n, n)
+        Initial layer weights.
+    beta : array_like, shape (N, n)
+        Initial layer biases.
+    steps : int, optional
+        The number of gradient steps, >= 0.
+    lr : float, optional
+        The learning rate :math:`\eta > 0`.
+    activation : {"tanh", "logistic"}, optional
+        The activation :math:`\sigma`.
+    residual : bool, optional
+        True for residual layers, False for plain ones.
+    progress : bool, optional
+        Show a tqdm progress bar (needs the optional package tqdm).
+
+    Returns
+    -------
+    TrainResult
+        The final weights and the losses (``steps + 1`` entries).
+
+    Raises
+    ------
+    InputError
+        Bad arguments, or a loss that became non-finite (``lr`` too large).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0, y, _ = symrb.toy_classification(200, seed=0)
+    >>> K, beta = np.zeros((4, 2, 2)), np.zeros((4, 2))
+    >>> result = symrb.train(x0, y, K, beta, steps=50, lr=0.005)
+    >>> print(result.losses[[0, -1]].round(2))
+    [42.47 32.83]
     """
     if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
         raise InputError(f"steps must be a non-negative integer, got {steps!r}")
-    if not np.isfinite(lr) or lr <= 0:
+    if not v.real_scalar(lr, "lr") > 0:
         raise InputError(f"lr must be a positive finite number, got {lr!r}")
     KK, bb = _weights(K, beta)
     KK, bb = KK.copy(), bb.copy()
-    rng = range(int(steps))
-    if progress:
-        try:
-            from tqdm.auto import tqdm
-
-            rng = tqdm(rng, desc="train")
-        except ImportError:  # tqdm is optional
-            pass
     losses = np.empty(int(steps) + 1)
-    for i in rng:
-        loss, gK, gb = loss_gradients(x0, KK, bb, targets, activation, residual)
-        if not np.isfinite(loss):
-            raise InputError(f"loss became non-finite at step {i} (lr = {lr} too large?)")
-        losses[i] = loss
-        KK -= lr * gK
-        bb -= lr * gb
+    with progress_bar(int(steps), "train", progress) as bar:
+        for i in range(int(steps)):
+            loss, gK, gb = loss_gradients(x0, KK, bb, targets, activation, residual)
+            if not np.isfinite(loss):
+                raise InputError(f"loss became non-finite at step {i} (lr = {lr} too large?)")
+            losses[i] = loss
+            KK -= lr * gK
+            bb -= lr * gb
+            bar.step()
     losses[-1] = loss_gradients(x0, KK, bb, targets, activation, residual)[0]
     return TrainResult(K=KK, beta=bb, losses=losses)
 
@@ -265,7 +427,29 @@ def toy_classification(num: int = 200, seed: int | np.random.Generator | None = 
 
     A residual network must bend the sine boundary flat and push the classes to
     :math:`x_2 = \pm1` (a deformation of the plane, which residual layers can approximate).
-    Returns ``(x0, targets, labels)`` with shapes (num, 2), (num, 2), (num,).
+
+    Parameters
+    ----------
+    num : int, optional
+        The number of points, >= 1.
+    seed : int, numpy.random.Generator or None, optional
+        The random source.
+
+    Returns
+    -------
+    x0 : ndarray, shape (num, 2)
+        The points.
+    targets : ndarray, shape (num, 2)
+        :math:`(x_1, c)`.
+    labels : ndarray, shape (num,)
+        The classes :math:`c = \pm 1`.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> x0, targets, labels = symrb.toy_classification(200, seed=0)
+    >>> x0.shape, targets.shape, int((labels > 0).sum())
+    ((200, 2), (200, 2), 99)
     """
     if isinstance(num, bool) or not isinstance(num, int | np.integer) or num < 1:
         raise InputError(f"num must be a positive integer, got {num!r}")

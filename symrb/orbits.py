@@ -64,12 +64,25 @@ def orbit_extremal_rhs(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> tuple[Array,
 
     Parameters
     ----------
-    x, p, N : array (..., n, n)
-        skew state, costate and fixed element (broadcast against each other)
+    x, p, N : array_like, shape (..., n, n)
+        The skew-symmetric state, costate and fixed element (broadcast against each other).
 
     Returns
     -------
-    (xdot, pdot) : arrays of the broadcast shape
+    xdot, pdot : ndarray, shape (..., n, n)
+        The vector field, of the broadcast shape.
+
+    Examples
+    --------
+    With the costate :math:`p = -N` of the one-sample extremal the state follows the double
+    bracket flow:
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> xdot, pdot = symrb.orbit_extremal_rhs(x, -N, N)
+    >>> bool(np.allclose(xdot, symrb.double_bracket_rhs(x, N)))
+    True
     """
     xx, nn = _pair_xN(x, N)
     pp = v.skew(p, "p", nn.shape[-1])
@@ -84,12 +97,21 @@ def orbit_hamiltonian(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> Array:
 
     Parameters
     ----------
-    x, p, N : array (..., n, n)
-        skew state, costate and fixed element (broadcast against each other)
+    x, p, N : array_like, shape (..., n, n)
+        The skew-symmetric state, costate and fixed element (broadcast against each other).
 
     Returns
     -------
-    array (...)
+    ndarray, shape (...)
+        The Hamiltonian.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> print(round(float(symrb.orbit_hamiltonian(x, -N, N)), 6) + 0.0)  # 0 on this extremal
+    0.0
     """
     xx, nn = _pair_xN(x, N)
     pp = v.skew(p, "p", nn.shape[-1])
@@ -101,12 +123,20 @@ def brockett_potential(x: ArrayLike, N: ArrayLike) -> Array:
 
     Parameters
     ----------
-    x, N : array (..., n, n)
-        skew state and fixed element (broadcast against each other)
+    x, N : array_like, shape (..., n, n)
+        The skew-symmetric state and fixed element (broadcast against each other).
 
     Returns
     -------
-    array (...)
+    ndarray, shape (...)
+        The potential.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> print(symrb.brockett_potential(x, N))  # -|x x n|^2 / 2 for n = 3
+    -0.625
     """
     xx, nn = _pair_xN(x, N)
     return _gen.brockett_potential(xx, nn)
@@ -117,12 +147,23 @@ def double_bracket_rhs(x: ArrayLike, N: ArrayLike) -> Array:
 
     Parameters
     ----------
-    x, N : array (..., n, n)
-        skew state and fixed element (broadcast against each other)
+    x, N : array_like, shape (..., n, n)
+        The skew-symmetric state and fixed element (broadcast against each other).
 
     Returns
     -------
-    array of the broadcast shape
+    ndarray, shape (..., n, n)
+        :math:`[x, [x, N]]`, of the broadcast shape.
+
+    Examples
+    --------
+    The field decreases :math:`\langle x, N\rangle` at the rate :math:`\|[x, N]\|^2`:
+
+    >>> import symrb
+    >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> xdot = symrb.double_bracket_rhs(x, N)
+    >>> print(symrb.pairing(xdot, N), -symrb.pairing(*2 * [symrb.commutator(x, N)]))
+    -1.25 -1.25
     """
     xx, nn = _pair_xN(x, N)
     return _gen.double_bracket_rhs(xx, nn)
@@ -131,12 +172,43 @@ def double_bracket_rhs(x: ArrayLike, N: ArrayLike) -> Array:
 def double_bracket_flow(
     x0: ArrayLike, N: ArrayLike, t: ArrayLike, rtol: float = 1e-11, atol: float = 1e-12
 ) -> Array:
-    r"""Integrate :math:`\dot x = [x, [x, N]]` from ``x0`` (skew, (n, n)) and return x at the times
-    ``t`` (increasing, starting at 0 or later), shape ``(len(t), n, n)``.
+    r"""Integrate the double bracket flow :math:`\dot x = [x, [x, N]]` from ``x0``.
 
     The flow stays on the orbit of ``x0`` and decreases :math:`\langle x, N\rangle` at the rate
     :math:`\|[x, N]\|^2`; it tends to a point commuting with N.  Uses ``scipy.integrate.solve_ivp``
-    (DOP853); raises :class:`NotConvergedError` if the integrator fails.
+    (DOP853).
+
+    Parameters
+    ----------
+    x0 : array_like, shape (n, n)
+        The skew-symmetric initial point.
+    N : array_like, shape (n, n)
+        The skew-symmetric fixed element.
+    t : array_like, shape (m,)
+        Increasing output times, >= 0 (the flow starts at time 0).
+    rtol, atol : float, optional
+        The tolerances of ``solve_ivp``.
+
+    Returns
+    -------
+    ndarray, shape (m, n, n)
+        x at the times ``t``.
+
+    Raises
+    ------
+    NotConvergedError
+        If the integrator fails.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> xs = symrb.double_bracket_flow(x0, N, [0, 1, 5, 20])
+    >>> print(symrb.pairing(xs, N).round(4))  # decreasing to -|x0|
+    [ 0.2    -0.8442 -1.1357 -1.1358]
+    >>> print(symrb.vee(xs[-1]).round(4) + 0.0)  # commutes with N
+    [ 0.      0.     -1.1358]
     """
     xx, nn = _pair_xN(x0, N, "x0")
     if xx.ndim != 2 or nn.ndim != 2:
@@ -163,10 +235,35 @@ def double_bracket_flow(
 class OrbitBVPResult:
     """Solution of the two-point boundary value problem of :func:`solve_orbit_bvp`.
 
-    ``t`` has shape (m,); ``x`` and ``p`` have shape (m, M, n, n) (M samples); ``u`` the shared
-    optimal control, shape (m, n, n).  ``residual`` is the largest relative collocation residual
-    reported by ``solve_bvp`` and ``bc_residual`` the largest boundary condition mismatch.
-    ``sol`` evaluates the packed solution at any time (see :meth:`at`).
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        The collocation mesh.
+    x, p : ndarray, shape (m, M, n, n)
+        The states and costates of the M samples on the mesh.
+    u : ndarray, shape (m, n, n)
+        The shared optimal control.
+    success : bool
+        Whether ``solve_bvp`` converged (and the solution is finite).
+    message : str
+        ``solve_bvp``'s message.
+    residual : float
+        The largest relative collocation residual reported by ``solve_bvp``.
+    bc_residual : float
+        The largest boundary condition mismatch.
+    costate : str
+        ``"corrected"`` or ``"printed"`` (the endpoint condition imposed).
+    sol : object
+        ``solve_bvp``'s result; :meth:`at` evaluates the solution at any time.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> x0, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> res = symrb.solve_orbit_bvp(x0, N, 2.0)
+    >>> x, p = res.at([0.0, 1.0, 2.0])
+    >>> res.success, x.shape
+    (True, (3, 1, 3, 3))
     """
 
     t: Array
@@ -182,7 +279,7 @@ class OrbitBVPResult:
 
     def at(self, t: ArrayLike) -> tuple[Array, Array]:
         """(x, p) at the times ``t`` (1-D), shapes (len(t), M, n, n), from the collocation spline."""
-        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        ts = np.atleast_1d(v.as_float_array(t, "t"))
         M, k = self.x.shape[1], self.x.shape[-1]
         return _unpack(self.sol.sol(ts), M, k)
 
@@ -272,6 +369,48 @@ def solve_orbit_bvp(
     steady state between an initial and a terminal layer); stretching the previous solution in
     time instead widens both layers, and for two samples fails beyond T = 5 or so.  Does not raise
     when the solver fails: check ``success`` and ``residual``.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (n, n) or (M, n, n)
+        The skew-symmetric initial states (one sample, or M).
+    N : array_like, shape (n, n)
+        The skew-symmetric fixed element.
+    T : float
+        The horizon, > 0.
+    costate : {"corrected", "printed"}, optional
+        The endpoint condition: :math:`p^a_T = -N` (corrected) or the paper's :math:`+N`.
+    nodes : int, optional
+        The number of initial mesh nodes, >= 3.
+    tol : float, optional
+        ``solve_bvp``'s tolerance.
+    max_nodes : int, optional
+        ``solve_bvp``'s largest mesh.
+    p_guess : array_like, shape (n, n), optional
+        A constant initial guess for the costates (default: the terminal value).
+    continuation_start : float, optional
+        The horizon below which no continuation is needed, > 0.
+    continuation_growth : float, optional
+        The factor between successive horizons of the continuation, > 1.
+
+    Returns
+    -------
+    OrbitBVPResult
+        The solution on the collocation mesh, with ``success`` and the residuals.
+
+    Examples
+    --------
+    For one sample the corrected extremal is the double bracket flow:
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> res = symrb.solve_orbit_bvp(x0, N, 2.0)
+    >>> res.success, res.x.shape[1:]
+    (True, (1, 3, 3))
+    >>> flow = symrb.double_bracket_flow(x0, N, res.t)
+    >>> bool(np.abs(res.x[:, 0] - flow).max() < 1e-6)
+    True
     """
     nn = v.skew(N, "N")
     if nn.ndim != 2:
@@ -284,7 +423,7 @@ def solve_orbit_bvp(
     M = xs0.shape[0]
     if M < 1:
         raise InputError("x0 must hold at least one sample")
-    if not (np.isfinite(T) and T > 0):
+    if not v.real_scalar(T, "T") > 0:
         raise InputError(f"T must be a positive finite time, got {T!r}")
     if costate not in ("corrected", "printed"):
         raise InputError(f"costate must be 'corrected' or 'printed', got {costate!r}")

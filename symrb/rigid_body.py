@@ -32,13 +32,28 @@ def rigid_body_rhs(Q: ArrayLike, M: ArrayLike, lam: ArrayLike) -> tuple[Array, A
 
     Parameters
     ----------
-    Q : array (..., n, n), the attitude (any square matrix is accepted; SO(n) is invariant)
-    M : array (..., n, n), skew-symmetric body angular momentum
-    lam : array (..., n), diagonal of :math:`\Lambda` with :math:`\lambda_i+\lambda_j>0`
+    Q : array_like, shape (..., n, n)
+        The attitude (any square matrix is accepted; SO(n) is invariant).
+    M : array_like, shape (..., n, n)
+        The skew-symmetric body angular momentum.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
 
     Returns
     -------
-    (Qdot, Mdot) : arrays broadcast to the common batch shape.
+    Qdot, Mdot : ndarray, shape (..., n, n)
+        The vector field, broadcast to the common batch shape.
+
+    Examples
+    --------
+    For n = 3 the momentum equation is Euler's, :math:`\dot m = m \times \omega`:
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam, m = np.array([0.7, 1.1, 1.6]), np.array([0.5, 1.0, 1.5])
+    >>> Qdot, Mdot = symrb.rigid_body_rhs(np.eye(3), symrb.hat(m), lam)
+    >>> print(symrb.vee(Mdot).round(4), symrb.euler_rhs_so3(m, lam).round(4))
+    [ 0.1812 -0.1389  0.0322] [ 0.1812 -0.1389  0.0322]
     """
     L = v.inertia(lam)
     nn = L.shape[-1]
@@ -49,13 +64,55 @@ def kinetic_energy(M: ArrayLike, lam: ArrayLike) -> Array:
     r"""The kinetic energy :math:`\tfrac12\langle J^{-1}M, M\rangle = \tfrac12\langle\Omega, J\Omega\rangle`.
 
     The paper's Hamiltonians (S5, S12) are half of it: :math:`\tfrac14\langle J^{-1}M, M\rangle`.
+
+    Parameters
+    ----------
+    M : array_like, shape (..., n, n)
+        Skew-symmetric body momenta.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The kinetic energies.
+
+    Examples
+    --------
+    For n = 3 it is :math:`\sum_i m_i^2/(2I_i)` with the principal moments :math:`I`:
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam, m = np.array([0.7, 1.1, 1.6]), np.array([0.5, 1.0, 1.5])
+    >>> I = symrb.inertia_from_lam(lam)
+    >>> print(round(float(symrb.kinetic_energy(symrb.hat(m), lam)), 6))
+    0.888688
+    >>> print(round(float(np.sum(m**2 / (2 * I))), 6))
+    0.888688
     """
     L = v.inertia(lam)
     return _gen.kinetic_energy(v.skew(M, "M", L.shape[-1]), L)
 
 
 def casimir_traces(M: ArrayLike) -> Array:
-    r"""The Casimirs :math:`(\operatorname{tr}M^2, \operatorname{tr}M^4, \operatorname{tr}M^6)`, shape (..., 3)."""
+    r"""The Casimirs :math:`(\operatorname{tr}M^2, \operatorname{tr}M^4, \operatorname{tr}M^6)`.
+
+    Parameters
+    ----------
+    M : array_like, shape (..., n, n)
+        Skew-symmetric matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The three traces.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.casimir_traces(symrb.hat([0.5, 1.0, 1.5])))  # -2|m|^2, 2|m|^4, -2|m|^6
+    [ -7.    24.5  -85.75]
+    """
     return _gen.casimir_traces(v.skew(M, "M"))
 
 
@@ -69,6 +126,29 @@ def manakov_integrals(M: ArrayLike, lam: ArrayLike) -> Array:
     :math:`4\operatorname{tr}(\Lambda^4M^2)+2\operatorname{tr}(\Lambda^2M\Lambda^2M)`,
     :math:`5\operatorname{tr}(\Lambda^2M^4)`,
     :math:`5\operatorname{tr}(\Lambda^6M^2)+5\operatorname{tr}(\Lambda^4M\Lambda^2M)`.
+
+    Parameters
+    ----------
+    M : array_like, shape (..., n, n)
+        Skew-symmetric body momenta.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+
+    Returns
+    -------
+    ndarray, shape (..., 6)
+        The six integrals.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> y0 = {"Q": np.eye(3), "M": symrb.hat([0.5, 1.0, 1.5])}
+    >>> sol = symrb.integrate(symrb.RigidBody, (0, 5), y0, lam=lam, rtol=1e-12, t_eval=[0, 5])
+    >>> F = symrb.manakov_integrals(sol.y.M, lam)
+    >>> F.shape, bool(np.abs(F[1] - F[0]).max() < 1e-9)  # conserved along the flow
+    ((2, 6), True)
     """
     L = v.inertia(lam)
     return _gen.manakov_integrals(v.skew(M, "M", L.shape[-1]), L)
@@ -76,7 +156,26 @@ def manakov_integrals(M: ArrayLike, lam: ArrayLike) -> Array:
 
 def euler_rhs_so3(m: ArrayLike, lam: ArrayLike) -> Array:
     r"""Euler's equations for n = 3: :math:`\dot m = m\times\omega`, :math:`\omega_i = m_i/I_i`,
-    :math:`I_1=\lambda_2+\lambda_3` (cyclic).  ``m`` and ``lam`` have shape (..., 3)."""
+    :math:`I_1=\lambda_2+\lambda_3` (cyclic).
+
+    Parameters
+    ----------
+    m : array_like, shape (..., 3)
+        Body angular momenta (vectors).
+    lam : array_like, shape (..., 3)
+        The diagonal of :math:`\Lambda`.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        :math:`\dot m`.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> print(symrb.euler_rhs_so3([0.5, 1.0, 1.5], [0.7, 1.1, 1.6]).round(4))
+    [ 0.1812 -0.1389  0.0322]
+    """
     L = v.inertia(lam)
     if L.shape[-1] != 3:
         raise InputError(f"lam must have shape (..., 3) for euler_rhs_so3, got {L.shape}")

@@ -64,16 +64,30 @@ _KRON_MAX_N = 8
 
 @dataclass(frozen=True)
 class MVSolveInfo:
-    """What :func:`solve_moser_veselov` did, per item of the batch (arrays of the batch shape).
+    r"""What :func:`solve_moser_veselov` did, per item of the batch (arrays of the batch shape).
 
     Attributes
     ----------
-    iterations : Newton iterations used after the starting guess.
-    residual : :math:`\\|U\\Lambda - \\Lambda U^T - M\\|_F`.
-    tol : the tolerance the residual met.
-    orthogonality : :math:`\\|U^TU - I\\|_F`.
-    margin : :math:`\\min\\operatorname{Re}\\sigma(U\\Lambda) > 0`, which tends to 0 at the fold.
-    start : ``"riccati"`` (cold start) or ``"warm"`` (given ``U0``), or ``"mixed"``.
+    iterations : ndarray of int
+        Newton iterations used after the starting guess.
+    residual : ndarray
+        :math:`\|U\Lambda - \Lambda U^T - M\|_F`.
+    tol : ndarray
+        The tolerance the residual met.
+    orthogonality : ndarray
+        :math:`\|U^TU - I\|_F`.
+    margin : ndarray
+        :math:`\min\operatorname{Re}\sigma(U\Lambda) > 0`, which tends to 0 at the fold.
+    start : str
+        ``"riccati"`` (cold start), ``"warm"`` (from ``U0``) or ``"mixed"``.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> M = symrb.hat([0.05, 0.1, 0.15])
+    >>> U, info = symrb.solve_moser_veselov(M, [0.7, 1.1, 1.6], return_info=True)
+    >>> info.start, bool(info.residual <= info.tol), bool(info.margin > 0)
+    ('riccati', True, True)
     """
 
     iterations: NDArray[np.int64]
@@ -314,12 +328,33 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
 
     Parameters
     ----------
-    M : array (..., n, n), skew-symmetric
-    lam : array (..., n), positive diagonal of :math:`\Lambda`
+    M : array_like, shape (..., n, n)
+        Skew-symmetric matrices.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, all entries > 0.
 
     Returns
     -------
-    array of the broadcast batch shape.
+    ndarray, shape (...)
+        :math:`t^*` for each item of the broadcast batch.
+
+    Examples
+    --------
+    For n = 2 the fold is at :math:`(\lambda_1+\lambda_2)/|M_{12}|`:
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> print(round(float(symrb.fold_scale([[0.0, 1.0], [-1.0, 0.0]], [1.0, 2.0])), 10))
+    3.0
+    >>> M = symrb.hat([0.5, 1.0, 1.5])
+    >>> t = symrb.fold_scale(M, [0.7, 1.1, 1.6])  # M itself is 4.9 % inside the domain
+    >>> print(round(float(t), 4))
+    1.0488
+    >>> U = symrb.solve_moser_veselov(0.999 * t * M, [0.7, 1.1, 1.6])  # just inside: solvable
+    >>> symrb.solve_moser_veselov(1.001 * t * M, [0.7, 1.1, 1.6])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    symrb.errors.OutOfDomainError: ... so M is 0.1 % past the fold
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
@@ -413,18 +448,27 @@ def solve_moser_veselov(
 
     Parameters
     ----------
-    M : array (..., n, n), skew-symmetric, 2 <= n
-    lam : array (..., n), the diagonal of :math:`\Lambda`, all entries > 0
-    tol : residual tolerance on :math:`\|U\Lambda-\Lambda U^T-M\|_F`; default
-        :math:`10\,\varepsilon\,\|M\|_F` per item
-    maxiter : most Newton iterations
-    U0 : optional starting guess in SO(n) (..., n, n), e.g. the previous step's solution; when
-        Newton from it fails or lands off the branch, the Riccati start is used instead
-    return_info : also return an :class:`MVSolveInfo`
+    M : array_like, shape (..., n, n)
+        Skew-symmetric right-hand sides, n >= 2.
+    lam : array_like, shape (..., n)
+        The diagonal of :math:`\Lambda`, all entries > 0.
+    tol : float, optional
+        The residual tolerance on :math:`\|U\Lambda-\Lambda U^T-M\|_F`; by default
+        :math:`10\,\varepsilon\,\|M\|_F` for each item.
+    maxiter : int, optional
+        The most Newton iterations.
+    U0 : array_like, shape (..., n, n), optional
+        A starting guess in SO(n), e.g. the previous step's solution; when Newton from it fails
+        or lands off the branch, the Riccati start is used instead.
+    return_info : bool, optional
+        Also return an :class:`MVSolveInfo`.
 
     Returns
     -------
-    U : array of the broadcast shape (..., n, n); with ``return_info``, ``(U, info)``.
+    U : ndarray, shape (..., n, n)
+        The solutions, in SO(n), for the broadcast batch.
+    info : MVSolveInfo
+        Only with ``return_info=True``.
 
     Raises
     ------
@@ -435,14 +479,32 @@ def solve_moser_veselov(
         :math:`\|M\|`, ``lam`` and how far past the fold ``M`` is (see :func:`fold_scale`).
     NotConvergedError
         Newton failed inside the domain (carries the residual and the iteration count).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> lam = np.array([0.7, 1.1, 1.6])
+    >>> M = symrb.hat([0.5, 1.0, 1.5])
+    >>> U = symrb.solve_moser_veselov(M, lam)
+    >>> bool(np.allclose(U @ np.diag(lam) - np.diag(lam) @ U.T, M))
+    True
+    >>> bool(np.allclose(U.T @ U, np.eye(3))), round(float(np.linalg.det(U)), 12)
+    (True, 1.0)
+
+    Past the fold there is no solution on the branch:
+
+    >>> symrb.solve_moser_veselov(3 * M, lam)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    symrb.errors.OutOfDomainError: U Lam - Lam U^T = M has no solution on the branch ...
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
     A = v.skew(M, "M", nn)
-    if tol is not None and not (np.isfinite(tol) and tol >= 0):
+    if tol is not None and not v.real_scalar(tol, "tol") >= 0:
         raise InputError(f"tol must be a finite number >= 0, got {tol!r}")
-    if int(maxiter) < 1:
-        raise InputError(f"maxiter must be >= 1, got {maxiter!r}")
+    maxiter = v.count(maxiter, "maxiter", 1)
     batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
     G = None
     if U0 is not None:

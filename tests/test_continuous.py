@@ -302,7 +302,7 @@ def test_integrate_validation() -> None:
         symrb.integrate(symrb.SymmetricRigidBody, (0, 1), {"Q": Q}, lam=lam)
     with pytest.raises(InputError, match="unexpected \\['M'\\]"):
         symrb.integrate(symrb.SymmetricRigidBody, (0, 1), {"Q": Q, "P": Q, "M": Q}, lam=lam)
-    with pytest.raises(InputError, match="M must be skew"):
+    with pytest.raises(InputError, match=r"y0\['M'\] must be skew"):
         symrb.integrate(symrb.RigidBody, (0, 1), (Q, Q), lam=lam)
     with pytest.raises(InputError, match="t_span"):
         symrb.integrate(symrb.RigidBody, (0, 1, 2), (Q, np.zeros((3, 3))), lam=lam)

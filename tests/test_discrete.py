@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from symrb import (
+    DiscreteFlowSolution,
     InputError,
     discrete_rigid_body_flow,
     jd_residual,
@@ -44,20 +45,22 @@ def test_three_algorithms_agree_over_ten_thousand_steps():
     Q0, M, rng = _start()
     steps = 10_000
     P0 = Q0 @ (0.5 * M)
-    Qs, Ps = symmetric_flow(Q0, P0, LAM3, 1.0, steps)
+    sym = symmetric_flow(Q0, P0, LAM3, 1.0, steps)
+    Qs, Msym = sym.y.Q, sym.y.M
     M1 = Q0.T @ P0 - P0.T @ Q0
-    QB, MB = mv_algorithm2(Qs[1], M1, LAM3, steps - 1)
-    QA = mv_algorithm1(Q0, Qs[1], LAM3, steps - 1)
-    Msym = np.swapaxes(Qs, -1, -2) @ Ps - np.swapaxes(Ps, -1, -2) @ Qs
+    mv2 = mv_algorithm2(Qs[1], M1, LAM3, steps - 1)
+    QB, MB = mv2.y.Q, mv2.y.M
+    QA = mv_algorithm1(Q0, Qs[1], LAM3, steps - 1).y.Q
+    assert sym.success and mv2.success
     R = random_SO(3, seed=rng)
-    QsR, _PsR = symmetric_flow(R @ Q0, R @ P0, LAM3, 1.0, steps)
+    QsR = symmetric_flow(R @ Q0, R @ P0, LAM3, 1.0, steps).y.Q
     spread = np.max(np.abs(R.T @ QsR - Qs))
     assert 0 < spread < 1e-10
     assert np.max(np.abs(QB - Qs[1:])) <= 10 * spread
     assert np.max(np.abs(MB - Msym[:-1])) <= 10 * spread * np.max(np.abs(M1))
     gap1 = np.max(np.abs(QA[1:] - QB))
     spread1 = max(
-        np.max(np.abs(Rk.T @ mv_algorithm1(Rk @ Q0, Rk @ Qs[1], LAM3, steps - 1) - QA))
+        np.max(np.abs(Rk.T @ mv_algorithm1(Rk @ Q0, Rk @ Qs[1], LAM3, steps - 1).y.Q - QA))
         for Rk in random_SO(3, (3,), seed=rng)
     )
     assert gap1 <= 20 * spread1  # the order of MV-Algorithm 1's own rounding spread
@@ -74,7 +77,7 @@ def test_mv_algorithm2_conserves_the_spectrum():
     rng = np.random.default_rng(10)
     lam = np.array([0.6, 0.9, 1.3, 1.7])
     M1 = random_so(4, seed=rng, scale=0.05)
-    _Q, MB = mv_algorithm2(random_SO(4, seed=rng), M1, lam, 1000)
+    MB = mv_algorithm2(random_SO(4, seed=rng), M1, lam, 1000).y.M
     ev0 = np.sort(np.linalg.eigvals(M1).imag)
     evs = np.sort(np.linalg.eigvals(MB).imag, axis=-1)
     assert np.max(np.abs(evs - ev0)) <= 1e-12 * np.max(np.abs(ev0))
@@ -102,7 +105,8 @@ def test_second_order():
     errs = []
     for h in (0.1, 0.05, 0.025):
         N = round(T / h)
-        t, Q, M = discrete_rigid_body_flow(Q0, M0, lam, h, N, save_every=N)
+        sol = discrete_rigid_body_flow(Q0, M0, lam, h, N, save_every=N)
+        t, Q, M = sol.t, sol.y.Q, sol.y.M
         assert t[-1] == pytest.approx(T)
         errs.append((np.abs(Q[-1] - QT).max(), np.abs(M[-1] - MT).max()))
     for a, b in zip(errs, errs[1:], strict=False):
@@ -116,7 +120,7 @@ def test_mv2_momentum_scaling():
     h, T = 0.01, 1.0
     N = round(T / h)
     U0 = solve_moser_veselov(h * M0, LAM3)
-    _Q, Ms = mv_algorithm2(Q0 @ U0, h * M0, LAM3, N - 1)
+    Ms = mv_algorithm2(Q0 @ U0, h * M0, LAM3, N - 1).y.M
     _QT, MT = _reference(Q0, M0, LAM3, (N - 1) * h)
     assert np.abs(Ms[-1] / h - MT).max() < 20 * h**2 * np.abs(M0).max()
 
@@ -125,26 +129,32 @@ def test_batch_equals_loop():
     rng = np.random.default_rng(5)
     Q0 = random_SO(3, size=(2,), seed=rng)
     M0 = random_so(3, size=(2,), seed=rng, scale=0.3)
-    t, Q, M = discrete_rigid_body_flow(Q0, M0, LAM3, 0.1, 20, save_every=5)
-    assert Q.shape == (5, 2, 3, 3) and M.shape == (5, 2, 3, 3) and t.shape == (5,)
+    sol = discrete_rigid_body_flow(Q0, M0, LAM3, 0.1, 20, save_every=5)
+    Q, M = sol.y.Q, sol.y.M
+    assert Q.shape == (5, 2, 3, 3) and M.shape == (5, 2, 3, 3) and sol.t.shape == (5,)
     for i in range(2):
-        _, Qi, Mi = discrete_rigid_body_flow(Q0[i], M0[i], LAM3, 0.1, 20, save_every=5)
-        assert np.allclose(Q[:, i], Qi, atol=1e-13) and np.allclose(M[:, i], Mi, atol=1e-13)
-    QB, MB = mv_algorithm2(Q0, 0.1 * M0, LAM3, 10)
+        one = discrete_rigid_body_flow(Q0[i], M0[i], LAM3, 0.1, 20, save_every=5)
+        assert np.allclose(Q[:, i], one.y.Q, atol=1e-13)
+        assert np.allclose(M[:, i], one.y.M, atol=1e-13)
+    mv2 = mv_algorithm2(Q0, 0.1 * M0, LAM3, 10)
     for i in range(2):
-        Qi, Mi = mv_algorithm2(Q0[i], 0.1 * M0[i], LAM3, 10)
-        assert np.allclose(QB[:, i], Qi, atol=1e-13) and np.allclose(MB[:, i], Mi, atol=1e-13)
+        one = mv_algorithm2(Q0[i], 0.1 * M0[i], LAM3, 10)
+        assert np.allclose(mv2.y.Q[:, i], one.y.Q, atol=1e-13)
+        assert np.allclose(mv2.y.M[:, i], one.y.M, atol=1e-13)
 
 
 def test_save_every_subsamples_the_full_run():
     Q0, M, _ = _start(6)
-    Qf, Pf = symmetric_flow(Q0, Q0 @ M, LAM3, 1.0, 12)
-    Qs, Ps = symmetric_flow(Q0, Q0 @ M, LAM3, 1.0, 12, save_every=4)
-    assert Qs.shape == (4, 3, 3)
-    assert np.array_equal(Qs, Qf[::4]) and np.array_equal(Ps, Pf[::4])
-    QA = mv_algorithm1(Q0, Qf[1], LAM3, 11, save_every=3)
-    QA1 = mv_algorithm1(Q0, Qf[1], LAM3, 11)
-    assert np.array_equal(QA, QA1[::3])
+    full = symmetric_flow(Q0, Q0 @ M, LAM3, 1.0, 12)
+    sub = symmetric_flow(Q0, Q0 @ M, LAM3, 1.0, 12, save_every=4)
+    assert sub.y.Q.shape == (4, 3, 3)
+    assert np.array_equal(sub.k, [0, 4, 8, 12]) and np.array_equal(sub.t, [0.0, 4.0, 8.0, 12.0])
+    assert np.array_equal(sub.y.Q, full.y.Q[::4]) and np.array_equal(sub.y.P, full.y.P[::4])
+    assert np.array_equal(sub.iterations, full.iterations)  # every step is counted
+    QA = mv_algorithm1(Q0, full.y.Q[1], LAM3, 11, save_every=3)
+    QA1 = mv_algorithm1(Q0, full.y.Q[1], LAM3, 11)
+    assert np.array_equal(QA.y.Q, QA1.y.Q[::3]) and np.array_equal(QA.k, [0, 3, 6, 9, 12])
+    assert np.array_equal(QA1.k, np.arange(13)) and np.array_equal(QA1.t, np.arange(13.0))
 
 
 def test_symmetric_step_matches_definition():
@@ -169,6 +179,8 @@ def test_validation_and_no_mutation():
         symmetric_flow(Q0, P0, LAM3, 0.1, -1)
     with pytest.raises(InputError, match="save_every must be"):
         mv_algorithm2(Q0, M, LAM3, 3, save_every=0)
+    with pytest.raises(InputError, match="save_every must be"):
+        mv_algorithm2(Q0, M, LAM3, 3, save_every=True)
     with pytest.raises(InputError, match="Q0 must be orthogonal"):
         symmetric_flow(2 * Q0, P0, LAM3, 0.1, 3)
     with pytest.raises(InputError, match="M must be skew"):
@@ -189,3 +201,81 @@ def test_symmetric_step_properties(seed, scale, h):
     M0 = Q0.T @ P0 - P0.T @ Q0
     M1 = Q1.T @ P1 - P1.T @ Q1
     assert np.allclose(M1, U.T @ M0 @ U, atol=1e-13 * (1 + np.abs(M0).max()))
+
+
+def test_result_object_names_the_states_and_counts_newton_iterations():
+    Q0, M, _ = _start(9, scale=0.2)
+    sym = symmetric_flow(Q0, Q0 @ M, LAM3, 0.5, 6, save_every=3)
+    assert isinstance(sym, DiscreteFlowSolution)
+    assert sym.success and sym.status == 0 and sym.message == "all 6 steps taken"
+    assert sorted(sym.y) == ["M", "P", "Q"] and sym.h == 0.5
+    assert np.array_equal(sym.t, [0.0, 1.5, 3.0])
+    # one solve per step; the first starts from the Riccati solution (which may already meet the
+    # tolerance), the others from an extrapolation that Newton has to polish
+    assert sym.iterations.shape == (6,) and np.all(sym.iterations[1:] >= 1)
+    assert sym.nit == sym.iterations.sum()
+    np.testing.assert_allclose(
+        sym.y.M, np.swapaxes(sym.y.Q, -1, -2) @ sym.y.P - np.swapaxes(sym.y.P, -1, -2) @ sym.y.Q
+    )
+    mv2 = mv_algorithm2(Q0, 0.1 * M, LAM3, 4)
+    assert mv2.h is None and np.array_equal(mv2.t, np.arange(5.0))
+    assert sorted(mv2.y) == ["M", "Q"] and mv2.iterations.shape == (5,)  # one more solve
+    assert sorted(mv_algorithm1(Q0, mv2.y.Q[1], LAM3, 4).y) == ["Q"]
+
+
+def test_a_solve_past_the_fold_stops_the_run_with_a_message():
+    Q0, M, _ = _start(10, scale=0.2)
+    # 10 M is far past the fold of J_D: the first step fails
+    sol = symmetric_flow(Q0, Q0 @ (10 * M), LAM3, 1.0, 5)
+    assert not sol.success and sol.status == -1
+    assert "step 1 of 5 failed" in sol.message and "past the fold" in sol.message
+    assert np.array_equal(sol.k, [0]) and sol.iterations.shape == (0,)
+    mv2 = mv_algorithm2(Q0, 10 * M, LAM3, 5)
+    assert not mv2.success and "step 1 of 5 failed" in mv2.message
+
+
+@pytest.mark.parametrize("flow", ["symmetric", "mv1", "mv2"])
+def test_a_failure_mid_run_keeps_the_states_reached(monkeypatch, flow):
+    """The fourth solve raises: the run returns the states up to the last completed step (appended
+    when save_every would have skipped it), the iterations of the solves done, and the reason."""
+    import symrb.discrete as dm
+
+    original = dm._Stepper.solve
+    calls = {"n": 0}
+
+    def failing(self, M):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise dm.OutOfDomainError("no solution (test)")
+        return original(self, M)
+
+    monkeypatch.setattr(dm._Stepper, "solve", failing)
+    Q0, M, _ = _start(11, scale=0.2)
+    if flow == "symmetric":
+        sol = symmetric_flow(Q0, Q0 @ M, LAM3, 0.5, 10, save_every=2)
+        last = 3  # steps 1-3 done, step 4 failed
+    elif flow == "mv1":
+        Q1 = solve_moser_veselov(0.1 * M, LAM3)
+        sol = mv_algorithm1(Q0, Q1, LAM3, 10, save_every=2)
+        last = 4  # Q_2, Q_3, Q_4 computed (steps 1-3), step 4 (Q_5) failed
+    else:
+        sol = mv_algorithm2(Q0, 0.1 * M, LAM3, 10, save_every=2)
+        last = 2  # the first solve and steps 1, 2; step 3 failed
+    assert not sol.success and sol.status == -1
+    assert "failed: no solution (test)" in sol.message
+    assert sol.k[-1] == last and sol.y.Q.shape[0] == len(sol.k)
+    assert sol.iterations.shape == (3,)
+
+
+def test_progress_bar(capsys, monkeypatch):
+    Q0, M, _ = _start(12)
+    sol = mv_algorithm2(Q0, M, LAM3, 50, save_every=50, progress=True)
+    err = capsys.readouterr().err
+    assert sol.success and "MV-Algorithm 2" in err and "50/50" in err
+    mv_algorithm2(Q0, M, LAM3, 50, save_every=50)
+    assert capsys.readouterr().err == ""
+    monkeypatch.setitem(__import__("sys").modules, "tqdm", None)  # tqdm not installed
+    with pytest.raises(ImportError, match=r"pip install 'symrb\[progress\]'"):
+        symmetric_flow(Q0, Q0 @ M, LAM3, 0.1, 5, progress=True)
+    with pytest.raises(InputError, match="progress must be True or False"):
+        symmetric_flow(Q0, Q0 @ M, LAM3, 0.1, 5, progress="yes")

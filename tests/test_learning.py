@@ -136,6 +136,17 @@ def test_training_decreases_loss():
     assert np.all(np.diff(res.losses) <= 1e-12)  # small steps: monotone descent
 
 
+def test_training_progress_bar(capsys):
+    x0, y, _c = learning.toy_classification(16, seed=1)
+    K0, b0 = np.zeros((2, 2, 2)), np.zeros((2, 2))
+    quiet = learning.train(x0, y, K0, b0, steps=20, lr=0.01)
+    assert capsys.readouterr().err == ""
+    shown = learning.train(x0, y, K0, b0, steps=20, lr=0.01, progress=True)
+    err = capsys.readouterr().err
+    assert "train" in err and "20/20" in err
+    np.testing.assert_array_equal(shown.losses, quiet.losses)  # the bar changes nothing else
+
+
 @pytest.mark.parametrize(
     ("call", "match"),
     [
