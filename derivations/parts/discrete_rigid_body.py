@@ -275,7 +275,7 @@ def _mp_gap(a: list[Any], b: list[Any]) -> Any:
 D7 = claim(
     "D7",
     label="mvoptprobm, discrbeq, discrbopteqns, Ukdef, discham, symequation, equ_final_th_2.7",
-    title="Discrete symmetric rigid body from optimal control on SO(n)",
+    title="Discrete symmetric rigid body from optimal control on $\\mathrm{SO}(n)$",
     statement="Minimising [[cost]] subject to [[dynamics]] with $Q_0$ and $Q_N$ given: with the "
     "Hamiltonian [[hamiltonian]], whose critical points in $U$ on $SO(n)$ satisfy [[critical]] "
     "(from [[lagrangian]], [[dlagrangian]]), one gets symequation [[symequation]], the costate "
@@ -294,18 +294,27 @@ D7 = claim(
     "$n=3$ and small momenta) and $U_k$ is the one on the branch through the identity (all "
     "eigenvalues of $U_k\\Lambda$ in the open right half-plane), unique, and existing only up "
     "to a fold (D10).",
-    note="The necessary conditions (symequation, the costate equation, equ_final_th_2.7, the "
-    "sign change) hold as printed, for every n.  What the theorem does not state: the dynamics "
-    "in discrbeq carry a frozen index k (with it the proof's identity sum tr(Lambda U_k) = sum "
-    "tr(Q_k Lambda Q_{k+1}^T) fails); the multiplier has the size n of the matrices, not the "
-    "number N of steps; the costate of the maximum principle is a gl(n) covector, defined up to "
-    "Q_k S_k with S_k symmetric (Ukdef's right side does not see S_k), so 'P_k in SO(n)' is a "
-    "choice of representative that exists when ||M||_op < 2 (S9, S10) and is kept by the "
-    "equations; P -> -P changes det P by (-1)^n; and Ukdef does not define U_k without naming "
-    "the branch: for n = 3 near M = 0 it has four solutions in SO(3), I and the half-turns "
-    "about the principal axes continued.",
+    note="The dynamics carry a frozen index, the multiplier $\\Sigma$ is said to be $N \\times "
+    "N$, and the theorem leaves the choice of $P_k$ and of the branch of $U_k$ unstated. "
+    "Corrected: $Q_{r+1} = Q_r U_r$, $\\Sigma$ is $n \\times n$, $P_k \\in \\mathrm{SO}(n)$ is a "
+    "choice of costate, and $U_k$ is the solution on the branch through the identity. The "
+    "necessary conditions (the stationarity equation of the proof, the costate equation, the "
+    "equation for $U_k$ before the sign change, and the sign change itself) hold as printed, for "
+    "every $n$. With the frozen index the proof's identity $\\sum_k \\operatorname{tr}(\\Lambda "
+    "U_k) = \\sum_k \\operatorname{tr}(Q_k \\Lambda Q_{k+1}^T)$ fails; the multiplier has the "
+    "size $n$ of the matrices, not the number $N$ of steps; the costate of the maximum principle "
+    "is a $\\mathfrak{gl}(n)$ covector, defined up to $Q_k S_k$ with $S_k$ symmetric (the right "
+    "side of the equation for $U_k$ does not see $S_k$), so '$P_k \\in \\mathrm{SO}(n)$' is a "
+    "choice of representative that exists when $\\|M\\|_{\\mathrm{op}} < 2$ (S9, S10) and is kept "
+    "by the equations; $P \\mapsto -P$ changes $\\det P$ by $(-1)^n$; and the equation for $U_k$ "
+    "does not define $U_k$ without naming the branch: for $n = 3$ near $M = 0$ it has four "
+    "solutions in $\\mathrm{SO}(3)$, $I$ and the half-turns about the principal axes continued.",
     expected="holds after correction",
     section="2.2",
+    where="Section 2.1 (The discrete symmetric rigid body), the first definition (minimise "
+    "$\\sum_k \\operatorname{tr}(\\Lambda U_k)$ subject to $Q_{k+1} = Q_k U_k$) and the first "
+    "theorem (the equations $Q_{k+1} = Q_k U_k$, $P_{k+1} = P_k U_k$ with $U_k \\Lambda - "
+    "\\Lambda U_k^T = Q_k^T P_k - P_k^T Q_k$), with its proof",
 )
 _A, _Sig, _dU = matrix("A"), matrix("Sigma"), matrix(r"\delta U")
 _Ur, _Qr, _Qr1 = matrix("U_r"), matrix("Q_r"), matrix("Q_{r+1}")
@@ -470,7 +479,8 @@ def _costate_gap(P0_formula: sp.Eq) -> float:
     run = _mp_run()
     P0x = _numeric(P0_formula.rhs, {"Q_0": run["Q0"], "M_0": run["M0"]})
     # the theorem's map (h = 1) for Lambda/h is the reference's map at step h
-    Qs, Ps = symrb.symmetric_flow(run["Q0"], P0x, _LAM3 / _H, 1.0, _STEPS)
+    sol = symrb.symmetric_flow(run["Q0"], P0x, _LAM3 / _H, 1.0, _STEPS)
+    Qs, Ps = sol.y.Q, sol.y.P
     dq = np.abs(Qs - run["Qf"]).max()
     off = np.abs(np.swapaxes(Ps, -1, -2) @ Ps - np.eye(3)).max()
     return float(np.max([dq, off, np.abs(np.linalg.det(Ps) - 1.0).max()]))
@@ -579,7 +589,7 @@ def d7_symrb_flow_is_extremal() -> float:
     rng = np.random.default_rng(71)
     lam = np.array([1.6, 1.9, 2.3, 2.7])
     Q0x = ref.random_rotation(4, rng)
-    Qs, _Ps = symrb.symmetric_flow(Q0x, 0.2 * rng.standard_normal((4, 4)), lam, 1.0, 8)
+    Qs = symrb.symmetric_flow(Q0x, 0.2 * rng.standard_normal((4, 4)), lam, 1.0, 8).y.Q
     Us = np.swapaxes(Qs[:-1], -1, -2) @ Qs[1:]
     worst = []
     for k in range(1, len(Qs) - 1):
@@ -598,7 +608,7 @@ def d7_symrb_flow_is_extremal() -> float:
 D8 = claim(
     "D8",
     label="discrbopteqns1, Ukdef1",
-    title="Symmetric representation of the discrete rigid body; J_D and its derivative J",
+    title="Symmetric representation of the discrete rigid body; $J_D$ and its derivative $J$",
     statement="The symmetric representation [[discrbopteqns1]] with [[Ukdef1]], where [[JD]] maps "
     "into $\\mathfrak{so}(n)$; the derivative of $J_D$ at the identity is the inertia operator, "
     "[[dJD]], which is invertible, so $J_D$ is a diffeomorphism from a neighbourhood of $I$ in "
@@ -606,9 +616,12 @@ D8 = claim(
     "then $Q_{k+1}$ and $P_{k+1}$, and transports the momentum: [[transport]].",
     expected="holds",
     section="2.2",
-    note="The local inverse of J_D is symrb.solve_moser_veselov (page 'The Moser-Veselov "
-    "solver'); discrete_rigid_body_flow runs the algorithm at step h (J_D(U_k) = h(Q_k^T P_k - "
-    "P_k^T Q_k)) from P_0 = Q_0 M_0/2.",
+    where="Section 2.1, the equations after the proof of the first theorem: the symmetric "
+    "representation of the discrete rigid body, $J_D U = U\\Lambda - \\Lambda U^T$, its "
+    "derivative $J$ at the identity, and the algorithm $(Q_k, P_k) \\mapsto (Q_{k+1}, P_{k+1})$",
+    note="The local inverse of $J_D$ is `symrb.solve_moser_veselov` (page 'The Moser-Veselov "
+    "solver'); `symrb.discrete_rigid_body_flow` runs the algorithm at step $h$, $J_D(U_k) = "
+    "h(Q_k^T P_k - P_k^T Q_k)$, from $P_0 = Q_0 M_0/2$.",
 )
 _eps, _Omega = sp.Symbol("epsilon"), matrix("Omega")
 D8.formula("discrbopteqns1", DISCRBOPTEQNS)
@@ -743,11 +756,13 @@ def d8_symrb_flows_against_50_digits() -> float:
     import symrb
 
     run = _mp_run()
-    t, Qd, Md = symrb.discrete_rigid_body_flow(run["Q0"], run["M0"], _LAM3, _H, _STEPS)
-    _tb, Qb, _Mb = symrb.discrete_rigid_body_flow(
+    flow = symrb.discrete_rigid_body_flow(run["Q0"], run["M0"], _LAM3, _H, _STEPS)
+    t, Qd, Md = flow.t, flow.y.Q, flow.y.M
+    Qb = symrb.discrete_rigid_body_flow(
         np.stack([run["Q0"]] * 2), np.stack([run["M0"]] * 2), _LAM3, _H, _STEPS
-    )
-    QS, PS = symrb.symmetric_flow(run["Q0"], run["P0"], _LAM3, _H, _STEPS)
+    ).y.Q
+    sym = symrb.symmetric_flow(run["Q0"], run["P0"], _LAM3, _H, _STEPS)
+    QS, PS = sym.y.Q, sym.y.P
     errs = [np.abs(t - _H * np.arange(_STEPS + 1)), np.abs(Qd - run["Qf"]), np.abs(Md - run["Mcf"])]
     errs += [np.abs(Qb - run["Qf"][:, None]), np.abs(QS - run["Qf"]), np.abs(PS - run["Pf"])]
     return float(np.max([e.max() for e in errs]))
@@ -771,16 +786,24 @@ D9 = claim(
     "the costate ends at [[endpoint_unflipped]], where [[final_unflipped]]; after the sign "
     "change used for Ukdef this becomes the theorem's [[endpoint]] with [[Ukdef2]], so the "
     "theorem's equations hold as stated.",
-    note="With the sum starting at k = 1 the first control U_0 carries no running cost and "
-    "Ukdef2 fails at k = 0.  The endpoint sign of m8 is wrong for the Hamiltonian's sign (the "
-    "maximum principle gives p_N = -dphi/dx_N there), but the theorem applies the flip P -> -P, "
-    "so its final P_N = +dphi/dQ_N is right: two sign slips cancel.  The evidence compares the "
-    "derivative of the cost along U_k e^(e xi) (central differences of an independently written "
-    "cost, n = 3, N = 4, two samples, phi(Q) = 1/2 ||Q - T||_F^2) with 1/2 tr(U_k^T (J_D(U_k) - "
-    "R_k) U_k xi), R_k the right side of the Ukdef2 variant, so it vanishes for every xi exactly "
-    "when that variant holds.",
+    note="The running cost starts at $k = 1$ (so the equation for $U_0$ fails), the sum over the "
+    "samples is mistyped, and the endpoint sign rests on two slips that cancel. Corrected: the "
+    "running cost starts at $k = 0$, the sum runs over $a = 1, \\dots, M$, and the theorem's "
+    "$P^a_N = \\partial\\phi/\\partial Q^a_N$ is right after the sign change $P \\mapsto -P$. "
+    "With the sum starting at $k = 1$ the first control $U_0$ carries no running cost and the "
+    "equation for $U_k$ fails at $k = 0$. The endpoint sign of the second proposition of Section "
+    "2 is wrong for the Hamiltonian's sign (the maximum principle gives $p_N = "
+    "-\\partial\\phi/\\partial x_N$ there), but the theorem applies the flip $P \\mapsto -P$, so "
+    "its final $P_N = +\\partial\\phi/\\partial Q_N$ is right: two sign slips cancel. The "
+    "evidence compares the derivative of the cost along $U_k e^{\\epsilon\\xi}$ (central "
+    "differences of an independently written cost, $n = 3$, $N = 4$, two samples, $\\phi(Q) = "
+    "\\tfrac12\\|Q - T\\|_F^2$) with $\\tfrac12 \\operatorname{tr}(U_k^T (J_D(U_k) - R_k) U_k "
+    "\\xi)$, $R_k$ the right side of the variant of the equation for $U_k$, so it vanishes for "
+    "every $\\xi$ exactly when that variant holds.",
     expected="holds after correction",
     section="2.2",
+    where="Section 2.1, the second definition (several samples $Q^a$ and a terminal cost $\\phi$) "
+    "and the second theorem (with $P^a_N = \\partial\\phi/\\partial Q^a_N$), with its proof",
 )
 _a, _Msamples = sp.symbols("a M", integer=True, positive=True)
 Qa, Pa, QaN, PaN = matrix("Q^a_k"), matrix("P^a_k"), matrix("Q^a_N"), matrix("P^a_N")
@@ -904,9 +927,12 @@ D10 = claim(
     "for small $M_k$, up to a fold; for $n=2$, [[n2]].",
     expected="holds",
     section="2.3",
-    note="mv3 with mv2 gives M_{k+1} = Lambda Omega_k^T - Omega_k Lambda = -J_D(Omega_k): the "
-    "momentum is transported by a conjugation.  symrb's mv_algorithm1, mv_algorithm2 and "
-    "symmetric_flow are written from their own equations and share only the solver of mv2.",
+    where="Section 2.2 (Classical Moser-Veselov equations), the three Moser-Veselov equations for "
+    "$\\Omega_k$, $M_k$ and $M_{k+1}$, and the paragraphs 'MV-Algorithm 1' and 'MV-Algorithm 2'",
+    note="The third Moser-Veselov equation with the second gives $M_{k+1} = \\Lambda\\Omega_k^T - "
+    "\\Omega_k\\Lambda = -J_D(\\Omega_k)$: the momentum is transported by a conjugation. symrb's "
+    "`mv_algorithm1`, `mv_algorithm2` and `symmetric_flow` are written from their own equations "
+    "and share only the solver of the second equation.",
 )
 MV1 = D10.formula("mv1", eq(Omk, Qk.T * Qkm1))
 MV2 = D10.formula("mv2", eq(Mk, MV_MOMENTUM.outputs["M"].xreplace({Om: Omk})))
@@ -990,9 +1016,9 @@ def d10_symrb_algorithms_against_50_digits() -> float:
 
     run = _mp_run()
     Qf = run["Qf"]
-    QA = symrb.mv_algorithm1(run["Q0"], Qf[1], _LAM3, _STEPS - 1)
-    QB, _MB = symrb.mv_algorithm2(Qf[1], run["Msf"][0], _LAM3, _STEPS - 1)
-    QS, _PS = symrb.symmetric_flow(run["Q0"], run["P0"], _LAM3, _H, _STEPS)
+    QA = symrb.mv_algorithm1(run["Q0"], Qf[1], _LAM3, _STEPS - 1).y.Q
+    QB = symrb.mv_algorithm2(Qf[1], run["Msf"][0], _LAM3, _STEPS - 1).y.Q
+    QS = symrb.symmetric_flow(run["Q0"], run["P0"], _LAM3, _H, _STEPS).y.Q
     errs = [np.abs(QA - Qf).max(), np.abs(QB - Qf[1:]).max(), np.abs(QS - Qf).max()]
     return float(np.max(errs))
 
@@ -1017,6 +1043,9 @@ D11 = claim(
     "[[mv3]].",
     expected="holds",
     section="2.3",
+    where="Section 2.2, the paragraph 'Discrete Variational Principle': stationary points of "
+    "$\\hat S = \\sum_k \\operatorname{tr}(Q_k \\Lambda Q_{k+1}^T)$ on sequences of orthogonal "
+    "matrices",
 )
 S_TERM = sp.Trace(Qk * Lam * Qk1.T)
 D11.formula("mvl", eq(sp.Symbol(r"\hat{S}"), sp.Sum(S_TERM, (_k, 0, _N - 1))))
@@ -1065,9 +1094,9 @@ def d11_symrb_sequences_stationary() -> float:
     lam = np.array([0.6, 0.9, 1.3, 1.7])
     Q0x = ref.random_rotation(4, rng)
     Q1x = Q0x @ expm(ref.random_skew(4, rng, 0.1))
-    QA = symrb.mv_algorithm1(Q0x, Q1x, lam, 7)
+    QA = symrb.mv_algorithm1(Q0x, Q1x, lam, 7).y.Q
     M1 = ref.J_D((Q1x.T @ Q0x).T, lam)  # mv2: M_1 = Omega_1^T Lam - Lam Omega_1 = J_D(Omega_1^T)
-    QB, _MB = symrb.mv_algorithm2(Q1x, M1, lam, 7)
+    QB = symrb.mv_algorithm2(Q1x, M1, lam, 7).y.Q
     worst = []
     for seq in (QA, np.concatenate([Q0x[None], QB])):
         for k in range(1, len(seq) - 1):
@@ -1097,12 +1126,17 @@ D12 = claim(
     "(which is Mdef1 by Ukdef1).  Conversely a Moser-Veselov solution gives "
     "[[converse]], a costate in $\\mathfrak{gl}(n)$; one in $SO(n)$ exists when the momentum's "
     "operator norm is below 2 (S9, S10): that is the 'certain set'.",
-    note="With Q_{k+1} = Q_k U_k, mv1 gives Omega_{k+1} = Q_{k+1}^T Q_k = U_k^T, mv2 then gives "
-    "M_{k+1} = U_k Lambda - Lambda U_k^T = J_D(U_k), and mv3 transports it as the symmetric "
-    "algorithm does.  With a time step h the momenta are h times the continuous ones "
-    "(symrb.discrete).",
+    note="The paper identifies $U$ with the body angular momentum, but $U_k$ is orthogonal, not "
+    "skew. Corrected: $U_k^T$ is the Moser-Veselov body angular velocity $\\Omega_{k+1}$, and the "
+    "momentum is $M_{k+1} = J_D(U_k)$. With $Q_{k+1} = Q_k U_k$, the first Moser-Veselov equation "
+    "gives $\\Omega_{k+1} = Q_{k+1}^T Q_k = U_k^T$, the second then gives $M_{k+1} = U_k\\Lambda "
+    "- \\Lambda U_k^T = J_D(U_k)$, and the third transports it as the symmetric algorithm does. "
+    "With a time step $h$ the momenta are $h$ times the continuous ones (`symrb.discrete`).",
     expected="holds after correction",
     section="2.3",
+    where="Section 2.2, the last paragraph: a solution $(Q_k, P_k)$ of the symmetric equations "
+    "gives the Moser-Veselov momentum $M_{k+1} = Q_k^T P_k - P_k^T Q_k$ (and Section 2.1, 'if we "
+    "identify $U$ with the body angular momentum')",
 )
 D12.formula("discrbopteqns1", DISCRBOPTEQNS)
 D12.formula("Ukdef1", UKDEF)
@@ -1184,7 +1218,7 @@ def d12_symrb_momenta_against_50_digits() -> float:
 
     run = _mp_run()
     Qf, Pf, Msf = run["Qf"], run["Pf"], run["Msf"]
-    _QB, MB = symrb.mv_algorithm2(Qf[1], Msf[0], _LAM3, _STEPS - 1)
+    MB = symrb.mv_algorithm2(Qf[1], Msf[0], _LAM3, _STEPS - 1).y.M
     _Q1, _P1, Us = symrb.symmetric_step(Qf[:-1], Pf[:-1], _LAM3, _H)  # a batch of 12 states
     errs = [np.abs(MB - Msf[:-1]).max(), np.abs(ref.J_D(Us, _LAM3) - Msf[:-1]).max()]
     return float(np.max(errs))
