@@ -18,6 +18,9 @@ from derivations.registry import ClaimResult, EvidenceResult, get_claim
 
 __all__ = [
     "plain",
+    "prose",
+    "short_where",
+    "breakable",
     "evidence_table",
     "claim_markdown",
     "check",
@@ -38,10 +41,169 @@ def plain(text: str) -> str:
     out = []
     for piece in pieces:
         if piece.startswith("$") and piece.endswith("$") and len(piece) > 1:
-            out.append(piece.replace("|", r"\vert "))
+            out.append(piece.replace("\\|", r"\Vert ").replace("|", r"\vert "))
         else:
             out.append(re.sub(r"([*_|\\`<>\[\]])", r"\\\1", piece))
     return "".join(out)
+
+
+def prose(text: str, cell: bool = False) -> str:
+    """A claim's ``title``, ``note`` or ``where``, which are Markdown with ``$...$`` math, ready to
+    embed in a page: whitespace made single, and with ``cell=True`` (inside a Markdown table) no
+    ``|`` left to split the cell (``\\|`` in text; ``\\Vert``/``\\vert`` in math)."""
+    text = " ".join(text.split())
+    if not cell:
+        return text
+    out = []
+    for piece in re.split(r"(\$[^$]+\$)", text):
+        if len(piece) > 1 and piece.startswith("$") and piece.endswith("$"):
+            out.append(piece.replace("\\|", r"\Vert ").replace("|", r"\vert "))
+        else:
+            out.append(re.sub(r"(?<!\\)\|", r"\|", piece))
+    return "".join(out)
+
+
+def _math_pieces(text: str) -> list[tuple[bool, str]]:
+    """``text`` cut into ``(is_math, piece)`` pieces at its ``$...$`` formulas."""
+    pieces = re.split(r"(\$[^$]+\$)", text)
+    return [(p.startswith("$") and p.endswith("$") and len(p) > 1, p) for p in pieces]
+
+
+def short_where(where: str) -> str:
+    """``where`` without its parentheses and without what follows its first colon: the section
+    and the item, for a table."""
+    out: list[str] = []
+    depth = 0
+    for is_math, piece in _math_pieces(where):
+        if is_math:
+            if not depth:
+                out.append(piece)
+            continue
+        for ch in piece:
+            depth += ch == "("
+            if not depth:
+                out.append(ch)
+            depth -= ch == ")" and depth > 0
+    text = " ".join("".join(out).split()).replace(" ,", ",")
+    head = []
+    for is_math, piece in _math_pieces(text):
+        if not is_math and ": " in piece:
+            head.append(piece.split(": ", 1)[0])
+            break
+        head.append(piece)
+    return "".join(head).strip()
+
+
+_TEX_TOKEN = re.compile(r"\\[A-Za-z]+|\\.|\s+|.", re.DOTALL)
+_RELATIONS = {
+    "=", "<", ">", r"\le", r"\leq", r"\ge", r"\geq", r"\ne", r"\neq", r"\approx", r"\equiv",
+    r"\mapsto", r"\to", r"\rightarrow", r"\sim",
+}  # fmt: skip
+_OPENERS = {"(": ")", "[": "]", r"\langle": r"\rangle", r"\{": r"\}", r"\begin": r"\end"}
+_BREAK_AFTER = {",", r"\quad", r"\qquad"}
+_UNSEEN = {"{", "}", "_", "^", r"\left", r"\right", r"\limits", r"\,", r"\;", r"\!", r"\quad"}
+_TALL = {r"\frac", r"\sum", r"\int", r"\prod"}
+
+
+def _tex_width(tokens: list[str]) -> int:
+    """A rough width of TeX tokens, in symbols (grouping and scripts count nothing)."""
+    return sum(1 for t in tokens if t.strip() and t not in _UNSEEN)
+
+
+def _after(tokens: list[str], i: int) -> int:
+    """The index of the first token after ``i`` that is not a space."""
+    j = i + 1
+    while j < len(tokens) and tokens[j].isspace():
+        j += 1
+    return j
+
+
+def _closing_right(tokens: list[str], i: int) -> int:
+    """The index of the ``\\right`` closing the ``\\left`` at ``i`` (-1 when there is none)."""
+    depth = 0
+    for j in range(i, len(tokens)):
+        depth += (tokens[j] == r"\left") - (tokens[j] == r"\right")
+        if depth == 0:
+            return j
+    return -1
+
+
+def _split_tex(tex: str, limit: int) -> list[str]:
+    """Cut a formula where a line may break: after a relation, a binary ``+``/``-``, a comma or a
+    ``\\quad`` at its top level.  A ``\\left``...``\\right`` pair at the top level
+    that is wider than ``limit`` becomes a ``\\bigl``...``\\bigr`` pair (``\\Bigl``...``\\Bigr``
+    around fractions, sums and integrals), whose inside may then break too.  An operator that
+    ends a piece is followed by ``{}`` so that TeX keeps its spacing."""
+    tokens = _TEX_TOKEN.findall(tex)
+    pieces: list[list[str]] = [[]]
+    stack: list[str] = []  # the token that closes each open group
+    last = ""  # the last thing at the top level: "" (nothing), "op", "open" or "x" (an operand)
+    i = 0
+    while i < len(tokens):
+        t = tokens[i]
+        if t in (r"\left", r"\right"):
+            d = _after(tokens, i)
+            if t == r"\left":
+                close = _closing_right(tokens, i)
+                rd = _after(tokens, close) if close > 0 else len(tokens)
+                wide = _tex_width(tokens[i:close]) > limit
+                if not stack and rd < len(tokens) and d < close and wide:
+                    size = "B" if _TALL & set(tokens[d + 1 : close]) else "b"
+                    opening = "" if tokens[d] == "." else f"\\{size}igl{tokens[d]}"
+                    closing = "" if tokens[rd] == "." else f"\\{size}igr{tokens[rd]}"
+                    tokens = tokens[:i] + tokens[d + 1 : close] + [closing] + tokens[rd + 1 :]
+                    pieces[-1].append(opening)
+                    last = "open"
+                    continue
+                stack.append(r"\right")
+            elif stack and stack[-1] == r"\right":
+                stack.pop()
+            pieces[-1].extend(tokens[i : d + 1])
+            i = d + 1
+            last = last if stack else "x"
+            continue
+        top = not stack
+        if t in _OPENERS:
+            stack.append(_OPENERS[t])
+        elif t == "{":
+            stack.append("}")
+        elif stack and t == stack[-1]:
+            stack.pop()
+        if top and t.strip():
+            pieces[-1].append(t)
+            operator = (t in _RELATIONS and last) or (t in ("+", "-") and last == "x")
+            if operator:
+                pieces[-1].append("{}")
+            nxt = tokens[_after(tokens, i)] if _after(tokens, i) < len(tokens) else ""
+            if operator or (t in _BREAK_AFTER and nxt not in _BREAK_AFTER):
+                pieces.append([])
+            if t in _RELATIONS or t in ("+", "-", ","):
+                last = "op"
+            elif t in _OPENERS or t == "{":
+                last = "open"
+            elif t not in (r"\quad", r"\qquad"):
+                last = "x"
+        else:
+            pieces[-1].append(t)
+            if not stack and t.strip():
+                last = "x"  # a group just closed at the top level
+        i += 1
+    out = ["".join(p).strip() for p in pieces]
+    return [p for p in out if p]
+
+
+def breakable(text: str, limit: int = 24) -> str:
+    """``text`` with every ``$...$`` formula wider than ``limit`` symbols cut into several
+    formulas separated by spaces, where a line may break (MathJax 3 never breaks a formula, so a
+    long one would be cut off or scroll in a narrow column).  Display math is left alone."""
+
+    def cut(m: re.Match[str]) -> str:
+        tex = m.group(1)
+        if _tex_width(_TEX_TOKEN.findall(tex)) <= limit:
+            return m.group(0)
+        return " ".join(f"${piece}$" for piece in _split_tex(tex, limit))
+
+    return re.sub(r"(?<![$\\])\$([^$]+)\$(?!\$)", cut, text)
 
 
 def _fmt_residual(e: Mapping[str, Any]) -> str:
@@ -68,12 +230,13 @@ def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> st
 def claim_markdown(result: ClaimResult) -> str:
     """Statement, erratum (printed/corrected), note, outcome and evidence table of a claim."""
     claim = get_claim(result.id)
-    parts = [f"**{claim.id}** (`{claim.label}`): {claim.render('statement')}"]
+    where = f"{prose(short_where(claim.where))}; LaTeX label" if claim.where else "LaTeX label"
+    parts = [f"**{claim.id}** ({where} `{claim.label}`): {breakable(claim.render('statement'))}"]
     if claim.printed:
-        parts.append(f"*Printed in the paper:* {claim.render('printed')}")
-        parts.append(f"*Corrected:* {claim.render('corrected')}")
+        parts.append(f"*Printed in the paper:* {breakable(claim.render('printed'))}")
+        parts.append(f"*Corrected:* {breakable(claim.render('corrected'))}")
     if claim.note:
-        parts.append(f"*Note:* {plain(claim.note)}")
+        parts.append(f"*Note:* {prose(claim.note)}")
     parts.append(f"Outcome: **{result.outcome}** (recorded: {claim.expected}).")
     parts.append(evidence_table(result.evidence))
     return "\n\n".join(parts)

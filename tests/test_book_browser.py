@@ -1,23 +1,41 @@
 """Open every page of the built book in headless Chromium and check what a reader would see.
 
-For each HTML page of ``book/_build/html`` (served from 127.0.0.1 by a local HTTP server):
+For each HTML page of the built book (served from 127.0.0.1 by a local HTTP server):
 
 * no request leaves 127.0.0.1 (requests elsewhere are recorded and aborted), and no local
-  resource answers with an HTTP error;
-* every ``<img>`` has loaded (``naturalWidth > 0``);
+  resource answers with an HTTP error; no uncaught JavaScript error;
+* every ``<img>`` has loaded (``naturalWidth > 0``) and has a meaningful ``alt`` text (not empty,
+  not a file name such as the hashed ``_images/3f2a...png`` that MyST-NB writes by default, at
+  least two words; Sphinx's expand/collapse icons on the module index are controls, not
+  pictures, and are left out);
 * on pages that load MathJax (Sphinx adds it only to pages with math), typesetting finishes, at
-  least one ``mjx-container`` exists, and no raw TeX delimiter is left in the visible text;
-* no uncaught JavaScript error.
+  least one ``mjx-container`` exists, no formula is a MathJax error, and no raw TeX is left in
+  the visible text;
+* the visible text (code, signatures and typeset math left out) holds no literal HTML tag
+  (``<br>``), no Markdown syntax (``**``, ``__``, ``*emphasis*``, backticks, backslash escapes)
+  and no Markdown table that failed to render (lines of ``| a | b |`` or ``|---|``), and no
+  rendered table has a row of raw pipes or a separator row shown as data.
+
+The errata page must have a summary table listing every erratum and one section (an ``h2``
+listed in the page's contents panel) per erratum; the errata are the claims whose outcome in
+``verify.json`` beside the built book (else the outcome recorded in the registry) is *holds after
+correction* or *fails*.  The claims and errata pages are also looked at as a reader would, at
+desktop width (1280 px) and on a phone (400 px): the page does not scroll sideways, no text is cut
+off by a box that hides overflow, no text lies outside the window, and every table fits its
+column without horizontal scrolling.  Their screenshots are saved (in ``SYMRB_SCREENSHOT_DIR``
+when set, else in pytest's temporary directory).
 
 Playwright drives the system Chromium at ``/usr/bin/chromium`` (``playwright install`` is never
 used). Without a built book or without Chromium the test is skipped, except in CI (``CI=true``),
-where it fails.  Set ``SYMRB_SCREENSHOT_DIR`` to save a full-page screenshot of every page.
+where it fails.  Set ``SYMRB_SCREENSHOT_DIR`` to save a full-page screenshot of every page, and
+``SYMRB_BOOK_HTML`` to check a book built elsewhere (default ``book/_build/html``).
 """
 
 from __future__ import annotations
 
 import functools
 import http.server
+import json
 import os
 import re
 import threading
@@ -31,7 +49,7 @@ import pytest
 pytestmark = pytest.mark.browser
 
 ROOT = Path(__file__).resolve().parents[1]
-HTML = ROOT / "book" / "_build" / "html"
+HTML = Path(os.environ.get("SYMRB_BOOK_HTML", ROOT / "book" / "_build" / "html")).resolve()
 CHROMIUM = Path("/usr/bin/chromium")
 LAUNCH_ARGS = [
     "--no-sandbox",
@@ -43,10 +61,138 @@ LAUNCH_ARGS = [
     "--disable-sync",
 ]
 LOCAL_HOSTS = {"127.0.0.1"}
-# TeX delimiters that MathJax would have replaced; seen in visible text, they mean math did not render.
-RAW_TEX = re.compile(r"\\\(|\\\)|\\\[|\\\]|\$\$|\\begin\{")
+ERRATA_OUTCOMES = ("holds after correction", "fails")
+# Pages looked at as a reader would, at these window widths (px).
+VISUAL_PAGES = ("claims.html", "errata.html")
+WIDTHS = (1280, 400)
+
+# TeX that MathJax would have replaced; seen in visible text, it means math did not render.
+RAW_TEX = re.compile(
+    r"\\\(|\\\)|\\\[|\\\]|\$\$|\\begin\{|\$[^$\n]*[\\^_{}][^$\n]*\$"
+    r"|\\(?:frac|partial|left|right|mathrm|mathfrak|operatorname|langle|rangle|lVert|rVert|sum)\b"
+)
+# Literal HTML tags in visible text: the tag was escaped instead of rendered.
+HTML_TAG = re.compile(
+    r"</?(?:br|p|div|span|b|i|em|strong|code|sub|sup|a|img|table|thead|tbody|tr|td|th|ul|ol|li"
+    r"|hr|pre|details|summary|h[1-6])"
+    r"(?:\s+[a-z_:][-\w:.]*(?:\s*=\s*(?:\"[^\"]*\"|'[^']*'|[^\s\"'=<>`]+))?)*\s*/?>",
+    re.IGNORECASE,
+)
+# Markdown syntax left in visible text.
+MARKDOWN = {
+    "bold or emphasis markers **": re.compile(r"\*\*"),
+    "bold or emphasis markers __": re.compile(r"(?<![A-Za-z0-9])__|__(?![A-Za-z0-9])"),
+    "emphasis markers *...*": re.compile(
+        r"(?<![\w*\\])\*[^\s*][^*\n]{0,80}?(?<![\s\\])\*(?![\w*])"
+    ),
+    "backticks": re.compile(r"`"),
+    "backslash escapes": re.compile(r"\\[*_|`<>\[\]#]"),
+}
+# A Markdown table that was not rendered: a line of cells, or a separator line.
+TABLE_LINE = re.compile(r"\|\s*:?-{3,}:?\s*\||^\s*\|(?:[^|\n]*\|){2,}\s*$", re.MULTILINE)
 # Jupyter Book writes index.html as a one-line redirect to the root page.
 REDIRECT = re.compile(r'<meta http-equiv="Refresh" content="0; url=([^"]+)"', re.IGNORECASE)
+FILE_NAME = re.compile(r"\.(?:png|jpe?g|svg|gif|webp|pdf)$|[0-9a-f]{16,}|/", re.IGNORECASE)
+
+# What a reader sees as text: the page without code, signatures, typeset math and scripts.
+VISIBLE_TEXT_JS = """() => {
+    const body = document.body.cloneNode(true);
+    body.querySelectorAll(
+        'pre, code, kbd, samp, script, style, noscript, template, textarea, mjx-container, '
+        + '.highlight, .MathJax_Preview, dt.sig, .sig, .headerlink'
+    ).forEach(e => e.remove());
+    return body.textContent;
+}"""
+
+# Rows of rendered tables (text of each cell, math and code left out).
+TABLE_ROWS_JS = """() => Array.from(document.querySelectorAll('article table tr')).map(tr =>
+    Array.from(tr.children).map(cell => {
+        const c = cell.cloneNode(true);
+        c.querySelectorAll('mjx-container, code, pre, .symrb-cell-label').forEach(e => e.remove());
+        return c.textContent.replace(/\\s+/g, ' ').trim();
+    }))"""
+
+# Images: where from, alt text, loaded pixels.
+IMAGES_JS = """() => Array.from(document.images).map(i => ({
+    src: i.getAttribute('src') || '', alt: i.getAttribute('alt'), width: i.naturalWidth,
+    control: i.classList.contains('toggler')
+}))"""
+
+# What a reader at this window width cannot see: text that lies outside the window, or outside
+# an ancestor box that hides its overflow (so no scrolling reveals it); tables wider than the
+# column they sit in (so they scroll sideways); and how far the page itself scrolls sideways.
+LAYOUT_JS = """() => {
+    const W = document.documentElement.clientWidth;
+    const article = document.querySelector('article') || document.body;
+    const clipped = [], outside = [], wide = [];
+    const describe = (el, text) =>
+        `${el.tagName.toLowerCase()}${el.className ? '.' + String(el.className).split(' ')[0] : ''}`
+        + `: "${text.trim().slice(0, 60)}"`;
+    const hider = start => {
+        for (let a = start; a && a !== document.documentElement; a = a.parentElement) {
+            const s = getComputedStyle(a);
+            if (s.overflowX !== 'visible' || s.overflowY !== 'visible') return [a, s];
+        }
+        return [null, null];
+    };
+    const units = [];
+    const walker = document.createTreeWalker(article, NodeFilter.SHOW_TEXT);
+    for (let n = walker.nextNode(); n; n = walker.nextNode()) {
+        if (!n.textContent.trim() || n.parentElement.closest('mjx-container, script, style')) continue;
+        const r = document.createRange();
+        r.selectNodeContents(n);
+        const el = n.parentElement;
+        units.push([el, el, n.textContent, Array.from(r.getClientRects())]);
+    }
+    const tex = m => {  // the TeX of a typeset formula, to say which one is cut off
+        const item = Array.from(MathJax.startup.document.math).find(i => i.typesetRoot === m);
+        return item ? '$' + item.math + '$' : 'a formula';
+    };
+    article.querySelectorAll('mjx-container').forEach(m => units.push(
+        [m, m.parentElement, tex(m), [m.getBoundingClientRect()]]));
+    for (const [el, from, text, rects] of units) {
+        const s = getComputedStyle(el);
+        if (s.visibility === 'hidden' || s.display === 'none') continue;
+        for (const rect of rects) {
+            if (rect.width === 0 || rect.height === 0) continue;
+            const [box, bs] = hider(from);
+            if (box) {
+                const b = box.getBoundingClientRect();
+                const scrolls = /auto|scroll/.test(bs.overflowX);
+                const cutX = rect.left < b.left - 1 || rect.right > b.right + 1;
+                const cutY = rect.top < b.top - 1 || rect.bottom > b.bottom + 1;
+                if ((cutX && !scrolls) || (cutY && !/auto|scroll/.test(bs.overflowY))) {
+                    clipped.push(describe(el, text));
+                    break;
+                }
+                if (scrolls && (b.left < -1 || b.right > W + 1)) {
+                    outside.push(describe(el, text));
+                    break;
+                }
+                if (scrolls) continue;
+            }
+            if (rect.left < -1 || rect.right > W + 1) {
+                outside.push(describe(el, text));
+                break;
+            }
+        }
+    }
+    article.querySelectorAll('table').forEach(t => {
+        const holder = t.parentElement;
+        if (t.getBoundingClientRect().width > holder.clientWidth + 1 || t.scrollWidth > t.clientWidth + 1) {
+            const head = t.querySelector('th, td');
+            wide.push(`table starting "${head ? head.textContent.trim().slice(0, 40) : ''}": `
+                + `${Math.round(t.getBoundingClientRect().width)} px in ${holder.clientWidth} px`);
+        }
+    });
+    return {
+        window: W,
+        page: document.documentElement.scrollWidth,
+        clipped: clipped.slice(0, 10),
+        outside: outside.slice(0, 10),
+        wide: wide,
+    };
+}"""
 
 
 def _in_ci() -> bool:
@@ -73,6 +219,22 @@ def _pages() -> list[str]:
 PAGES = _pages()
 
 
+def _errata_ids() -> list[str]:
+    """The errata of the built book: from the ``verify.json`` the build read, else the registry."""
+    results = HTML.parent / "verify.json"
+    if results.is_file():
+        claims = json.loads(results.read_text())["claims"]
+        return [r["id"] for r in claims if r["outcome"] in ERRATA_OUTCOMES]
+    from derivations.registry import all_claims
+
+    return [c.id for c in all_claims() if c.expected in ERRATA_OUTCOMES]
+
+
+def _screenshot_dir(tmp_path: Path) -> Path:
+    shots = os.environ.get("SYMRB_SCREENSHOT_DIR")
+    return Path(shots) if shots else tmp_path
+
+
 class _QuietHandler(http.server.SimpleHTTPRequestHandler):
     def log_message(self, format: str, *args: Any) -> None:
         pass
@@ -81,9 +243,7 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
 @pytest.fixture(scope="module")
 def server() -> Iterator[str]:
     if not PAGES:
-        _skip_or_fail(
-            f"the book is not built ({HTML.relative_to(ROOT)} has no index.html): run bash tools/book.sh"
-        )
+        _skip_or_fail(f"the book is not built ({HTML} has no index.html): run bash tools/book.sh")
     handler = functools.partial(_QuietHandler, directory=str(HTML))
     httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
@@ -112,46 +272,29 @@ def browser() -> Iterator[Any]:
             b.close()
 
 
-def test_book_has_pages() -> None:
-    if not PAGES:
-        _skip_or_fail("the book is not built: run bash tools/book.sh")
-    for page in (
-        "index.html",
-        "intro.html",
-        "conventions.html",
-        "claims.html",
-        "errata.html",
-        "api.html",
-    ):
-        assert page in PAGES, f"{page} is missing from the built book"
-
-
-@pytest.mark.parametrize("page", PAGES or ["(book not built)"])
-def test_page(page: str, server: str, browser: Any, tmp_path: Path) -> None:
-    requests: list[str] = []
-    outside: list[str] = []
-    http_errors: list[str] = []
-    js_errors: list[str] = []
-
-    context = browser.new_context(viewport={"width": 1280, "height": 900}, service_workers="block")
+def _open(browser: Any, server: str, page: str, width: int = 1280) -> tuple[Any, Any, dict]:
+    """Open ``page`` in a new context of the given window width, wait until its images and math
+    are done, and return ``(context, tab, record)`` with the requests and errors seen."""
+    record: dict[str, list[str]] = {"requests": [], "outside": [], "http": [], "js": []}
+    context = browser.new_context(viewport={"width": width, "height": 900}, service_workers="block")
 
     def route(r: Any) -> None:
         url = r.request.url
-        requests.append(url)
+        record["requests"].append(url)
         parts = urlsplit(url)
         if parts.scheme in {"data", "blob", "about"} or parts.hostname in LOCAL_HOSTS:
             r.continue_()
         else:
-            outside.append(url)
+            record["outside"].append(url)
             r.abort()
 
     context.route("**/*", route)
     tab = context.new_page()
-    tab.on("pageerror", lambda exc: js_errors.append(str(exc)))
+    tab.on("pageerror", lambda exc: record["js"].append(str(exc)))
     tab.on(
         "response",
         lambda resp: (
-            http_errors.append(f"{resp.status} {resp.url}") if resp.status >= 400 else None
+            record["http"].append(f"{resp.status} {resp.url}") if resp.status >= 400 else None
         ),
     )
     try:
@@ -167,7 +310,6 @@ def test_page(page: str, server: str, browser: Any, tmp_path: Path) -> None:
                 tab.goto(f"{server}/{page}", wait_until="commit", timeout=60_000)
         else:
             tab.goto(f"{server}/{page}", wait_until="load", timeout=60_000)
-
         # images: make lazy ones load, then wait until every image has finished (or failed) loading
         tab.evaluate(
             "() => document.querySelectorAll('img').forEach(i => { i.loading = 'eager'; })"
@@ -175,32 +317,141 @@ def test_page(page: str, server: str, browser: Any, tmp_path: Path) -> None:
         tab.wait_for_function(
             "() => Array.from(document.images).every(i => i.complete)", timeout=30_000
         )
-        broken = tab.evaluate(
-            "() => Array.from(document.images).filter(i => !(i.naturalWidth > 0)).map(i => i.src)"
-        )
-
         has_mathjax = tab.evaluate(
             "() => Array.from(document.scripts).some(s => /mathjax/i.test(s.src))"
         )
-        mjx_count = 0
-        raw_tex: list[str] = []
         if has_mathjax:
             tab.wait_for_function(
                 "() => window.MathJax && MathJax.startup && MathJax.startup.promise", timeout=60_000
             )
             tab.evaluate("() => MathJax.startup.promise")
-            mjx_count = tab.locator("mjx-container").count()
-            visible = tab.evaluate(
-                """() => {
-                    const body = document.body.cloneNode(true);
-                    body.querySelectorAll(
-                        'pre, code, script, style, textarea, mjx-container, .highlight, .MathJax_Preview'
-                    ).forEach(e => e.remove());
-                    return body.textContent;
-                }"""
-            )
-            raw_tex = [m.group(0) for m in RAW_TEX.finditer(visible)]
+    except BaseException:
+        context.close()
+        raise
+    record["mathjax"] = [str(has_mathjax)] if has_mathjax else []
+    return context, tab, record
 
+
+def _text_defects(visible: str) -> list[str]:
+    """Leftover TeX, HTML tags, Markdown syntax and unrendered tables in the visible text."""
+    found = []
+    for name, pattern in [("raw TeX", RAW_TEX), ("literal HTML tags", HTML_TAG)]:
+        hits = sorted({m.group(0) for m in pattern.finditer(visible)})
+        if hits:
+            found.append(f"{name}: {hits[:8]}")
+    for name, pattern in MARKDOWN.items():
+        hits = sorted({_context(visible, m) for m in pattern.finditer(visible)})
+        if hits:
+            found.append(f"Markdown {name}: {hits[:5]}")
+    rows = sorted({m.group(0).strip()[:80] for m in TABLE_LINE.finditer(visible)})
+    if rows:
+        found.append(f"Markdown table shown as text: {rows[:5]}")
+    return found
+
+
+def _context(text: str, m: re.Match[str], width: int = 30) -> str:
+    return " ".join(text[max(0, m.start() - width) : m.end() + width].split())
+
+
+def _table_defects(rows: list[list[str]]) -> list[str]:
+    """Rendered table rows made of raw pipes, or a Markdown separator row shown as data."""
+    bad = []
+    for cells in rows:
+        joined = " ‖ ".join(cells)
+        pipes = [c for c in cells if re.search(r"(^|\s)\|(\s|$)", c)]
+        separator = cells and all(re.fullmatch(r"[|:\- ]*-{3,}[|:\- ]*", c) for c in cells if c)
+        if pipes or (separator and any(cells)):
+            bad.append(joined[:120])
+    return bad
+
+
+def _image_defects(images: list[dict]) -> list[str]:
+    bad = []
+    for img in images:
+        alt = (img["alt"] or "").strip()
+        name = img["src"].rsplit("/", 1)[-1]
+        if not img["width"]:
+            bad.append(f"{name}: no pixels loaded (naturalWidth 0)")
+        if img["control"]:
+            continue  # Sphinx's expand/collapse icon on the module index, not a picture
+        if not alt:
+            bad.append(f"{name}: no alt text")
+        elif FILE_NAME.search(alt) or len(alt.split()) < 2:
+            bad.append(f"{name}: alt text is not a description: {alt[:60]!r}")
+    return bad
+
+
+@pytest.mark.parametrize(
+    ("text", "defect"),
+    [
+        ("checks<br>of the printed form", "literal HTML tags"),
+        ('see <span class="x">here</span>', "literal HTML tags"),
+        ("evidence marked *printed* fails", "emphasis markers"),
+        ("a **bold** claim", "**"),
+        ("the `symrb` package", "backticks"),
+        (r"u\*\_k and \|M\|", "backslash escapes"),
+        ("| claim | outcome |\n|---|---|\n| S1 | holds |", "Markdown table"),
+        (r"the pairing \langle p, x \rangle", "raw TeX"),
+        ("$\\|M\\|_{op} < 2$ was not typeset", "raw TeX"),
+    ],
+)
+def test_text_checks_see_what_issue_8_found(text: str, defect: str) -> None:
+    found = _text_defects(f"Some prose. {text} More prose.")
+    assert any(defect in f for f in found), found
+
+
+def test_text_checks_pass_plain_prose() -> None:
+    prose = (
+        "The pairing <p, f> and u*_k, H*_xx in ASCII; |x|^2 and ||M||_op < 2; a * b; "
+        "the map x |-> y; costs 2.1e+00 > 1e-12, as expected."
+    )
+    assert _text_defects(prose) == []
+
+
+def test_table_checks_see_a_row_of_raw_pipes() -> None:
+    assert _table_defects([["| a | b |", ""], ["1", "2"]])
+    assert _table_defects([["---", ":---:"]])
+    assert not _table_defects([["D1", "|x| + |y| <= 1"], ["S9", "holds"]])
+
+
+def test_image_checks_see_hashed_names_and_missing_pixels() -> None:
+    hashed = "../_images/" + "0123456789abcdef" * 4 + ".png"
+    images = [
+        {"src": hashed, "alt": hashed, "width": 640, "control": False},
+        {"src": "a.png", "alt": "", "width": 640, "control": False},
+        {"src": "b.png", "alt": "Bar chart of seconds per claim", "width": 0, "control": False},
+        {"src": "c.png", "alt": "Bar chart of seconds per claim", "width": 640, "control": False},
+    ]
+    found = _image_defects(images)
+    assert len(found) == 3 and not any(f.startswith("c.png") for f in found), found
+
+
+def test_book_has_pages() -> None:
+    if not PAGES:
+        _skip_or_fail("the book is not built: run bash tools/book.sh")
+    for page in (
+        "index.html",
+        "intro.html",
+        "conventions.html",
+        "claims.html",
+        "errata.html",
+        "api.html",
+    ):
+        assert page in PAGES, f"{page} is missing from the built book"
+
+
+@pytest.mark.parametrize("page", PAGES or ["(book not built)"])
+def test_page(page: str, server: str, browser: Any) -> None:
+    context, tab, record = _open(browser, server, page)
+    try:
+        images = tab.evaluate(IMAGES_JS)
+        visible = tab.evaluate(VISIBLE_TEXT_JS)
+        rows = tab.evaluate(TABLE_ROWS_JS)
+        mjx_count = tab.locator("mjx-container").count()
+        math_errors = tab.evaluate(
+            "() => Array.from(document.querySelectorAll('mjx-merror'))"
+            ".map(e => e.getAttribute('data-mjx-error') || e.textContent)"
+        )
         shots = os.environ.get("SYMRB_SCREENSHOT_DIR")
         if shots:
             target = Path(shots) / (page.replace("/", "__").removesuffix(".html") + ".png")
@@ -209,11 +460,99 @@ def test_page(page: str, server: str, browser: Any, tmp_path: Path) -> None:
     finally:
         context.close()
 
-    assert requests, f"{page}: no request recorded"
-    assert not outside, f"{page}: requests left 127.0.0.1: {outside}"
-    assert not http_errors, f"{page}: HTTP errors: {http_errors}"
-    assert not broken, f"{page}: images that did not load: {broken}"
-    assert not js_errors, f"{page}: JavaScript errors: {js_errors}"
-    if has_mathjax:
-        assert mjx_count > 0, f"{page}: MathJax is loaded but typeset nothing"
-        assert not raw_tex, f"{page}: raw TeX left in the visible text: {raw_tex[:10]}"
+    problems = []
+    if not record["requests"]:
+        problems.append("no request recorded")
+    if record["outside"]:
+        problems.append(f"requests left 127.0.0.1: {record['outside']}")
+    if record["http"]:
+        problems.append(f"HTTP errors: {record['http']}")
+    if record["js"]:
+        problems.append(f"JavaScript errors: {record['js']}")
+    if record["mathjax"] and mjx_count == 0:
+        problems.append("MathJax is loaded but typeset nothing")
+    if math_errors:
+        problems.append(f"MathJax could not typeset: {math_errors[:5]}")
+    problems += [f"image {d}" for d in _image_defects(images)]
+    problems += _text_defects(visible)
+    problems += [f"table row of raw pipes: {r}" for r in _table_defects(rows)]
+    assert not problems, f"{page}:\n  " + "\n  ".join(problems)
+
+
+def test_errata_page_has_a_summary_and_one_section_per_erratum(server: str, browser: Any) -> None:
+    errata = _errata_ids()
+    assert errata, "no erratum found in the results: nothing to check"
+    context, tab, _record = _open(browser, server, "errata.html")
+    try:
+        sections = tab.evaluate(
+            """() => Array.from(document.querySelectorAll('article section > h2')).map(h => ({
+                id: h.parentElement.id, text: h.textContent.replace(/\\s+/g, ' ').trim()
+            }))"""
+        )
+        contents = tab.evaluate(
+            """() => Array.from(document.querySelectorAll('.bd-toc-nav a, nav.page-toc a'))
+                .map(a => ({href: a.getAttribute('href'), text: a.textContent.trim()}))"""
+        )
+        tables = tab.evaluate(
+            """first => Array.from(document.querySelectorAll('article table')).map(t => ({
+                first: Array.from(t.querySelectorAll('tbody tr')).map(r => {
+                    const cell = (r.querySelector('td, th') || document.createElement('td'))
+                        .cloneNode(true);
+                    cell.querySelectorAll('.symrb-cell-label').forEach(e => e.remove());
+                    return cell.textContent.trim();
+                }),
+                before: (() => {
+                    const h = Array.from(document.querySelectorAll('article section > h2'))
+                        .find(h => h.textContent.trim().startsWith(first));
+                    return !h || !!(t.compareDocumentPosition(h) & Node.DOCUMENT_POSITION_FOLLOWING);
+                })()
+            }))""",
+            errata[0],
+        )
+    finally:
+        context.close()
+    starts = re.compile(r"^\W*([DS]\d+)\b")
+    headed = {}
+    for s in sections:
+        m = starts.match(s["text"])
+        if m:
+            headed.setdefault(m.group(1), []).append(s["id"])
+    missing = [cid for cid in errata if cid not in headed]
+    doubled = [cid for cid, ids in headed.items() if len(ids) > 1]
+    extra = [cid for cid in headed if cid not in errata]
+    assert not missing, f"errata without their own section (h2): {missing}"
+    assert not doubled, f"errata with more than one section: {doubled}"
+    assert not extra, f"sections for claims that are not errata: {extra}"
+    listed = {f"#{sid}" for ids in headed.values() for sid in ids}
+    in_panel = {c["href"] for c in contents if c["href"] in listed}
+    assert in_panel == listed, (
+        f"the contents panel does not list every erratum: missing {sorted(listed - in_panel)}"
+    )
+    summary = [
+        t for t in tables if t["before"] and set(errata) <= {c.split()[0] for c in t["first"] if c}
+    ]
+    assert summary, "no summary table listing every erratum before the first erratum's section"
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+@pytest.mark.parametrize("page", VISUAL_PAGES)
+def test_reader_view(page: str, width: int, server: str, browser: Any, tmp_path: Path) -> None:
+    if page not in PAGES:
+        _skip_or_fail(f"{page} is not built")
+    context, tab, _record = _open(browser, server, page, width=width)
+    try:
+        layout = tab.evaluate(LAYOUT_JS)
+        target = _screenshot_dir(tmp_path) / f"reader_{page.removesuffix('.html')}_{width}px.png"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tab.screenshot(path=str(target), full_page=True)
+    finally:
+        context.close()
+    problems = []
+    if layout["page"] > layout["window"] + 1:
+        problems.append(
+            f"the page scrolls sideways: {layout['page']} px in a {layout['window']} px window"
+        )
+    problems += [f"text cut off by its box: {c}" for c in layout["clipped"]]
+    problems += [f"text outside the window: {c}" for c in layout["outside"]]
+    problems += [f"table wider than its column: {w}" for w in layout["wide"]]
+    assert not problems, f"{page} at {width} px (screenshot {target}):\n  " + "\n  ".join(problems)

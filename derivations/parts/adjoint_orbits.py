@@ -236,13 +236,18 @@ S13 = claim(
     "su(n)) and $V_x$ the gradient of $V$, the Hamiltonian [[H]] has [[dHdu]] for every $d$, so "
     "[[ustar]] and [[Hstar]], and the extremals solve [[xdot]], [[pdot]].",
     expected="holds",
-    section="3.5",
-    note="Holds as printed provided one bilinear form B is used throughout (pairing, norm and "
-    "gradient V_x): the general-n checks use only cyclicity of the trace, so they hold for "
-    "B = -c tr with any c, in particular for the pairing -1/2 tr on so(n) and for the negative "
-    "Killing form, which is (n-2) tr on so(n) and 2n tr on su(n). Mixing forms rescales the "
-    "control: on su(n) with <p,.> = -1/2 tr but ||u||^2 = -kappa(u,u), u* = [p,x]/(4n) (1/8 on "
-    "su(2); see tests/test_orbits.py).",
+    section="3.4",
+    where="Section 3.4 (Optimality on adjoint orbits and learning), the control system $\\dot x = "
+    "[x, u]$, the functional $\\eta(x, u)$ and the theorem on the equations of the maximum "
+    "principle, with its proof ($u^* = [p, x]$ and $H^*$)",
+    note="Holds as printed provided one bilinear form $B$ is used throughout (pairing, norm and "
+    "gradient $V_x$): the checks for general $n$ use only cyclicity of the trace, so they hold "
+    "for $B = -c\\operatorname{tr}$ with any $c$, in particular for the pairing "
+    "$-\\tfrac12\\operatorname{tr}$ on $\\mathfrak{so}(n)$ and for the negative Killing form, "
+    "which is $(n-2)\\operatorname{tr}$ on $\\mathfrak{so}(n)$ and $2n\\operatorname{tr}$ on "
+    "$\\mathfrak{su}(n)$. Mixing forms rescales the control: on $\\mathfrak{su}(n)$ with "
+    "$\\langle p, \\cdot\\rangle = -\\tfrac12\\operatorname{tr}$ but $\\|u\\|^2 = -\\kappa(u, "
+    "u)$, $u^* = [p, x]/(4n)$ ($1/8$ on $\\mathfrak{su}(2)$; see `tests/test_orbits.py`).",
 )
 _a, _b = matrix("a"), matrix("b")
 _kappa = sp.Function("kappa")
@@ -550,11 +555,13 @@ S14 = claim(
     "[[toda_a]], [[toda_b]] (with $b_0$ and $b_k$ zero), that is [[lax]] with [[toda_B]], the "
     "strictly upper minus the strictly lower part of $L$.",
     expected="holds",
-    section="3.5",
-    note="Holds as printed (the printed first line of eq. opb lacks a closing bracket, [x,[p,x]). "
-    "The sign of V_x is decided by the checks: V_x = +[N,[N,x]] (the opposite sign fails, see "
-    "tests/test_orbits.py). On real symmetric L the flow Ldot = [L,[L,D]] is the Toda flow run "
-    "backwards in time; the compact form x = iL reverses it.",
+    section="3.4",
+    where="Section 3.4, the first corollary (Brockett's potential $V(x) = -\\tfrac12\\|[x, "
+    "n]\\|^2$) and the paragraph after it (the link with the Toda lattice)",
+    note="Holds as printed (the first line of the printed equations lacks a closing bracket, "
+    "$[x,[p,x]$). The sign of $V_x$ is decided by the checks: $V_x = +[N,[N,x]]$ (the opposite "
+    "sign fails, see `tests/test_orbits.py`). On real symmetric $L$ the flow $\\dot L = "
+    "[L,[L,D]]$ is the Toda flow run backwards in time; the compact form $x = iL$ reverses it.",
 )
 BROCKETT = S14.formula("V", eq(V(x), -(_Norm(Bracket(x, N)) ** 2) / 2))
 BROCKETT_REWRITTEN = S14.formula("V_rewritten", eq(V(x), Pair(x, Bracket(N, Bracket(N, x))) / 2))
@@ -822,25 +829,35 @@ S15 = claim(
     "[[invariant]], and on so(3) this gives [[bound]] for every $T$, where [[beta]]: the second "
     "term does not go to zero unless the samples start on one line.",
     expected="holds after correction",
-    section="3.5",
-    note="Three findings. (1) Endpoint sign: with H = <p,f> - L (the convention of S13), "
-    "minimising int L + phi(x_T) needs p_T = -dphi/dx_T = -N; the printed +dphi/dx_T makes the "
-    "adjoint gradient of the cost wrong (relative error 0.53) and its extremal p = +N drives x "
-    "along xdot = -[x,[x,N]], maximising <x_T, N>. (2) The samples share the control, so "
-    "u* = sum_b [p^b,x^b]; the printed per-sample [p^a,x^a] is not Hamilton's equation of the "
-    "shared problem (and x in [p^a,[p^a,x]] lacks its index; we read it as x^a). (3) The limit: "
-    "for one sample the corrected extremal IS the double bracket flow for every T (p = -N "
-    "exactly) and ||[N,[N,x_T]]|| decays like exp(-||x_0|| ||N|| T): on so(3) with ||x_0|| = 0.5, "
-    "||N|| = 1 it is 0.499, 0.431, 0.202, 0.029, 5.2e-4 at T = 1, 2, 4, 8, 16 (times "
-    "exp(T/2) it tends to 2 tan(phi_0/2) ||N||^2 ||x_0|| = 1.557), and solve_orbit_bvp from the "
-    "guess p = 0 reproduces the exact solution to 5e-8 (collocation tolerance 1e-6). For two "
-    "samples the shared control rotates both by the same rotation (it conserves <x^1, x^2> for "
-    "every n), so on so(3) the angle between the lines of x^1 and x^2 is fixed "
-    "and max_a ||[N,[N,x^a_T]]|| stays above ||N||^2 min_a ||x^a_0|| sin(beta/2) for every T "
-    "(sharp: attained by samples of equal norm placed symmetrically about N). On the so(3) example "
-    "(seed 150) the bound is 1.708 and the BVP solutions give 2.152, 2.176, 2.176 at T = 2, 4, 8: "
-    "the second term settles at a positive value instead of going to zero, and neither sample "
-    "follows its own double bracket flow.",
+    section="3.4",
+    where="Section 3.4, the second corollary (several samples $x^a$ with a terminal cost, $p^a_T "
+    "= \\partial\\phi/\\partial x^a_T$) and the last paragraph of the section (with $\\phi(x^a_T) "
+    "= \\langle x^a_T, n\\rangle$ the solution is said to tend to the double bracket equation "
+    "$\\dot x = [x, [x, n]]$)",
+    note="The endpoint sign is wrong, the per-sample control ignores that the samples share $u$, "
+    "and for several samples the solution does not tend to the double bracket flow. Corrected: "
+    "$p^a_T = -\\partial\\phi/\\partial x^a_T$ and $u^* = \\sum_b [p^b, x^b]$; one sample follows "
+    "the double bracket flow for every $T$, several do not. (1) Endpoint sign: with $H = \\langle "
+    "p, f\\rangle - L$ (the convention of S13), minimising $\\int L + \\phi(x_T)$ needs $p_T = "
+    "-\\partial\\phi/\\partial x_T = -N$; the printed $+\\partial\\phi/\\partial x_T$ makes the "
+    "adjoint gradient of the cost wrong (relative error 0.53) and its extremal $p = +N$ drives "
+    "$x$ along $\\dot x = -[x,[x,N]]$, maximising $\\langle x_T, N\\rangle$. (2) The samples "
+    "share the control, so $u^* = \\sum_b [p^b, x^b]$; the printed per-sample $[p^a, x^a]$ is not "
+    "Hamilton's equation of the shared problem (and $x$ in $[p^a,[p^a,x]]$ lacks its index; we "
+    "read it as $x^a$). (3) The limit: for one sample the corrected extremal is the double "
+    "bracket flow for every $T$ ($p = -N$ exactly) and $\\|[N,[N,x_T]]\\|$ decays like "
+    "$e^{-\\|x_0\\| \\|N\\| T}$: on $\\mathfrak{so}(3)$ with $\\|x_0\\| = 0.5$, $\\|N\\| = 1$ it "
+    "is 0.499, 0.431, 0.202, 0.029, 5.2e-4 at $T$ = 1, 2, 4, 8, 16 (times $e^{T/2}$ it tends to "
+    "$2\\tan(\\phi_0/2)\\|N\\|^2 \\|x_0\\| = 1.557$), and `solve_orbit_bvp` from the guess $p = "
+    "0$ reproduces the exact solution to 5e-8 (collocation tolerance 1e-6). For two samples the "
+    "shared control rotates both by the same rotation (it conserves $\\langle x^1, x^2\\rangle$ "
+    "for every $n$), so on $\\mathfrak{so}(3)$ the angle between the lines of $x^1$ and $x^2$ is "
+    "fixed and $\\max_a \\|[N,[N,x^a_T]]\\|$ stays above $\\|N\\|^2 \\min_a \\|x^a_0\\| "
+    "\\sin(\\beta/2)$ for every $T$ (sharp: attained by samples of equal norm placed "
+    "symmetrically about $N$). On the $\\mathfrak{so}(3)$ example (seed 150) the bound is 1.708 "
+    "and the BVP solutions give 2.152, 2.176, 2.176 at $T$ = 2, 4, 8: the second term settles at "
+    "a positive value instead of going to zero, and neither sample follows its own double bracket "
+    "flow.",
 )
 ORB_M = S15.formula("orb_m", eq(XDOT_A, Bracket(xa, u)))
 PHI_EQ = S15.formula("phi", eq(PHI(xaT), Pair(xaT, N)))

@@ -376,14 +376,22 @@ D1 = claim(
     "per step. These are exactly the critical points of [[V]], which equals [[rewrite]].",
     expected="holds after correction",
     section="2",
-    note="The structure of the principle is right, but three details are not. (i) The costate "
-    "equation at k = N with p_{N+1} = 0 would force p_N = -dg/dx(x_N, u_N) for a phantom control "
-    "u_N; for a fixed endpoint p_N is free (exact example f = x + u, g = u^2/2, x_0 = 0, x_2 = 1: "
-    "p_2 = 1/2 while the printed equation gives 0). (ii) The proof's V needs one multiplier per "
-    "step (the proposition's sigma = sigma(p_{k+1}, x_k) already allows that; V does not): in an "
-    "exact example the minimiser has sigma_0 = -3/7, sigma_1 = -1/7, and with one shared sigma "
-    "the stationarity equations at the minimiser have no solution. (iii) The proof's rewriting "
-    "with the sum up to N adds Hhat(0, x_N, u_N, sigma) = -g(x_N, u_N) + <sigma, h(u_N)>.",
+    where="Section 2, the first definition (the problem with fixed endpoints $x_0$, $x_N$ and the "
+    "constraint $h(u_k) = 0$) and the first proposition (the extremal equations with $H = "
+    "\\langle p_{k+1}, f(x_k, u_k)\\rangle - g(x_k, u_k)$ and the multiplier $\\sigma$), with its "
+    "proof",
+    note="The costate equation is stated up to $k = N$ and the proof uses one multiplier "
+    "$\\sigma$ for all steps. Corrected: the costate equation holds for $1 \\le k \\le N-1$ only, "
+    "$p_N$ is a free unknown, and there is one multiplier $\\sigma_k$ per step. The structure of "
+    "the principle is right, but three details are not. (i) The costate equation at $k = N$ with "
+    "$p_{N+1} = 0$ would force $p_N = -\\partial g/\\partial x(x_N, u_N)$ for a phantom control "
+    "$u_N$; for a fixed endpoint $p_N$ is free (exact example $f = x + u$, $g = u^2/2$, $x_0 = "
+    "0$, $x_2 = 1$: $p_2 = 1/2$ while the printed equation gives $0$). (ii) The proof's $V$ needs "
+    "one multiplier per step (the proposition's $\\sigma = \\sigma(p_{k+1}, x_k)$ already allows "
+    "that; $V$ does not): in an exact example the minimiser has $\\sigma_0 = -3/7$, $\\sigma_1 = "
+    "-1/7$, and with one shared $\\sigma$ the stationarity equations at the minimiser have no "
+    "solution. (iii) The proof's rewriting with the sum up to $N$ adds $\\hat H(0, x_N, u_N, "
+    "\\sigma) = -g(x_N, u_N) + \\langle \\sigma, h(u_N)\\rangle$.",
 )
 COST = D1.formula("cost", eq(_C, sp.Sum(_g(_x[_k], _u[_k]), (_k, 0, _Nm1))))
 DYNAMICS = D1.formula("dynamics", _Steps([eq(_x[_k1], _f(_x[_k], _u[_k]))], _k, 0, _Nm1))
@@ -606,10 +614,17 @@ D2 = claim(
     "that matrix invertible; it equals the printed matrix only when $u^*$ does not depend on $y$.",
     expected="holds after correction",
     section="2",
-    note="u*_k depends on p_{k+1}, so the Jacobian of the step picks up H_xu du*/dy. Exact "
-    "counterexample: f = x + u, g = (u + x)^2/2 >= 0 has d^2H/dy dx = 1 everywhere, yet u* = y - x "
-    "and p_k = 0 for every p_{k+1}: the step does not determine p_{k+1}. The index order (y_i x_j "
-    "or x_i y_j) is a transpose and does not matter for invertibility.",
+    where="Section 2, the paragraph after the proof of the first proposition: the step is "
+    "implicit in $p_{k+1}$ and needs the matrix $\\partial^2 H/\\partial y_i\\,\\partial x_j$ "
+    "invertible",
+    note="Invertibility of the printed matrix $\\partial^2 H/\\partial y\\,\\partial x$ at fixed "
+    "$u$ does not make the step solvable for $p_{k+1}$. Corrected: the step needs the mixed "
+    "derivative of the reduced Hamiltonian $H^*(y, x) = \\hat H(y, x, u^*(y, x), \\sigma(y, x))$ "
+    "invertible. $u^*_k$ depends on $p_{k+1}$, so the Jacobian of the step picks up "
+    "$H_{xu}\\,\\partial u^*/\\partial y$. Exact counterexample: $f = x + u$, $g = (u + x)^2/2 "
+    "\\ge 0$ has $\\partial^2 H/\\partial y\\,\\partial x = 1$ everywhere, yet $u^* = y - x$ and "
+    "$p_k = 0$ for every $p_{k+1}$: the step does not determine $p_{k+1}$. The index order ($y_i "
+    "x_j$ or $x_i y_j$) is a transpose and does not matter for invertibility.",
 )
 D2.formula("H", H_DEF)
 STEP = D2.formula(
@@ -690,14 +705,19 @@ D3 = claim(
     "the entry $(i, j)$ of $H^*_{xy}$ is the derivative in $x_i$ and $y_j$.",
     expected="holds after correction",
     section="2",
-    note="Two slips. (i) Second derivatives must be those of the reduced Hamiltonian H* (u* and "
-    "sigma depend on (p_{k+1}, x_k)); at frozen u*, Hhat is linear in p, so the printed coefficient "
-    "of dp_{k+1} in dx_{k+1} is always 0, while it is H*_yy = B B^T in the family f = a(x) + B u, "
-    "g = |u|^2/2 + V(x). (ii) For n > 1 the two lines need transposed mixed matrices; the printed "
-    "form uses the same one (if the printed symbol is read as the mixed derivative contracted in "
-    "the right slot, this second point is notation only). In the symbolic family u* does not depend "
-    "on x, so there only the H*_yy block separates H* from frozen Hhat; the float64 family with "
-    "u*(x, p_{k+1}) separates every block.",
+    where="Section 2, the corollary (its only one): the differentials $dp_k$ and $dx_{k+1}$ of "
+    "the extremal equations",
+    note="The printed second derivatives are those of $\\hat H$ at frozen $u^*_k$, and both lines "
+    "use the same mixed matrix. Corrected: the second derivatives are those of the reduced "
+    "Hamiltonian $H^*$, and the two lines use the transposed mixed matrices $H^*_{xy}$ and "
+    "$(H^*_{xy})^T$. (i) $u^*$ and $\\sigma$ depend on $(p_{k+1}, x_k)$; at frozen $u^*$, $\\hat "
+    "H$ is linear in $p$, so the printed coefficient of $dp_{k+1}$ in $dx_{k+1}$ is always $0$, "
+    "while it is $H^*_{yy} = BB^T$ in the family $f = a(x) + Bu$, $g = \\|u\\|^2/2 + V(x)$. (ii) "
+    "For $n > 1$ the two lines need transposed mixed matrices; the printed form uses the same one "
+    "(if the printed symbol is read as the mixed derivative contracted in the right slot, this "
+    "second point is notation only). In the symbolic family $u^*$ does not depend on $x$, so "
+    "there only the $H^*_{yy}$ block separates $H^*$ from frozen $\\hat H$; the float64 family "
+    "with $u^*(x, p_{k+1})$ separates every block.",
 )
 _dxk, _dpk, _dx1, _dp1 = (vector(s) for s in ("dx_k", "dp_k", "dx_{k+1}", "dp_{k+1}"))
 _R = {"xx": matrix("H^*_{xx}"), "xy": matrix("H^*_{xy}"), "yy": matrix("H^*_{yy}")}
@@ -986,15 +1006,17 @@ def d3_nonlinear_printed() -> float:
 D4 = claim(
     "D4",
     label="eq8.13",
-    title="The advance map (x_k, p_k) -> (x_{k+1}, p_{k+1}) is symplectic",
+    title="The advance map $(x_k, p_k) \\mapsto (x_{k+1}, p_{k+1})$ is symplectic",
     statement="The implicit advance map $\\Phi$ of the extremal equations preserves "
     "$dx\\wedge dp$: its Jacobian $D\\Phi$, obtained from the corrected linearised equations of D3 "
     "where $H^*_{xy}$ is invertible, satisfies [[symplectic]] with [[omega]].",
     expected="holds",
     section="2",
-    note="Shown for every symmetric H*_xx, H*_yy and invertible H*_xy (so for every smooth H* "
-    "with invertible mixed derivative): symbolic for n = 2, exact rational random blocks for "
-    "n = 3, and on a nonlinear family solved numerically.",
+    where="Section 2, the remark after the corollary: the advance map $\\Phi$ is symplectic, "
+    "$\\Phi^*(dx_{k+1} \\wedge dp_{k+1}) = dx_k \\wedge dp_k$",
+    note="Shown for every symmetric $H^*_{xx}$, $H^*_{yy}$ and invertible $H^*_{xy}$ (so for "
+    "every smooth $H^*$ with invertible mixed derivative): symbolic for $n = 2$, exact rational "
+    "random blocks for $n = 3$, and on a nonlinear family solved numerically.",
 )
 _DPhi, _Omega = sp.MatrixSymbol(r"D\Phi", 2 * n, 2 * n), sp.MatrixSymbol(r"\Omega", 2 * n, 2 * n)
 OMEGA = D4.formula(
@@ -1096,11 +1118,19 @@ D5 = claim(
     "$H$ (equivalently the costates are minus the gradients of the cost, D6).",
     expected="holds after correction",
     section="2",
-    note="With H = <p, f> - g and a minimisation, V = -(cost) + <p, f - x> + <sigma, h>, so "
-    "dV/dx^a_N = -p^a_N - phi'(x^a_N): the endpoint sign is minus (the paper's V carries +phi and "
-    "an extra -p_N x_N). If x^a_N is fixed, phi(x^a_N) is a constant and no endpoint condition "
-    "follows. eq8.3m must use x^a_k. The -phi(x^a_N) inside eq8.4m is harmless (constant in the "
-    "variables of H). The proof's V needs sigma_k per step, as in D1 (checked there).",
+    where="Section 2, the second definition (several samples $a = 1, \\dots, M$ and an endpoint "
+    "cost $\\phi$) and the second proposition (extremal equations and the endpoint condition "
+    "$p^a_N = \\partial\\phi/\\partial x^a_N$), with its proof",
+    note="The problem fixes the endpoints $x^a_N$, the costate equation uses the un-indexed "
+    "$x_k$, and the endpoint condition has the wrong sign. Corrected: the endpoint is free, the "
+    "costate equation uses $x^a_k$, and $p^a_N = -\\partial\\phi/\\partial x^a_N$ for $H = "
+    "\\langle p, f\\rangle - g$. With $H = \\langle p, f\\rangle - g$ and a minimisation, $V = "
+    "-(\\text{cost}) + \\langle p, f - x\\rangle + \\langle \\sigma, h\\rangle$, so $\\partial "
+    "V/\\partial x^a_N = -p^a_N - \\phi'(x^a_N)$: the endpoint sign is minus (the paper's $V$ "
+    "carries $+\\phi$ and an extra $-p_N x_N$). If $x^a_N$ is fixed, $\\phi(x^a_N)$ is a constant "
+    "and no endpoint condition follows. The term $-\\phi(x^a_N)$ inside the proposition's "
+    "Hamiltonian is harmless (constant in the variables of $H$). The proof's $V$ needs "
+    "$\\sigma_k$ per step, as in D1 (checked there).",
 )
 COST5 = D5.formula(
     "cost",
@@ -1355,12 +1385,21 @@ D6 = claim(
     "[[backprop]] and [[weights]] with $s=-1$.",
     expected="holds after correction",
     section="2",
-    note="symrb implements both layers with h = 1 and the D5 sign (its costates are minus the "
-    "back-propagated gradients). For g = 0 the recursion p_k = (df/dx)^T p_{k+1} is linear and "
-    "homogeneous, so the endpoint sign is a global sign: m8 gives p_k = +dPhi/dx_k, D5 gives "
-    "p_k = -dPhi/dx_k. With g != 0 the recursion p_k = (df/dx)^T p_{k+1} - dg/dx is affine and "
-    "only p_N = -dphi/dx_N makes p_k = -dC/dx_k; with m8's sign the costates are neither plus nor "
-    "minus the gradients.",
+    where="Section 2, the paragraph 'Remark' that closes the section before Section 2.1: item 1 "
+    "(the ResNet layer $f(x, u) = \\sigma(Kx + \\beta)$) and item 2 (the link with "
+    "back-propagation)",
+    note="Remark 1's layer $\\sigma(Kx + \\beta)$ is not the residual (ResNet) layer, and with a "
+    "running cost the printed endpoint sign does not make the costates the back-propagated "
+    "gradients. Corrected: the ResNet layer is $x + h\\,\\sigma(Kx + \\beta)$, and with $p^a_N = "
+    "-\\partial\\phi/\\partial x^a_N$ the costates are minus the gradients of the cost, for "
+    "either layer. The symrb implementation has both layers with $h = 1$ and the D5 sign (its "
+    "costates are minus the back-propagated gradients). For $g = 0$ the recursion $p_k = "
+    "(\\partial f/\\partial x)^T p_{k+1}$ is linear and homogeneous, so the endpoint sign is a "
+    "global sign: the printed endpoint condition gives $p_k = +\\partial\\Phi/\\partial x_k$, "
+    "D5's gives $p_k = -\\partial\\Phi/\\partial x_k$. With $g \\ne 0$ the recursion $p_k = "
+    "(\\partial f/\\partial x)^T p_{k+1} - \\partial g/\\partial x$ is affine and only $p_N = "
+    "-\\partial\\phi/\\partial x_N$ makes $p_k = -\\partial C/\\partial x_k$; with the printed "
+    "sign the costates are neither plus nor minus the gradients.",
 )
 SIGMOID_DEF = D6.formula(
     "sigmoid", eq(sp.Function(r"\sigma")(sp.Symbol("z")), 1 / (1 + sp.exp(-sp.Symbol("z"))))

@@ -310,7 +310,7 @@ D7 = claim(
     "does not define $U_k$ without naming the branch: for $n = 3$ near $M = 0$ it has four "
     "solutions in $\\mathrm{SO}(3)$, $I$ and the half-turns about the principal axes continued.",
     expected="holds after correction",
-    section="2.2",
+    section="2.1",
     where="Section 2.1 (The discrete symmetric rigid body), the first definition (minimise "
     "$\\sum_k \\operatorname{tr}(\\Lambda U_k)$ subject to $Q_{k+1} = Q_k U_k$) and the first "
     "theorem (the equations $Q_{k+1} = Q_k U_k$, $P_{k+1} = P_k U_k$ with $U_k \\Lambda - "
@@ -615,7 +615,7 @@ D8 = claim(
     "$SO(n)$ onto a neighbourhood of $0$ in $\\mathfrak{so}(n)$; the algorithm computes $U_k$, "
     "then $Q_{k+1}$ and $P_{k+1}$, and transports the momentum: [[transport]].",
     expected="holds",
-    section="2.2",
+    section="2.1",
     where="Section 2.1, the equations after the proof of the first theorem: the symmetric "
     "representation of the discrete rigid body, $J_D U = U\\Lambda - \\Lambda U^T$, its "
     "derivative $J$ at the identity, and the algorithm $(Q_k, P_k) \\mapsto (Q_{k+1}, P_{k+1})$",
@@ -801,7 +801,7 @@ D9 = claim(
     "\\xi)$, $R_k$ the right side of the variant of the equation for $U_k$, so it vanishes for "
     "every $\\xi$ exactly when that variant holds.",
     expected="holds after correction",
-    section="2.2",
+    section="2.1",
     where="Section 2.1, the second definition (several samples $Q^a$ and a terminal cost $\\phi$) "
     "and the second theorem (with $P^a_N = \\partial\\phi/\\partial Q^a_N$), with its proof",
 )
@@ -926,7 +926,7 @@ D10 = claim(
     "$(Q_{k+1}, M_{k+1})$; they define the same dynamics.  mv2 can be solved for $\\Omega_k$ "
     "for small $M_k$, up to a fold; for $n=2$, [[n2]].",
     expected="holds",
-    section="2.3",
+    section="2.2",
     where="Section 2.2 (Classical Moser-Veselov equations), the three Moser-Veselov equations for "
     "$\\Omega_k$, $M_k$ and $M_{k+1}$, and the paragraphs 'MV-Algorithm 1' and 'MV-Algorithm 2'",
     note="The third Moser-Veselov equation with the second gives $M_{k+1} = \\Lambda\\Omega_k^T - "
@@ -1042,7 +1042,7 @@ D11 = claim(
     "equations: with [[mv1]] and [[mv2]], the first variation in $Q_k$ vanishes exactly when "
     "[[mv3]].",
     expected="holds",
-    section="2.3",
+    section="2.2",
     where="Section 2.2, the paragraph 'Discrete Variational Principle': stationary points of "
     "$\\hat S = \\sum_k \\operatorname{tr}(Q_k \\Lambda Q_{k+1}^T)$ on sequences of orthogonal "
     "matrices",
@@ -1133,7 +1133,7 @@ D12 = claim(
     "- \\Lambda U_k^T = J_D(U_k)$, and the third transports it as the symmetric algorithm does. "
     "With a time step $h$ the momenta are $h$ times the continuous ones (`symrb.discrete`).",
     expected="holds after correction",
-    section="2.3",
+    section="2.2",
     where="Section 2.2, the last paragraph: a solution $(Q_k, P_k)$ of the symmetric equations "
     "gives the Moser-Veselov momentum $M_{k+1} = Q_k^T P_k - P_k^T Q_k$ (and Section 2.1, 'if we "
     "identify $U$ with the body angular momentum')",

@@ -51,12 +51,16 @@ def _lam(k: int) -> list[sp.Symbol]:
 S1 = claim(
     "S1",
     label="killing.eqn",
-    title="Pairing on so(n) agrees with the dot product of R^3",
+    title="Pairing on $\\mathfrak{so}(n)$ agrees with the dot product of $\\mathbb{R}^3$",
     statement="[[pairing]]; for $n=3$, [[pair_is_dot]] where [[hat]].",
     expected="holds",
     section="3.1",
-    note="The pairing and the hat map are definitions; what is checked is that they agree with the "
-    "dot and cross products of R^3, and that symrb's hat and pairing implement them.",
+    where="Section 3.1 (Classical $n$-dimensional rigid body equations), the first displayed "
+    "equation, $\\langle \\xi, \\eta\\rangle = -\\tfrac12 \\operatorname{tr}(\\xi\\eta)$, and the "
+    "hat map $\\hat u v = u \\times v$ after it",
+    note="The pairing and the hat map are definitions; what is checked is that they agree with "
+    "the dot and cross products of $\\mathbb{R}^3$, and that symrb's `hat` and `pairing` "
+    "implement them.",
 )
 _xi, _eta = matrix("xi"), matrix("eta")
 _u, _v = vector("u"), vector("v")
@@ -99,16 +103,19 @@ def s1_symrb_hat_and_pairing() -> float:
 S2 = claim(
     "S2",
     label="rbl",
-    title="Rigid body equations; J symmetric positive definite; n = 3 moments",
+    title="Rigid body equations; $J$ symmetric positive definite; moments of inertia for $n = 3$",
     statement="[[Qdot]], [[Mdot]], [[J]]; $J$ is symmetric for the pairing, [[J_symmetric]], and "
     "positive definite when [[positive]] for every pair of distinct indices $i$, $j$; for $n=3$, "
     "[[moment]] and cyclic.",
     expected="holds",
     section="3.1",
-    note="The equations are the definitions of the flow; what is checked is that the emitted field "
-    "computes Omega with J(Omega) = M and returns exactly these right-hand sides, and that symrb's "
-    "field and its flow agree with independent references (an n^2 x n^2 linear solve for J^-1, and "
-    "the Jacobi elliptic solution for n = 3).",
+    where="Section 3.1, the rigid body equations $\\dot Q = Q\\Omega$, $\\dot M = [M, \\Omega]$ "
+    "and the paragraph after them ($M = J(\\Omega) = \\Lambda\\Omega + \\Omega\\Lambda$, "
+    "$\\Lambda_i + \\Lambda_j > 0$, $I_1 = \\Lambda_2 + \\Lambda_3$)",
+    note="The equations are the definitions of the flow; what is checked is that the emitted "
+    "field computes $\\Omega$ with $J(\\Omega) = M$ and returns exactly these right-hand sides, "
+    "and that symrb's field and its flow agree with independent references (an $n^2 \\times n^2$ "
+    "linear solve for $J^{-1}$, and the Jacobi elliptic solution for $n = 3$).",
 )
 QDOT = S2.formula("Qdot", eq(matrix("Qdot"), Q * Om))
 MDOT = S2.formula("Mdot", eq(matrix("Mdot"), Bracket(M, Om)))
@@ -305,13 +312,17 @@ def s2_symrb_euler_pointwise() -> float:
 S3 = claim(
     "S3",
     label="RBLag_group.eqn",
-    title="Mdot = [M, Omega] is Euler-Poincare for l(Omega) = 1/2 <Omega, J Omega>",
+    title="$\\dot M = [M, \\Omega]$ is Euler-Poincaré for $l(\\Omega) = \\tfrac12\\langle "
+    "\\Omega, J(\\Omega)\\rangle$",
     statement="For [[lagrangian]] the variational derivative is [[derivative]] and "
     "[[coadjoint]], so the Euler-Poincare equation reads [[euler_poincare]].",
     expected="holds",
     section="3.1",
+    where="Section 3.1, the paragraph after the rigid body equations: the Euler-Poincaré "
+    "equations of $l(\\Omega) = \\tfrac12\\langle \\Omega, J(\\Omega)\\rangle$ and the Lagrangian "
+    "$L(g, \\dot g)$ on $T\\,\\mathrm{SO}(n)$",
     note="The Lagrangian is the paper's definition; the kinetic energy kernel is that Lagrangian "
-    "evaluated at Omega = J^-1(M), which the evidence checks.",
+    "evaluated at $\\Omega = J^{-1}(M)$, which the evidence checks.",
 )
 _eta3 = matrix("eta")
 _ell = sp.Function("l")
@@ -396,9 +407,13 @@ S4 = claim(
     "conserved along the rigid body flow and are in involution for the Lie-Poisson bracket.",
     expected="holds",
     section="3.1",
-    note="Words with an odd number of M's vanish (M skew, Lambda^2 symmetric) and the top power "
-    "of lambda is the constant tr(Lambda^2k), so the non-trivial integrals for 2 <= k <= 5 are "
-    "six; the lambda^0 coefficients tr(M^k) are the Casimirs.",
+    where="Section 3.1, the last displayed equation: Manakov's Lax equation with parameter, "
+    "$\\frac{d}{dt}(M + \\lambda\\Lambda^2) = [M + \\lambda\\Lambda^2, \\Omega + "
+    "\\lambda\\Lambda]$, and the integrals after it",
+    note="Words with an odd number of $M$'s vanish ($M$ skew, $\\Lambda^2$ symmetric) and the top "
+    "power of $\\lambda$ is the constant $\\operatorname{tr}(\\Lambda^{2k})$, so the non-trivial "
+    "integrals for $2 \\le k \\le 5$ are six; the $\\lambda^0$ coefficients "
+    "$\\operatorname{tr}(M^k)$ are the Casimirs.",
 )
 _lp = sp.Symbol("lambda")
 _k = sp.Symbol("k", integer=True, positive=True)

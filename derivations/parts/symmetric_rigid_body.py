@@ -291,13 +291,21 @@ S5 = claim(
     corrected="With the costate paired with $\\dot Q$ by [[pairing]] on $\\mathfrak{gl}(n)$ "
     "(which extends the pairing of S1 on $\\mathfrak{so}(n)$), the Hamiltonian [[H_corrected]] "
     "is maximised at [[optimal_U]], and the extremals follow [[costate]].",
-    note="The printed Hamiltonian has the cost with a plus sign and is maximised: it is convex in "
-    "U (Hessian +1/2 diag(lam_i + lam_j)), so it has no maximum, and its stationary point is "
-    "U = -J^-1(Q^T P - P^T Q). The maximum principle with the normal multiplier -1 on the running "
-    "cost gives H = <P, QU> - 1/4 <U, J(U)>, maximised exactly at the printed U. The printed "
-    "factor of U fixes the pairing of P with Qdot as 1/2 tr(P^T Qdot) (with c tr(P^T QU) the "
-    "maximiser is 2c J^-1(...)). The costate equations do not depend on the sign.",
+    note="The printed Hamiltonian has the cost with a plus sign and is maximised, but it is "
+    "convex in $U$, so it has no maximum. Corrected: $H = \\langle P, QU\\rangle - "
+    "\\tfrac14\\langle U, J(U)\\rangle$, with $P$ paired with $\\dot Q$ by "
+    "$\\tfrac12\\operatorname{tr}(P^T \\dot Q)$, is maximised exactly at the printed $U$. The "
+    "printed $H$ has the Hessian $+\\tfrac12\\operatorname{diag}(\\Lambda_i + \\Lambda_j)$ in $U$ "
+    "and its stationary point is $U = -J^{-1}(Q^T P - P^T Q)$. The maximum principle with the "
+    "normal multiplier $-1$ on the running cost gives the corrected $H$. The printed factor of "
+    "$U$ fixes the pairing of $P$ with $\\dot Q$ as $\\tfrac12\\operatorname{tr}(P^T \\dot Q)$ "
+    "(with $c\\operatorname{tr}(P^T QU)$ the maximiser is $2c\\,J^{-1}(\\cdots)$). The costate "
+    "equations do not depend on the sign.",
     section="3.2",
+    where="Section 3.2 (Smooth optimal control and the symmetric rigid body equations), the first "
+    "definition (minimise $\\tfrac14\\int_0^T \\langle U, J(U)\\rangle\\,dt$ subject to $\\dot Q "
+    "= QU$), the first proposition ($U = J^{-1}(Q^T P - P^T Q)$) and the remark after it (the "
+    "Hamiltonian)",
 )
 _A, _B = matrix("A"), matrix("B")
 PAIRING = S5.formula("pairing", eq(GlPair(_A, _B), sp.Trace(_A.T * _B) / 2))
@@ -485,13 +493,15 @@ def s5_first_variation() -> float:
 S6 = claim(
     "S6",
     label="SRBtoRB.prop",
-    title="(Q, M = Q^T P - P^T Q) solves the rigid body equations",
+    title="$(Q, M = Q^T P - P^T Q)$ solves the rigid body equations",
     statement="If $(Q, P)$ solves [[srb1]] with [[U]], then $Q$ and [[M]] satisfy the rigid body "
     "equations [[rbl]] with [[Omega]].",
     expected="holds",
     section="3.2",
-    note="Only U^T = -U is used; Q^T Q = I is not needed, so the statement holds on all of "
-    "gl(n) x gl(n).",
+    where="Section 3.2, the second proposition: if $(Q, P)$ solves the symmetric equations, $(Q, "
+    "M)$ solves the rigid body equations (with its one-line proof)",
+    note="Only $U^T = -U$ is used; $Q^T Q = I$ is not needed, so the statement holds on all of "
+    "$\\mathfrak{gl}(n) \\times \\mathfrak{gl}(n)$.",
 )
 S6.formula("srb1", SRB1)
 S6.formula("U", OPTIMAL_U)
@@ -588,7 +598,7 @@ def s6_flow_against_reference_rigid_body() -> float:
 S7 = claim(
     "S7",
     label="rbnlms",
-    title="A costate B with Q^T B skew: the McLachlan-Scovel equations",
+    title="A costate $B$ with $Q^T B$ skew: the McLachlan-Scovel equations",
     statement="For a costate $B$ with [[skew]], the extremal equations of S5 become [[rbnlms]]; "
     "these equations leave the set where $Q^TB$ is skew invariant, and on it $Q^TB$ follows the "
     "rigid body equations (the McLachlan-Scovel equations).",
@@ -597,14 +607,18 @@ S7 = claim(
     corrected="The extremal equations for a costate $B$ with [[skew]] are [[extremal_B]]: "
     "(rbnlms) holds for the rescaled costate [[rescaled]], which on this set is "
     "[[remark]], the map the paper's commented-out remark names.",
-    note="With Q^T B skew, Q^T B - B^T Q = 2 Q^T B, so the control of S5 is U = J^-1(2 Q^T B): "
-    "the printed equations (rbnlms), read for the costate itself, run the extremal flow at half "
-    "speed; they hold for the rescaled costate B' = 2B, which on this set equals B - Q B^T Q. "
-    "That map, B' = P - Q P^T Q, takes every solution of the symmetric rigid body equations with "
-    "Q orthogonal to a solution of (rbnlms) with Q^T B' = M (the paper's commented-out remark). "
-    "The invariance of the set where Q^T B is skew holds for any U: S = Q^T B + B^T Q obeys "
-    "Sdot = U^T S + S U.",
+    note="Read for the costate itself, the printed McLachlan-Scovel equations run the extremal "
+    "flow at half speed. Corrected: the extremals are $\\dot Q = QJ^{-1}(2Q^T B)$, $\\dot B = "
+    "BJ^{-1}(2Q^T B)$, so the printed equations hold for the rescaled costate $B' = 2B$. With "
+    "$Q^T B$ skew, $Q^T B - B^T Q = 2Q^T B$, so the control of S5 is $U = J^{-1}(2Q^T B)$; on "
+    "this set $B' = 2B$ equals $B - QB^T Q$. That map, $B' = P - QP^T Q$, takes every solution of "
+    "the symmetric rigid body equations with $Q$ orthogonal to a solution of the McLachlan-Scovel "
+    "equations with $Q^T B' = M$ (the paper's commented-out remark). The invariance of the set "
+    "where $Q^T B$ is skew holds for any $U$: $S = Q^T B + B^T Q$ obeys $\\dot S = U^T S + SU$.",
     section="3.2",
+    where="Section 3.2, the paragraph after the proof of the second proposition: the "
+    "McLachlan-Scovel equations $\\dot Q = QJ^{-1}(Q^T B)$, $\\dot B = BJ^{-1}(Q^T B)$ for a "
+    "costate $B$ with $Q^T B$ skew",
 )
 SKEW_B = S7.formula("skew", eq(sp.Transpose(Q.T * B), -Q.T * B))
 MCLACHLAN_SCOVEL_RHS = Kernel(
@@ -726,13 +740,20 @@ S8 = claim(
     printed="[[endpoint_printed]] (with the printed $U$).",
     corrected="[[endpoint_corrected]], where $\\partial\\phi/\\partial Q$ is the matrix of "
     "entrywise partial derivatives: minus the gradient in the pairing of S5.",
-    note="With the running cost entering the maximum principle with multiplier -1 (so that U is "
-    "the printed +J^-1(...), see S5), transversality gives P_T = -grad phi, and the gradient in "
-    "the pairing 1/2 tr(A^T B) is twice the entrywise derivative. Checked against a forward "
-    "tangent-linear derivative of the cost: with the corrected endpoint the reduced gradient is "
-    "1/2 J(U - sum_a J^-1(M^a)) and vanishes exactly at the printed U; with the printed one it "
-    "does not match. Equivalently the printed sign is right after P -> -P, U -> -J^-1(...).",
+    note="The endpoint condition $P^a_T = \\partial\\phi/\\partial Q^a_T$ has the wrong sign and "
+    "factor for the printed control. Corrected: $P^a_T = -2\\,\\partial\\phi/\\partial Q^a_T$, "
+    "minus the gradient of $\\phi$ in the pairing of S5. With the running cost entering the "
+    "maximum principle with multiplier $-1$ (so that $U$ is the printed $+J^{-1}(\\cdots)$, see "
+    "S5), transversality gives $P_T = -\\nabla\\phi$, and the gradient in the pairing "
+    "$\\tfrac12\\operatorname{tr}(A^T B)$ is twice the entrywise derivative. Checked against a "
+    "forward tangent-linear derivative of the cost: with the corrected endpoint the reduced "
+    "gradient is $\\tfrac12 J(U - \\sum_a J^{-1}(M^a))$ and vanishes exactly at the printed $U$; "
+    "with the printed one it does not match. Equivalently the printed sign is right after $P "
+    "\\mapsto -P$, $U \\mapsto -J^{-1}(\\cdots)$.",
     section="3.2",
+    where="Section 3.2, the second definition (several samples $Q^a$ and a terminal cost "
+    "$\\phi$), the third proposition ($U = \\sum_a J^{-1}((Q^a)^T P^a - (P^a)^T Q^a)$) and the "
+    "endpoint condition after it, $P^a_T = \\partial\\phi/\\partial Q^a_T$",
 )
 _a, _m = sp.symbols("a m", integer=True, positive=True)
 Qa, Pa = matrix("Q^a"), matrix("P^a")
@@ -899,15 +920,21 @@ def s8_corrected_endpoint() -> float:
 S9 = claim(
     "S9",
     label="M_Q_P.eqn, CandS.definition",
-    title="||M||_op <= 2 is necessary for M = Q^T P - P^T Q with P in SO(n)",
+    title="$\\|M\\|_{\\mathrm{op}} \\le 2$ is necessary for $M = Q^T P - P^T Q$ with $P$ in "
+    "$\\mathrm{SO}(n)$",
     statement="If $Q, P\\in SO(n)$ and [[M]], then [[bound]], and the bound is attained. With "
     "$A$ the orthogonal matrix $Q^TP$, [[identity]]. For $P\\in\\mathfrak{gl}(n)$ there is no "
     "bound: [[gl]] solves the equation for every skew $M$.",
     expected="holds",
     section="3.3",
-    note="The paper's argument uses ||P||_op <= 1, so P is in SO(n) (or O(n)). For a costate P in "
-    "gl(n), as in S5, there is no bound. The identity gives |Mx|^2 = 4|x|^2 - |(A + A^T)x|^2, so "
-    "||M||_op = 2 exactly when A + A^T is singular (A has eigenvalues +-i).",
+    where="Section 3.3 (Local equivalence of classical rigid body and symmetric rigid body "
+    "equations), the paragraph before the definition of $C$ and $S$ (the necessary condition "
+    "$\\|M\\|_{\\mathrm{op}} \\le 2$), and that definition",
+    note="The paper's argument uses $\\|P\\|_{\\mathrm{op}} \\le 1$, so $P$ is in "
+    "$\\mathrm{SO}(n)$ (or $\\mathrm{O}(n)$). For a costate $P$ in $\\mathfrak{gl}(n)$, as in S5, "
+    "there is no bound. With $A = Q^T P$ orthogonal the identity gives $\\|Mx\\|^2 = 4\\|x\\|^2 - "
+    "\\|(A + A^T)x\\|^2$, so $\\|M\\|_{\\mathrm{op}} = 2$ exactly when $A + A^T$ is singular ($A$ "
+    "has eigenvalues $\\pm i$).",
 )
 S9_M = S9.formula("M", eq(M, SYMMETRIC_MOMENTUM.outputs["M"]))
 BOUND = S9.formula("bound", sp.Le(OpNorm(M), 2))
@@ -976,17 +1003,23 @@ def s9_bound_attained() -> float:
 S10 = claim(
     "S10",
     label="Pequ",
-    title="P = Q exp(asinh(M/2)) solves M = Q^T P - P^T Q for ||M||_op < 2",
+    title="$P = Q\\exp(\\sinh^{-1}(M/2))$ solves $M = Q^T P - P^T Q$ for $\\|M\\|_{\\mathrm{op}} "
+    "< 2$",
     statement="For [[domain]], the rotation given by (Pequ) solves [[M]].",
     expected="holds after correction",
     printed="[[printed]], the exponent read as half of $\\sinh^{-1}M$.",
     corrected="[[corrected]], which on skew matrices is [[closed]].",
-    note="Notational: the printed exponent is ambiguous. Read as sinh^-1(M/2) (the reading that "
-    "matches the domain ||M/2||_op < 1 of the series) it holds; read as (sinh^-1 M)/2 it fails "
-    "even where the series converges. On skew matrices exp(asinh X) = X + (I + X^2)^(1/2), which "
-    "is how symrb.P_from_M computes it (on the real Schur form). The solution is not unique: "
-    "eigen-angles phi and pi - phi of Q^T P give the same M; this one has |phi| < pi/2.",
+    note="The printed exponent $\\sinh^{-1} M/2$ is ambiguous, and read as $\\tfrac12\\sinh^{-1} "
+    "M$ it fails. Corrected: $P = Q\\exp(\\sinh^{-1}(M/2))$, the reading that matches the domain "
+    "$\\|M/2\\|_{\\mathrm{op}} < 1$ of the series. The slip is notational: read as "
+    "$\\sinh^{-1}(M/2)$ the proposition holds; read as $(\\sinh^{-1} M)/2$ it fails even where "
+    "the series converges. On skew matrices $\\exp(\\sinh^{-1} X) = X + (I + X^2)^{1/2}$, which "
+    "is how `symrb.P_from_M` computes it (on the real Schur form). The solution is not unique: "
+    "eigen-angles $\\varphi$ and $\\pi - \\varphi$ of $Q^T P$ give the same $M$; this one has "
+    "$\\lvert\\varphi\\rvert < \\pi/2$.",
     section="3.3",
+    where="Section 3.3, the first proposition: for $\\|M\\|_{\\mathrm{op}} < 2$ the equation $M = "
+    "Q^T P - P^T Q$ has the solution $P = Q\\,e^{\\sinh^{-1} M/2}$",
 )
 DOMAIN = S10.formula("domain", sp.Lt(OpNorm(M), 2))
 S10_M = S10.formula("M", eq(M, SYMMETRIC_MOMENTUM.outputs["M"]))
@@ -1201,14 +1234,16 @@ def s10_float64_conditioning() -> float:
 S11 = claim(
     "S11",
     label="invariance of C and S",
-    title="||M||_op is a Casimir; C and S are invariant",
+    title="$\\|M\\|_{\\mathrm{op}}$ is a Casimir; $C$ and $S$ are invariant",
     statement="Along the symmetric rigid body flow, [[spatial]] with [[M]]; as $Q$ stays "
     "orthogonal (S12), $M(t)$ is orthogonally conjugate to $M(0)$, so its operator norm is "
     "constant and the sets $C$ (norm equal to 2) and $S$ (norm below 2) are invariant.",
     expected="holds",
     section="3.3",
+    where="Section 3.3, the second proposition ($C$ and $S$ are invariant under the rigid body "
+    "equations) and its proof (the operator norm is a Casimir)",
     note="The paper argues with the coadjoint action; the check is the equivalent statement that "
-    "the spatial momentum Q M Q^T is constant. Only U^T = -U is used.",
+    "the spatial momentum $QMQ^T$ is constant. Only $U^T = -U$ is used.",
 )
 SPATIAL = S11.formula("spatial", eq(Ddt(Q * M * Q.T), sp.ZeroMatrix(n, n)))
 S11.formula("M", eq(M, SYMMETRIC_MOMENTUM.outputs["M"]))
@@ -1234,18 +1269,24 @@ def s11_spatial_momentum_general_n() -> sp.Integer:
 S12 = claim(
     "S12",
     label="gln_symp, ourHam",
-    title="Hamiltonian form of the symmetric rigid body on gl(n) x gl(n)",
+    title="Hamiltonian form of the symmetric rigid body on $\\mathfrak{gl}(n) \\times "
+    "\\mathfrak{gl}(n)$",
     statement="On $\\mathfrak{gl}(n)\\times\\mathfrak{gl}(n)$ with the symplectic form [[form]] "
     "and the Hamiltonian [[H]], Hamilton's equations [[hamilton]] for every $v$ are "
     "[[equations]], the symmetric rigid body equations; $SO(n)\\times SO(n)$ is invariant, and "
     "[[quarter]] with [[M]].",
     expected="holds",
     section="3.3",
-    note="With the convention Omega(X_H, .) = dH the equations are exactly the symmetric rigid "
-    "body equations (the factor 1/2 of the form and the 1/8 of H match); the opposite convention "
-    "reverses time. H is half the kinetic energy 1/2 <J^-1 M, M>, consistent with the cost "
-    "1/4 <U, JU> of S5. The symplectic form and H are the paper's definitions (gln_symp, ourHam): "
-    "what is checked is what follows from them.",
+    where="Section 3.3, the paragraph 'The Hamiltonian form of the symmetric rigid body "
+    "equations': the third proposition (the symplectic form on $\\mathfrak{gl}(n) \\times "
+    "\\mathfrak{gl}(n)$ and the Hamiltonian $H(\\xi, \\eta)$) and the remark $H = "
+    "\\tfrac14\\langle J^{-1}M, M\\rangle$ after it",
+    note="With the convention $\\Omega(X_H, \\cdot) = dH$ the equations are exactly the symmetric "
+    "rigid body equations (the factor $\\tfrac12$ of the form and the $\\tfrac18$ of $H$ match); "
+    "the opposite convention reverses time. $H$ is half the kinetic energy $\\tfrac12\\langle "
+    "J^{-1}M, M\\rangle$, consistent with the cost $\\tfrac14\\langle U, J(U)\\rangle$ of S5. The "
+    "symplectic form and $H$ are the paper's definitions: what is checked is what follows from "
+    "them.",
 )
 _xi, _eta = matrix("xi"), matrix("eta")
 _x1, _y1, _x2, _y2 = (matrix(s) for s in ("xi_1", "eta_1", "xi_2", "eta_2"))

@@ -1,0 +1,159 @@
+"""The renderers of the claims and errata pages (``derivations.report`` and the book extension
+``book/_ext/symrb_claims.py``), on the registered claims and on made-up results."""
+
+from __future__ import annotations
+
+import copy
+import importlib.util
+import re
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+pytest.importorskip("sphinx")
+
+from derivations.registry import all_claims  # noqa: E402
+from derivations.report import _TEX_TOKEN, breakable, prose, short_where  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("symrb_claims", ROOT / "book/_ext/symrb_claims.py")
+assert _spec and _spec.loader
+ext: Any = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(ext)
+
+CLAIMS = all_claims()
+ERRATA = [c for c in CLAIMS if c.expected in ext.ERRATA]
+FORMULA = re.compile(r"(?<![$\\])\$([^$]+)\$(?!\$)")
+
+
+def _texts() -> list[tuple[str, str]]:
+    return [
+        (f"{c.id}.{which}", c.render(which))
+        for c in CLAIMS
+        for which in ("statement", "printed", "corrected")
+        if getattr(c, which)
+    ]
+
+
+def _normal(tex: str) -> list[str]:
+    """The tokens of a formula without spaces, empty groups, sizes and null delimiters: what
+    :func:`breakable` may change."""
+    tokens = [t for t in _TEX_TOKEN.findall(tex) if t.strip()]
+    out: list[str] = []
+    skip_dot = False
+    for t in tokens:
+        if t in (r"\left", r"\right", r"\bigl", r"\bigr", r"\Bigl", r"\Bigr"):
+            skip_dot = True
+            continue
+        if skip_dot and t == ".":
+            skip_dot = False
+            continue
+        skip_dot = False
+        if t == "}" and out and out[-1] == "{":
+            out.pop()
+            continue
+        out.append(t)
+    return out
+
+
+def _balanced(tex: str) -> bool:
+    depth = 0
+    for t in _TEX_TOKEN.findall(tex):
+        depth += (t == "{") - (t == "}")
+        if depth < 0:
+            return False
+    return depth == 0 and tex.count(r"\left") == tex.count(r"\right")
+
+
+@pytest.mark.parametrize(("where", "text"), _texts())
+def test_breakable_only_cuts_formulas(where: str, text: str) -> None:
+    cut = breakable(text, limit=12)
+    pieces = FORMULA.findall(cut)
+    assert all(_balanced(p) for p in pieces), f"{where}: a piece is not balanced TeX"
+    before = [t for f in FORMULA.findall(text) for t in _normal(f)]
+    after = [t for p in pieces for t in _normal(p)]
+    assert after == before, f"{where}: cutting changed the formulas"
+    assert FORMULA.sub("", cut).split() == FORMULA.sub("", text).split()
+
+
+def test_breakable_cuts_long_formulas_and_leaves_the_rest() -> None:
+    long = r"$V = \sum_{k=0}^{N-1} \left(\langle p_{k+1}, f(x_k, u_k) - x_{k+1}\rangle + \langle \sigma, h(u_k)\rangle - g(x_k, u_k)\right)$"
+    cut = breakable(long, limit=12)
+    assert len(FORMULA.findall(cut)) >= 4
+    assert r"\Bigl(" in cut or r"\bigl(" in cut
+    assert breakable("short $x = y$ and $$a = b + c + d + e + f + g + h + i$$", limit=2) == (
+        "short $x ={}$ $y$ and $$a = b + c + d + e + f + g + h + i$$"
+    )
+    assert breakable("$a + b$", limit=24) == "$a + b$"
+
+
+def test_prose_in_a_table_cell_has_no_bare_pipe() -> None:
+    for c in CLAIMS:
+        for text in (c.title, c.note, c.where):
+            cell = prose(text, cell=True)
+            assert not re.search(r"(?<!\\)\|", cell), f"{c.id}: {cell[:80]}"
+
+
+def test_every_claim_says_where_it_is_in_the_paper() -> None:
+    for c in CLAIMS:
+        assert re.match(r"Section [23](\.\d)?[ ,]", c.where), f"{c.id}: where={c.where!r}"
+        short = short_where(c.where)
+        section = re.match(r"Section [\d.]+", c.where)
+        assert section and short.startswith(section.group() + ","), (c.id, short)
+        assert "(" not in FORMULA.sub("", short) and ": " not in FORMULA.sub("", short), short
+
+
+def test_every_erratum_note_says_what_is_wrong_and_the_correction() -> None:
+    assert ERRATA
+    for c in ERRATA:
+        wrong, fixed = ext.summary_of(c.note)
+        assert wrong and not wrong.startswith("Corrected"), c.id
+        assert fixed, f"{c.id}: no 'Corrected: ...' sentence in the note"
+
+
+def test_sentences_never_cut_inside_math() -> None:
+    assert ext.sentences("It is $a. B$ here. $x$ starts. Corrected: y.") == [
+        "It is $a. B$ here.",
+        "$x$ starts.",
+        "Corrected: y.",
+    ]
+
+
+def _result(outcome: str) -> dict[str, Any]:
+    ev = {"level": "exact rational", "description": "d", "seconds": 0.0, "error": None}
+    return {
+        "id": "S99",
+        "outcome": outcome,
+        "evidence": [
+            {**ev, "form": "printed", "residual": 1.0, "tol": 1e-12},
+            {**ev, "form": "corrected", "residual": 0.0, "tol": 1e-12},
+        ],
+    }
+
+
+NOTE = "The sign is wrong. Corrected: the sign is right. Details."
+
+
+def test_an_erratum_passes_the_check() -> None:
+    ext.check_erratum(_result("holds after correction"), NOTE)
+
+
+def test_the_errata_page_refuses_a_statement_that_is_no_longer_an_erratum() -> None:
+    r = _result("holds after correction")
+    printed_passes = copy.deepcopy(r)
+    printed_passes["evidence"][0]["residual"] = 0.0
+    with pytest.raises(ext.ExtensionError, match="not an erratum"):
+        ext.check_erratum(printed_passes, NOTE)
+    corrected_fails = copy.deepcopy(r)
+    corrected_fails["evidence"][1]["residual"] = 1.0
+    with pytest.raises(ext.ExtensionError, match="corrected-form check fails"):
+        ext.check_erratum(corrected_fails, NOTE)
+    with pytest.raises(ext.ExtensionError, match="Corrected"):
+        ext.check_erratum(r, "The sign is wrong. Nothing else.")
+
+
+def test_evidence_rows_show_residual_against_tolerance() -> None:
+    rows = ext.evidence_rows(_result("holds after correction")["evidence"])
+    assert rows[2].endswith("| 1.0e+00 > 1.0e-12 | fails, as expected |")
+    assert rows[3].endswith("| 0 ≤ 1.0e-12 | passes |")
