@@ -365,7 +365,7 @@ D1 = claim(
     "D1",
     label="prob8.1, gendiscprop, eq8.3-eq8.6",
     title="Discrete maximum principle (fixed endpoints, control constraint)",
-    statement="Proposition gendiscprop: a solution of the problem of minimising [[cost]] subject to "
+    statement="The discrete maximum principle (the first proposition of Section 2): a solution of the problem of minimising [[cost]] subject to "
     "[[dynamics]], with $x_0$ and $x_N$ given, and [[constraint]] satisfies the extremal equations "
     "of [[H]] and [[Hhat]], the critical points of an augmented functional $V$.",
     printed="The costate equation is stated for every step up to $N$, [[costate_printed]], with "
@@ -698,7 +698,7 @@ D3 = claim(
     "D3",
     label="C:8.3",
     title="Linearised extremal equations",
-    statement="Corollary C:8.3: differentiating the extremal equations gives the differentials "
+    statement="The corollary after the discrete maximum principle: differentiating the extremal equations gives the differentials "
     "$dp_k$ and $dx_{k+1}$ as linear functions of $dx_k$ and $dp_{k+1}$.",
     printed="[[printed]], with second derivatives of $\\hat H$ at $(p_{k+1}, x_k, u^*_k)$.",
     corrected="[[corrected]] with the second derivatives of the reduced Hamiltonian [[reduced]]; "
@@ -1108,11 +1108,11 @@ D5 = claim(
     "D5",
     label="prob8.1m, gendiscpropm, eq8.3m-eq8.6m, m8",
     title="Multi-sample problem with terminal cost: shared controls, per-sample costates",
-    statement="Proposition gendiscpropm: for the problem of minimising [[cost]] subject to "
+    statement="The multi-sample maximum principle (the second proposition of Section 2): for the problem of minimising [[cost]] subject to "
     "[[dynamics]] and the control constraint, with controls shared by the samples, the "
     "extremal equations of [[H]] have per-sample costates and an endpoint condition.",
-    printed="prob8.1m also fixes the endpoints $x^a_N$; eq8.3m is [[costate_printed]] with the "
-    "un-indexed $x_k$; m8 is [[m8]].",
+    printed="The multi-sample problem also fixes the endpoints $x^a_N$; its costate equation is "
+    "[[costate_printed]] with the un-indexed $x_k$; its endpoint condition is [[m8]].",
     corrected="The endpoint is free. The extremal equations are the critical points of [[V]]: "
     "[[state]], [[costate]], [[stationary]] with one multiplier per step, and [[endpoint]] for this "
     "$H$ (equivalently the costates are minus the gradients of the cost, D6).",
@@ -1369,18 +1369,18 @@ D6 = claim(
     title="ResNet layers: the costate recursion is back-propagation",
     statement="Remark 1: in the ResNet framework of Benning et al. (2019) a layer is $f(x, u)$ "
     "with controls $u$ the pair $(K, \\beta)$ and $\\sigma$ the sigmoid [[sigmoid]] applied "
-    "entrywise. Remark 2: the solution of Proposition gendiscpropm is back-propagation (LeCun "
+    "entrywise. Remark 2: the solution of the multi-sample maximum principle is back-propagation (LeCun "
     "1988). With [[H]] and no running cost, [[no_running_cost]], the costate recursion of the "
     "layers is [[adjoint]] (for the plain layer [[adjoint_plain]]), and for the endpoint condition "
     "[[endpoint]] with either sign, $s=1$ or $s=-1$, the costates and weight gradients are "
     "[[backprop]] and [[weights]] with [[cost]].",
     printed="Remark 1: the ResNet layer is [[plain_layer]]. Remark 2, read for Proposition "
-    "gendiscpropm with its endpoint condition m8, [[m8]], and a running cost $g$: the costates "
+    "the multi-sample maximum principle with its endpoint condition [[m8]], and a running cost $g$: the costates "
     "are the back-propagated gradients of the cost, [[backprop]] and [[weights]] with $s=1$.",
     corrected="The ResNet layer of Benning et al. is the residual layer [[residual_layer]], a "
     "perturbation of the identity, [[identity]], which the plain layer is not. The costate "
     "recursion is back-propagation for both layers when there is no running cost, with either "
-    "endpoint sign (m8's sign gives the gradients, D5's sign minus the gradients); with a running "
+    "endpoint sign (the printed sign gives the gradients, D5's sign minus the gradients); with a running "
     "cost only D5's endpoint condition [[endpoint_minus]] gives the gradients of the cost, "
     "[[backprop]] and [[weights]] with $s=-1$.",
     expected="holds after correction",

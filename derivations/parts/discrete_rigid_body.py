@@ -278,19 +278,19 @@ D7 = claim(
     title="Discrete symmetric rigid body from optimal control on $\\mathrm{SO}(n)$",
     statement="Minimising [[cost]] subject to [[dynamics]] with $Q_0$ and $Q_N$ given: with the "
     "Hamiltonian [[hamiltonian]], whose critical points in $U$ on $SO(n)$ satisfy [[critical]] "
-    "(from [[lagrangian]], [[dlagrangian]]), one gets symequation [[symequation]], the costate "
-    "equation [[costate]], equ_final_th_2.7 [[final]], and after the sign change of $P$ the "
+    "(from [[lagrangian]], [[dlagrangian]]), one gets the stationarity equation of the proof [[symequation]], the costate "
+    "equation [[costate]], the proof's last equation [[final]], and after the sign change of $P$ the "
     "theorem's equations [[discrbopteqns]] with [[Ukdef]].  The proof uses the Moser-Veselov "
     "form of the cost, [[mv_functional]].",
-    printed="discrbeq reads [[dynamics_printed]]; the multiplier $\\Sigma$ is an $N\\times N$ "
+    printed="The dynamics of the problem read [[dynamics_printed]]; the multiplier $\\Sigma$ is an $N\\times N$ "
     "matrix; $P_k$ in $SO(n)$ is the discrete covector of the maximum principle (the theorem's "
     "$P_k$ is minus the covector of the proof, so both would be in $SO(n)$: [[flip_printed]]); "
-    "$U_k$ in $SO(n)$ is defined by Ukdef (one solution).",
-    corrected="discrbeq is [[dynamics]]; $\\Sigma$ is $n\\times n$ (the size of $U^TU-I$); the "
+    "$U_k$ in $SO(n)$ is defined by the theorem's equation for $U_k$ (one solution).",
+    corrected="The dynamics are [[dynamics]]; $\\Sigma$ is $n\\times n$ (the size of $U^TU-I$); the "
     "costate is a covector of $\\mathfrak{gl}(n)$, fixed only up to adding $Q_k$ times a symmetric "
     "matrix, so $SO(n)$ is a choice (an invariant set): [[P0_gl]] and [[P0_SO]] give the same "
     "extremal; the sign change gives [[flip_det]], so for odd $n$ at most one of $P_k$ and "
-    "$-P_k$ is in $SO(n)$; Ukdef has several solutions in $SO(n)$ (two for $n=2$, four for "
+    "$-P_k$ is in $SO(n)$; the equation for $U_k$ has several solutions in $SO(n)$ (two for $n=2$, four for "
     "$n=3$ and small momenta) and $U_k$ is the one on the branch through the identity (all "
     "eigenvalues of $U_k\\Lambda$ in the open right half-plane), unique, and existing only up "
     "to a fold (D10).",
@@ -777,14 +777,14 @@ D9 = claim(
     title="Learning version: several samples and a terminal cost",
     statement="Minimising [[cost]] subject to [[dynamics]] gives [[costate]], [[Ukdef2]] and "
     "[[endpoint]].",
-    printed="discrboptm starts the running cost at one, [[cost_printed]], and writes "
-    "$\\phi(\\overline Q^a_N)$ for the free end point; Ukdef2 typesets the sum's limits as "
-    "`\\sum_{^Ma=1}`; the proof applies Proposition gendiscpropm, whose endpoint condition m8 "
-    "for the Hamiltonian dischamm, before the sign change, reads [[endpoint_m8]].",
+    printed="The cost of the learning problem starts the running cost at one, [[cost_printed]], and writes "
+    "$\\phi(\\overline Q^a_N)$ for the free end point; the theorem's equation for $U_k$ typesets the sum's limits as "
+    "`\\sum_{^Ma=1}`; the proof applies the multi-sample maximum principle, whose endpoint "
+    "condition for the Hamiltonian of the proof, before the sign change, reads [[endpoint_m8]].",
     corrected="The running cost starts at zero, [[cost]], with $\\phi$ a function of the matrix "
-    "$Q^a_N$; the sum in Ukdef2 runs over the samples one to M; for the Hamiltonian of dischamm "
+    "$Q^a_N$; the sum in the equation for $U_k$ runs over the samples one to M; for the Hamiltonian of the proof "
     "the costate ends at [[endpoint_unflipped]], where [[final_unflipped]]; after the sign "
-    "change used for Ukdef this becomes the theorem's [[endpoint]] with [[Ukdef2]], so the "
+    "change used for the equation for $U_k$ this becomes the theorem's [[endpoint]] with [[Ukdef2]], so the "
     "theorem's equations hold as stated.",
     note="The running cost starts at $k = 1$ (so the equation for $U_0$ fails), the sum over the "
     "samples is mistyped, and the endpoint sign rests on two slips that cancel. Corrected: the "
@@ -923,7 +923,7 @@ D10 = claim(
     title="Moser-Veselov equations and the two MV algorithms",
     statement="The Moser-Veselov equations [[mv1]], [[mv2]], [[mv3]].  MV-Algorithm 1 maps "
     "$(Q_k, Q_{k+1})$ to $(Q_{k+1}, Q_{k+2})$ and MV-Algorithm 2 maps $(Q_k, M_k)$ to "
-    "$(Q_{k+1}, M_{k+1})$; they define the same dynamics.  mv2 can be solved for $\\Omega_k$ "
+    "$(Q_{k+1}, M_{k+1})$; they define the same dynamics.  The second Moser-Veselov equation can be solved for $\\Omega_k$ "
     "for small $M_k$, up to a fold; for $n=2$, [[n2]].",
     expected="holds",
     section="2.2",
@@ -1123,7 +1123,7 @@ D12 = claim(
     "[[ident_printed]].",
     corrected="$U_k$ is orthogonal, not skew: it is the transposed Moser-Veselov body angular "
     "velocity, [[ident_omega]], and the body angular momentum is [[ident_momentum]] "
-    "(which is Mdef1 by Ukdef1).  Conversely a Moser-Veselov solution gives "
+    "(the momentum formula of Section 2.2, by the equation for $U_k$).  Conversely a Moser-Veselov solution gives "
     "[[converse]], a costate in $\\mathfrak{gl}(n)$; one in $SO(n)$ exists when the momentum's "
     "operator norm is below 2 (S9, S10): that is the 'certain set'.",
     note="The paper identifies $U$ with the body angular momentum, but $U_k$ is orthogonal, not "

@@ -605,7 +605,7 @@ S7 = claim(
     expected="holds after correction",
     printed="The extremal equations for a costate $B$ with [[skew]] are [[rbnlms]].",
     corrected="The extremal equations for a costate $B$ with [[skew]] are [[extremal_B]]: "
-    "(rbnlms) holds for the rescaled costate [[rescaled]], which on this set is "
+    "the McLachlan-Scovel equations hold for the rescaled costate [[rescaled]], which on this set is "
     "[[remark]], the map the paper's commented-out remark names.",
     note="Read for the costate itself, the printed McLachlan-Scovel equations run the extremal "
     "flow at half speed. Corrected: the extremals are $\\dot Q = QJ^{-1}(2Q^T B)$, $\\dot B = "
@@ -1005,7 +1005,7 @@ S10 = claim(
     label="Pequ",
     title="$P = Q\\exp(\\sinh^{-1}(M/2))$ solves $M = Q^T P - P^T Q$ for $\\|M\\|_{\\mathrm{op}} "
     "< 2$",
-    statement="For [[domain]], the rotation given by (Pequ) solves [[M]].",
+    statement="For [[domain]], the rotation given by the paper's formula for $P$ solves [[M]].",
     expected="holds after correction",
     printed="[[printed]], the exponent read as half of $\\sinh^{-1}M$.",
     corrected="[[corrected]], which on skew matrices is [[closed]].",
