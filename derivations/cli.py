@@ -946,4 +946,9 @@ def main(argv: Sequence[str] | None = None, prog: str = "symrb") -> int:
     if why is not None:
         print(why, file=sys.stderr)
         return 2
-    return int(args.func(args))
+    try:
+        return int(args.func(args))
+    except BrokenPipeError:  # `symrb claims | head`: the reader closed the pipe, not an error
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes at exit
+        return 0

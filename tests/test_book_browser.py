@@ -113,6 +113,15 @@ TABLE_ROWS_JS = """() => Array.from(document.querySelectorAll('article table tr'
     }))"""
 
 # Images: where from, alt text, loaded pixels.
+# Code and output blocks whose lines run past the column edge (the reader sees them cut off, or
+# has to scroll each block sideways): the block's content is wider than the block.
+CUT_LINES_JS = """() => Array.from(document.querySelectorAll('article div.highlight pre, article .cell_output pre'))
+    .filter(p => p.scrollWidth > p.clientWidth + 1)
+    .map(p => {
+        const line = p.textContent.split('\\n').reduce((a, b) => (b.length > a.length ? b : a), '');
+        return `${p.scrollWidth} px in ${p.clientWidth} px: "${line.trim().slice(0, 60)}"`;
+    })"""
+
 IMAGES_JS = """() => Array.from(document.images).map(i => ({
     src: i.getAttribute('src') || '', alt: i.getAttribute('alt'), width: i.naturalWidth,
     control: i.classList.contains('toggler')
@@ -447,6 +456,7 @@ def test_page(page: str, server: str, browser: Any) -> None:
         images = tab.evaluate(IMAGES_JS)
         visible = tab.evaluate(VISIBLE_TEXT_JS)
         rows = tab.evaluate(TABLE_ROWS_JS)
+        cut = tab.evaluate(CUT_LINES_JS)
         mjx_count = tab.locator("mjx-container").count()
         math_errors = tab.evaluate(
             "() => Array.from(document.querySelectorAll('mjx-merror'))"
@@ -476,6 +486,7 @@ def test_page(page: str, server: str, browser: Any) -> None:
     problems += [f"image {d}" for d in _image_defects(images)]
     problems += _text_defects(visible)
     problems += [f"table row of raw pipes: {r}" for r in _table_defects(rows)]
+    problems += [f"code or output line cut at the column edge: {c}" for c in cut[:5]]
     assert not problems, f"{page}:\n  " + "\n  ".join(problems)
 
 

@@ -1,4 +1,8 @@
-"""Tests of symrb.discrete: symmetric representation, MV-Algorithms 1 and 2, time-step scaling."""
+"""Tests of symrb.discrete: symmetric representation, MV-Algorithms 1 and 2, time-step scaling.
+
+The long-run agreement of the three maps and their order of accuracy are experiments of the book
+(symrb.experiments.discrete), tested once in tests/test_experiments_discrete.py.
+"""
 
 from __future__ import annotations
 
@@ -32,44 +36,6 @@ def _start(seed=0, scale=0.05, nn=3):
     return random_SO(nn, seed=rng), random_so(nn, seed=rng, scale=scale), rng
 
 
-def test_three_algorithms_agree_over_ten_thousand_steps():
-    """Symmetric representation from (Q_0, P_0), MV-Algorithm 2 from (Q_1, M_1 = Q_0^T P_0 -
-    P_0^T Q_0) (claim D12) and MV-Algorithm 1 from (Q_0, Q_1) give the same Q_k (n = 3, 10^4 steps).
-
-    The symmetric representation and MV-Algorithm 2 agree to within ten times the spread of the
-    symmetric algorithm's own rounding (the same run in a rotated frame R Q, R P, which the
-    equations leave invariant).  MV-Algorithm 1 computes M from Q_{k+1}^T Q_k, a difference of
-    nearly equal matrices, so its rounding errors grow fast (about N^3 here); its gap to MV-2 must
-    be of the order of its own rotated-frame spread and far below the O(h^2) discretisation error
-    (1e-3) that a wrong index would expose."""
-    Q0, M, rng = _start()
-    steps = 10_000
-    P0 = Q0 @ (0.5 * M)
-    sym = symmetric_flow(Q0, P0, LAM3, 1.0, steps)
-    Qs, Msym = sym.y.Q, sym.y.M
-    M1 = Q0.T @ P0 - P0.T @ Q0
-    mv2 = mv_algorithm2(Qs[1], M1, LAM3, steps - 1)
-    QB, MB = mv2.y.Q, mv2.y.M
-    QA = mv_algorithm1(Q0, Qs[1], LAM3, steps - 1).y.Q
-    assert sym.success and mv2.success
-    R = random_SO(3, seed=rng)
-    QsR = symmetric_flow(R @ Q0, R @ P0, LAM3, 1.0, steps).y.Q
-    spread = np.max(np.abs(R.T @ QsR - Qs))
-    assert 0 < spread < 1e-10
-    assert np.max(np.abs(QB - Qs[1:])) <= 10 * spread
-    assert np.max(np.abs(MB - Msym[:-1])) <= 10 * spread * np.max(np.abs(M1))
-    gap1 = np.max(np.abs(QA[1:] - QB))
-    spread1 = max(
-        np.max(np.abs(Rk.T @ mv_algorithm1(Rk @ Q0, Rk @ Qs[1], LAM3, steps - 1).y.Q - QA))
-        for Rk in random_SO(3, (3,), seed=rng)
-    )
-    assert gap1 <= 20 * spread1  # the order of MV-Algorithm 1's own rounding spread
-    assert gap1 < 1e-5  # far below the O(h^2) error a wrong index would show
-    # Casimirs: spectrum of the MV momentum conserved
-    ev0 = np.sort(np.linalg.eigvals(M1).imag)
-    assert np.allclose(np.sort(np.linalg.eigvals(MB).imag, axis=-1), ev0, atol=1e-13)
-
-
 def test_mv_algorithm2_conserves_the_spectrum():
     """mv3 is a conjugation, so the spectrum of M_k along MV-Algorithm 2 stays that of M_1 (n = 4,
     1000 steps).  Every orthogonal update has this property, so it is a test of the implementation
@@ -94,23 +60,6 @@ def _reference(Q0, M0, lam, T):
     y0 = np.concatenate([Q0.ravel(), M0.ravel()])
     sol = solve_ivp(f, (0, T), y0, method="DOP853", rtol=1e-13, atol=1e-13)
     return sol.y[: nn * nn, -1].reshape(nn, nn), sol.y[nn * nn :, -1].reshape(nn, nn)
-
-
-def test_second_order():
-    rng = np.random.default_rng(3)
-    lam = np.array([0.6, 0.9, 1.3, 1.7])
-    M0, Q0 = random_so(4, seed=rng, scale=0.5), random_SO(4, seed=rng)
-    T = 2.0
-    QT, MT = _reference(Q0, M0, lam, T)
-    errs = []
-    for h in (0.1, 0.05, 0.025):
-        N = round(T / h)
-        sol = discrete_rigid_body_flow(Q0, M0, lam, h, N, save_every=N)
-        t, Q, M = sol.t, sol.y.Q, sol.y.M
-        assert t[-1] == pytest.approx(T)
-        errs.append((np.abs(Q[-1] - QT).max(), np.abs(M[-1] - MT).max()))
-    for a, b in zip(errs, errs[1:], strict=False):
-        assert 3.8 < a[0] / b[0] < 4.2 and 3.8 < a[1] / b[1] < 4.2
 
 
 def test_mv2_momentum_scaling():

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Build the executed book from a fresh clone:
-#   install, check that the generated code is what the derivations emit (never rewriting tracked
-#   files), verify every claim, optionally run the CI subset of the mutation check
-#   (SYMRB_MUTATION=ci), then build the book with every page executed and warnings as errors.
+#   set up the Python (the active virtual environment, else .venv, created on first use), install,
+#   check that the generated code is what the derivations emit (never rewriting tracked files),
+#   verify every claim, optionally run the CI subset of the mutation check (SYMRB_MUTATION=ci),
+#   then build the book with every page executed and warnings as errors.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/_common.sh"
 
-step "install symrb with the book extra"
-"$PYTHON" -m pip install --quiet --disable-pip-version-check -e ".[book]"
+step "Python environment and symrb with the book extra"
+use_python
+install_symrb book
 
 step "symrb derive --check (symrb/_generated is what the derivations emit)"
 symrb derive --check
@@ -27,6 +29,7 @@ if [ "${SYMRB_MUTATION:-}" = "ci" ]; then
 fi
 
 step "jupyter-book build -W --keep-going book"
-jupyter-book build -W --keep-going book
+book_start=$(date +%s)
+"$PYTHON" tools/build_book.py -W --keep-going book
 
-printf '\nbook built in %ss: book/_build/html/index.html\n' "$(( $(date +%s) - start ))"
+printf '\nbook built in %s s: book/_build/html/index.html\n' "$(($(date +%s) - book_start))"
