@@ -1,4 +1,5 @@
-r"""The Moser-Veselov equation :math:`U\Lambda - \Lambda U^T = M` on :math:`SO(n)` (paper, eqs. Ukdef1, mv2).
+r"""The Moser-Veselov equation :math:`U\Lambda - \Lambda U^T = M` on :math:`SO(n)` (the paper's
+eqs. (22) and (32)).
 
 Given a skew :math:`M` and a positive diagonal :math:`\Lambda`, the discrete rigid body needs the
 :math:`U\in SO(n)` with :math:`J_D(U) = U\Lambda - \Lambda U^T = M` *on the branch through the
@@ -440,11 +441,12 @@ def solve_moser_veselov(
 ) -> Array | tuple[Array, MVSolveInfo]:
     r"""Solve :math:`U\Lambda - \Lambda U^T = M` for :math:`U\in SO(n)` on the branch through the identity.
 
-    This is eq. Ukdef1 (:math:`J_D(U_k) = Q_k^TP_k - P_k^TQ_k`) and, with :math:`U = \Omega^T`,
-    eq. mv2 (:math:`M = \Omega^T\Lambda - \Lambda\Omega`) of the paper.  The returned :math:`U` is
-    the unique solution with every eigenvalue of :math:`U\Lambda` in the open right half-plane
-    (equal to :math:`I` at :math:`M = 0`, continuous in :math:`M`); see the module docstring for
-    the method (Riccati start, Sylvester-Newton polish).
+    This is eq. (22) of the paper (:math:`J_D(U_k) = Q_k^TP_k - P_k^TQ_k`, symmetric
+    representation) and, with :math:`U = \Omega^T`, its eq. (32) (:math:`M = \Omega^T\Lambda -
+    \Lambda\Omega`, Moser-Veselov).  The returned :math:`U` is the unique solution with every
+    eigenvalue of :math:`U\Lambda` in the open right half-plane (equal to :math:`I` at
+    :math:`M = 0`, continuous in :math:`M`); see the module docstring for the method (Riccati
+    start, Sylvester-Newton polish).
 
     Parameters
     ----------
