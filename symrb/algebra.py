@@ -265,7 +265,7 @@ def J_inv(M: ArrayLike, lam: ArrayLike) -> Array:
 
 
 def J_D(U: ArrayLike, lam: ArrayLike) -> Array:
-    r"""The discrete inertia operator :math:`J_D(U) = U\Lambda - \Lambda U^T` (paper, eq. (22)).
+    r"""The discrete inertia operator :math:`J_D(U) = U\Lambda - \Lambda U^T` (paper, Section 2.1).
 
     Its derivative at the identity is :math:`J` (claim D8).
 

@@ -4,13 +4,13 @@ version, the reconstruction :math:`P = Q\exp(\sinh^{-1}(M/2))`, and a ``solve_iv
 .. math::
 
     \dot Q = QU,\quad \dot P = PU,\quad U = J^{-1}(Q^TP - P^TQ)
-    \qquad\text{(symmetric rigid body, paper eq. (44))}
+    \qquad\text{(symmetric rigid body, paper Section 3.2)}
 
     \dot Q = QJ^{-1}(Q^TB),\quad \dot B = BJ^{-1}(Q^TB)
-    \qquad\text{(McLachlan-Scovel, eq. (47); } B = 2P \text{ when } Q^TP \text{ is skew)}
+    \qquad\text{(McLachlan-Scovel, Section 3.2; } B = 2P \text{ when } Q^TP \text{ is skew)}
 
     \dot Q^a = Q^aU,\quad \dot P^a = P^aU,\quad U = \sum_a J^{-1}((Q^a)^TP^a - (P^a)^TQ^a)
-    \qquad\text{(learning version, eqs. (49), (50))}
+    \qquad\text{(learning version, Section 3.2)}
 
 The vector fields are generated in :mod:`symrb._generated.symmetric_rigid_body` by
 :mod:`derivations.parts.symmetric_rigid_body` (claims S5-S12); the functions here validate input and
@@ -132,7 +132,7 @@ def mclachlan_scovel_rhs(Q: ArrayLike, B: ArrayLike, lam: ArrayLike) -> tuple[Ar
     :math:`J^{-1}` is defined on :math:`\mathfrak{so}(n)`, so :math:`Q^TB` must be skew (this set
     is invariant).  Raises :class:`InputError` otherwise.  For a costate :math:`P` of the
     symmetric rigid body with :math:`Q^TP` skew, the extremal flow is this field for
-    :math:`B = 2P` (the paper's (47) with :math:`B = P` runs it at half speed); for any
+    :math:`B = 2P` (the paper's McLachlan-Scovel equations with :math:`B = P` runs it at half speed); for any
     :math:`P`, :math:`B = P - QP^TQ` maps the symmetric flow with :math:`Q` orthogonal to it.
 
     Parameters
@@ -240,7 +240,7 @@ def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array,
 
 
 def gl_hamiltonian(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
-    r"""The Hamiltonian on :math:`\mathfrak{gl}(n)\times\mathfrak{gl}(n)` (paper, eq. (56);
+    r"""The Hamiltonian on :math:`\mathfrak{gl}(n)\times\mathfrak{gl}(n)` (paper, Section 3.3;
     claim S12):
 
     .. math:: H = -\tfrac18\operatorname{tr}[J^{-1}(M)M] = \tfrac14\langle J^{-1}M, M\rangle,

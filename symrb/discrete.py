@@ -3,10 +3,13 @@ r"""Discrete rigid body flows (paper, Section 2): the symmetric representation a
 Three maps, each implemented from its own equations and sharing only the solver of
 :math:`J_D(U) = U\Lambda - \Lambda U^T = M` (:func:`symrb.solve_moser_veselov`):
 
-* the symmetric representation (paper, eqs. (21) and (22)):
+* the symmetric representation (paper, Section 2.1):
   :math:`J_D(U_k) = h\,(Q_k^TP_k - P_k^TQ_k)`, :math:`Q_{k+1} = Q_kU_k`, :math:`P_{k+1} = P_kU_k`;
-* MV-Algorithm 1, :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})` (eqs. (31)-(33));
-* MV-Algorithm 2, :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (eqs. (31)-(33)).
+* MV-Algorithm 1, :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})` (paper, Section 2.2);
+* MV-Algorithm 2, :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (paper, Section 2.2).
+
+MV1-MV3 below name the three Moser-Veselov equations of Section 2.2 in the order the paper
+prints them.
 
 Time step.  A discrete momentum is :math:`h` times the continuous one.  In the symmetric
 representation ``P`` is on the continuous scale (:math:`Q^TP - P^TQ \approx M(t_k)`, so
@@ -116,7 +119,7 @@ class DiscreteFlowSolution:
 
 
 def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
-    r""":math:`U\Lambda - \Lambda U^T - M` (zero when ``U`` solves eq. (22) / (32) for ``M``).
+    r""":math:`U\Lambda - \Lambda U^T - M` (zero when ``U`` solves :math:`J_D(U) = M`).
 
     Parameters
     ----------
@@ -261,7 +264,7 @@ class _Run:
 def symmetric_step(
     Q: ArrayLike, P: ArrayLike, lam: ArrayLike, h: float = 1.0
 ) -> tuple[Array, Array, Array]:
-    r"""One step of the symmetric representation (paper, eqs. (21) and (22)).
+    r"""One step of the symmetric representation (paper, Section 2.1).
 
     Solves :math:`U\Lambda - \Lambda U^T = h(Q^TP - P^TQ)` on the branch through the identity and
     returns :math:`(QU, PU, U)`.
@@ -407,10 +410,10 @@ def mv_algorithm1(
 ) -> DiscreteFlowSolution:
     r"""MV-Algorithm 1: :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})`.
 
-    Each step (paper, eqs. (31)-(33)): :math:`\Omega_{k+1} = Q_{k+1}^TQ_k` (31),
-    :math:`M_{k+1} = \Omega_{k+1}^T\Lambda - \Lambda\Omega_{k+1}` (32),
-    :math:`M_{k+2} = \Omega_{k+1}M_{k+1}\Omega_{k+1}^T` (33), solve (32) for :math:`\Omega_{k+2}`,
-    then :math:`Q_{k+2} = Q_{k+1}\Omega_{k+2}^T` (31).  For step h,
+    Each step (paper, Section 2.2): :math:`\Omega_{k+1} = Q_{k+1}^TQ_k` (MV1),
+    :math:`M_{k+1} = \Omega_{k+1}^T\Lambda - \Lambda\Omega_{k+1}` (MV2),
+    :math:`M_{k+2} = \Omega_{k+1}M_{k+1}\Omega_{k+1}^T` (MV3), solve (MV2) for :math:`\Omega_{k+2}`,
+    then :math:`Q_{k+2} = Q_{k+1}\Omega_{k+2}^T` (MV1).  For step h,
     start from :math:`Q_1 \approx Q(h)`.
 
     Parameters
@@ -481,9 +484,9 @@ def mv_algorithm2(
 ) -> DiscreteFlowSolution:
     r"""MV-Algorithm 2: :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (discrete momenta).
 
-    Each step (paper, eqs. (31)-(33)): solve (32) :math:`M_k = \Omega_k^T\Lambda -
-    \Lambda\Omega_k` for :math:`\Omega_k`, :math:`M_{k+1} = \Omega_kM_k\Omega_k^T` (33), solve the
-    same (32) for :math:`\Omega_{k+1}`, :math:`Q_{k+1} = Q_k\Omega_{k+1}^T` (31).  The solution
+    Each step (paper, Section 2.2): solve (MV2) :math:`M_k = \Omega_k^T\Lambda -
+    \Lambda\Omega_k` for :math:`\Omega_k`, :math:`M_{k+1} = \Omega_kM_k\Omega_k^T` (MV3), solve the
+    same (MV2) for :math:`\Omega_{k+1}`, :math:`Q_{k+1} = Q_k\Omega_{k+1}^T` (MV1).  The solution
     for :math:`\Omega_{k+1}` is the next step's :math:`\Omega_k` (same equation), so one solve per
     step (and one before the first).
 
@@ -518,7 +521,7 @@ def mv_algorithm2(
     >>> sol = symrb.mv_algorithm2(np.eye(3), M1, lam, 1000, save_every=500)
     >>> sol.k
     array([   0,  500, 1000])
-    >>> spectra = np.linalg.eigvals(sol.y.M).imag  # (33) is a conjugation: spectrum conserved
+    >>> spectra = np.linalg.eigvals(sol.y.M).imag  # (MV3) is a conjugation: spectrum conserved
     >>> bool(np.ptp(np.sort(spectra, axis=-1), axis=0).max() < 1e-15)
     True
     """
@@ -529,14 +532,14 @@ def mv_algorithm2(
     run.save(0, Q=Qk.copy(), M=Mk.copy())
     k = 1  # the solve before the loop belongs to the first step
     try:
-        Om = np.swapaxes(stepper.solve(Mk), -1, -2)  # Omega_k from the paper's (32)
+        Om = np.swapaxes(stepper.solve(Mk), -1, -2)  # Omega_k from the paper's (MV2)
         run.count(stepper)
         for k in range(1, steps + 1):
-            Mk_next = _gen.mv_transport(Om, Mk)  # paper's (33)
-            Om = np.swapaxes(stepper.solve(Mk_next), -1, -2)  # Omega_{k+1} from (32)
+            Mk_next = _gen.mv_transport(Om, Mk)  # MV3
+            Om = np.swapaxes(stepper.solve(Mk_next), -1, -2)  # Omega_{k+1} from (MV2)
             run.count(stepper)
             Mk = Mk_next
-            Qk = Qk @ np.swapaxes(Om, -1, -2)  # (31): Q_{k+1} = Q_k Omega_{k+1}^T
+            Qk = Qk @ np.swapaxes(Om, -1, -2)  # (MV1): Q_{k+1} = Q_k Omega_{k+1}^T
             if k % save_every == 0:
                 run.save(k, Q=Qk, M=Mk)
             run.bar.step()

@@ -16,7 +16,7 @@ Benning et al. (2019) with :math:`h = 1`; the paper's Remark 1 gives that name t
 
 Sign conventions (derived in :mod:`derivations.parts.discrete_control`, claims D5 and D6):
 the Hamiltonian is :math:`H(p, x, u) = \langle p, f(x, u)\rangle` and the problem a minimisation,
-so with the corrected endpoint condition of D5 (the paper's endpoint condition (12) has the
+so with the corrected endpoint condition of D5 (the paper's endpoint condition in Section 2 has the
 opposite sign, which without a running cost only flips the sign of every costate) the costates are
 
 .. math::

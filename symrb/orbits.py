@@ -58,7 +58,7 @@ def _pair_xN(x: ArrayLike, N: ArrayLike, xname: str = "x") -> tuple[Array, Array
 
 
 def orbit_extremal_rhs(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> tuple[Array, Array]:
-    r"""The extremal vector field of the orbit problem with Brockett's potential (paper, eq. (63)).
+    r"""The extremal vector field of the orbit problem with Brockett's potential (paper, Section 3.4).
 
     .. math:: \dot x = [x, [p, x]],\qquad \dot p = [p, [p, x]] - [N, [N, x]].
 

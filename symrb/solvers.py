@@ -1,5 +1,5 @@
-r"""The Moser-Veselov equation :math:`U\Lambda - \Lambda U^T = M` on :math:`SO(n)` (the paper's
-eqs. (22) and (32)).
+r"""The Moser-Veselov equation :math:`U\Lambda - \Lambda U^T = M` on :math:`SO(n)` (the paper,
+Sections 2.1 and 2.2).
 
 Given a skew :math:`M` and a positive diagonal :math:`\Lambda`, the discrete rigid body needs the
 :math:`U\in SO(n)` with :math:`J_D(U) = U\Lambda - \Lambda U^T = M` *on the branch through the
@@ -441,8 +441,8 @@ def solve_moser_veselov(
 ) -> Array | tuple[Array, MVSolveInfo]:
     r"""Solve :math:`U\Lambda - \Lambda U^T = M` for :math:`U\in SO(n)` on the branch through the identity.
 
-    This is eq. (22) of the paper (:math:`J_D(U_k) = Q_k^TP_k - P_k^TQ_k`, symmetric
-    representation) and, with :math:`U = \Omega^T`, its eq. (32) (:math:`M = \Omega^T\Lambda -
+    This is the paper's equation for :math:`U_k` in Section 2.1 (:math:`J_D(U_k) = Q_k^TP_k - P_k^TQ_k`, symmetric
+    representation) and, with :math:`U = \Omega^T`, its second Moser-Veselov equation (Section 2.2, :math:`M = \Omega^T\Lambda -
     \Lambda\Omega`, Moser-Veselov).  The returned :math:`U` is the unique solution with every
     eigenvalue of :math:`U\Lambda` in the open right half-plane (equal to :math:`I` at
     :math:`M = 0`, continuous in :math:`M`); see the module docstring for the method (Riccati

@@ -603,7 +603,7 @@ ORBIT_EXTREMAL_RHS = Kernel(
     target="adjoint_orbits",
     args=[ARG_X, ARG_P, ARG_N],
     outputs={"xdot": OPB[0].rhs.doit(), "pdot": OPB[1].rhs.doit()},
-    doc="Extremal equations with Brockett's potential (paper, eq. (63)).\n\n"
+    doc="Extremal equations with Brockett's potential (paper, Section 3.4).\n\n"
     "xdot = [x, [p, x]], pdot = [p, [p, x]] - [N, [N, x]].",
     claims=("S14", "S15"),
 )

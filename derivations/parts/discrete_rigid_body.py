@@ -61,7 +61,7 @@ JD = Kernel(
         ARG_LAM,
     ],
     outputs={"JD": U * Lam - Lam * U.T},
-    doc="The discrete inertia operator J_D(U) = U Lambda - Lambda U^T (paper, eq. (22)).\n\n"
+    doc="The discrete inertia operator J_D(U) = U Lambda - Lambda U^T (paper, Section 2.1).\n\n"
     "Its derivative at the identity is J(Omega) = Omega Lambda + Lambda Omega (claim D8).",
     claims=("D7", "D8", "D10", "D12"),
 )
@@ -70,7 +70,7 @@ MV_MOMENTUM = Kernel(
     target="discrete_rigid_body",
     args=[ARG_OMEGA, ARG_LAM],
     outputs={"M": Om.T * Lam - Lam * Om},
-    doc="Moser-Veselov equation (paper, eq. (32)): M_k = Omega_k^T Lambda - Lambda Omega_k.",
+    doc="Second Moser-Veselov equation (paper, Section 2.2): M_k = Omega_k^T Lambda - Lambda Omega_k.",
     claims=("D10", "D11", "D12"),
 )
 MV_TRANSPORT = Kernel(
@@ -78,7 +78,7 @@ MV_TRANSPORT = Kernel(
     target="discrete_rigid_body",
     args=[ARG_OMEGA, Arg("M", "(..., n, n)", "discrete body angular momentum, skew")],
     outputs={"M_next": Om * M * Om.T},
-    doc="Moser-Veselov equation (paper, eq. (33)): M_{k+1} = Omega_k M_k Omega_k^T.",
+    doc="Third Moser-Veselov equation (paper, Section 2.2): M_{k+1} = Omega_k M_k Omega_k^T.",
     claims=("D10", "D11", "D12"),
 )
 

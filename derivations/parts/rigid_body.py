@@ -135,7 +135,7 @@ RIGID_BODY_RHS = Kernel(
     target="rigid_body",
     args=[ARG_Q, ARG_M, ARG_LAM],
     outputs={"Qdot": Q * Jinv(M), "Mdot": M * Jinv(M) - Jinv(M) * M},
-    doc="Rigid body vector field (paper, eq. (39)).\n\n"
+    doc="Rigid body vector field (paper, Section 3.1).\n\n"
     "Qdot = Q Omega, Mdot = [M, Omega], Omega = J^{-1}(M), J^{-1}(M)_ij = M_ij / (lam_i + lam_j).",
     claims=("S2",),
 )

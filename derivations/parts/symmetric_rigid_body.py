@@ -339,7 +339,7 @@ SYMMETRIC_RIGID_BODY_RHS = Kernel(
     target="symmetric_rigid_body",
     args=[ARG_Q, ARG_P, ARG_LAM],
     outputs={"Qdot": Q * Jinv(MOMENTUM), "Pdot": P * Jinv(MOMENTUM)},
-    doc="Symmetric rigid body field (paper, eq. (44)).\n\n"
+    doc="Symmetric rigid body field (paper, Section 3.2).\n\n"
     "Qdot = Q U, Pdot = P U, U = J^{-1}(Q^T P - P^T Q), J^{-1}(X)_ij = X_ij / (lam_i + lam_j).",
     claims=("S5", "S6", "S7", "S11", "S12"),
 )
@@ -626,7 +626,7 @@ MCLACHLAN_SCOVEL_RHS = Kernel(
     target="symmetric_rigid_body",
     args=[ARG_Q, ARG_B, ARG_LAM],
     outputs={"Qdot": Q * Jinv(Q.T * B), "Bdot": B * Jinv(Q.T * B)},
-    doc="McLachlan-Scovel field (paper, eq. (47)).\n\n"
+    doc="McLachlan-Scovel field (paper, Section 3.2).\n\n"
     "Qdot = Q U, Bdot = B U, U = J^{-1}(Q^T B), for Q^T B skew.",
     claims=("S7",),
 )
@@ -772,7 +772,7 @@ CONTROL_RHS = Kernel(
     args=[ARG_Q, ARG_P, ARG_U],
     outputs={"Qdot": Q * U, "Pdot": P * U},
     doc="State and costate fields for a given control U: Qdot = Q U, Pdot = P U.\n\n"
-    "The learning version (paper, eqs. (49) and (50)), one sample per batch entry.",
+    "The learning version (paper, Section 3.2), one sample per batch entry.",
     claims=("S8",),
 )
 
@@ -1301,7 +1301,7 @@ GL_HAMILTONIAN = Kernel(
     target="symmetric_rigid_body",
     args=[ARG_Q, ARG_P, ARG_LAM],
     outputs={"H": -sp.Trace(Jinv(MOMENTUM) * MOMENTUM) / 8},
-    doc="The Hamiltonian on gl(n) x gl(n) (paper, eq. (56)).\n\n"
+    doc="The Hamiltonian on gl(n) x gl(n) (paper, Section 3.3).\n\n"
     "H = -1/8 trace(J^{-1}(M) M) = 1/4 <J^{-1}(M), M>, M = Q^T P - P^T Q: half the kinetic\n"
     "energy of the rigid body with momentum M.",
     claims=("S12",),

@@ -112,7 +112,7 @@ def orbit_hamiltonian(x, p, N):
 
 
 def orbit_extremal_rhs(x, p, N):
-    r"""Extremal equations with Brockett's potential (paper, eq. (63)).
+    r"""Extremal equations with Brockett's potential (paper, Section 3.4).
 
     xdot = [x, [p, x]], pdot = [p, [p, x]] - [N, [N, x]].
 

@@ -13,7 +13,7 @@ __all__ = ["jd", "mv_momentum", "mv_transport"]
 
 
 def jd(U, lam):
-    r"""The discrete inertia operator J_D(U) = U Lambda - Lambda U^T (paper, eq. (22)).
+    r"""The discrete inertia operator J_D(U) = U Lambda - Lambda U^T (paper, Section 2.1).
 
     Its derivative at the identity is J(Omega) = Omega Lambda + Lambda Omega (claim D8).
 
@@ -41,7 +41,7 @@ def jd(U, lam):
 
 
 def mv_momentum(Omega, lam):
-    r"""Moser-Veselov equation (paper, eq. (32)): M_k = Omega_k^T Lambda - Lambda Omega_k.
+    r"""Second Moser-Veselov equation (paper, Section 2.2): M_k = Omega_k^T Lambda - Lambda Omega_k.
 
     Parameters
     ----------
@@ -67,7 +67,7 @@ def mv_momentum(Omega, lam):
 
 
 def mv_transport(Omega, M):
-    r"""Moser-Veselov equation (paper, eq. (33)): M_{k+1} = Omega_k M_k Omega_k^T.
+    r"""Third Moser-Veselov equation (paper, Section 2.2): M_{k+1} = Omega_k M_k Omega_k^T.
 
     Parameters
     ----------

@@ -19,7 +19,7 @@ __all__ = [
 
 
 def rigid_body_rhs(Q, M, lam):
-    r"""Rigid body vector field (paper, eq. (39)).
+    r"""Rigid body vector field (paper, Section 3.1).
 
     Qdot = Q Omega, Mdot = [M, Omega], Omega = J^{-1}(M), J^{-1}(M)_ij = M_ij / (lam_i + lam_j).
 

@@ -48,7 +48,7 @@ def symmetric_momentum(Q, P):
 
 
 def symmetric_rigid_body_rhs(Q, P, lam):
-    r"""Symmetric rigid body field (paper, eq. (44)).
+    r"""Symmetric rigid body field (paper, Section 3.2).
 
     Qdot = Q U, Pdot = P U, U = J^{-1}(Q^T P - P^T Q), J^{-1}(X)_ij = X_ij / (lam_i + lam_j).
 
@@ -82,7 +82,7 @@ def symmetric_rigid_body_rhs(Q, P, lam):
 
 
 def mclachlan_scovel_rhs(Q, B, lam):
-    r"""McLachlan-Scovel field (paper, eq. (47)).
+    r"""McLachlan-Scovel field (paper, Section 3.2).
 
     Qdot = Q U, Bdot = B U, U = J^{-1}(Q^T B), for Q^T B skew.
 
@@ -118,7 +118,7 @@ def mclachlan_scovel_rhs(Q, B, lam):
 def control_rhs(Q, P, U):
     r"""State and costate fields for a given control U: Qdot = Q U, Pdot = P U.
 
-    The learning version (paper, eqs. (49) and (50)), one sample per batch entry.
+    The learning version (paper, Section 3.2), one sample per batch entry.
 
     Parameters
     ----------
@@ -148,7 +148,7 @@ def control_rhs(Q, P, U):
 
 
 def gl_hamiltonian(Q, P, lam):
-    r"""The Hamiltonian on gl(n) x gl(n) (paper, eq. (56)).
+    r"""The Hamiltonian on gl(n) x gl(n) (paper, Section 3.3).
 
     H = -1/8 trace(J^{-1}(M) M) = 1/4 <J^{-1}(M), M>, M = Q^T P - P^T Q: half the kinetic
     energy of the rigid body with momentum M.
