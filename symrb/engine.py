@@ -37,9 +37,10 @@ the step loop: :func:`mv_flow` validates once; :meth:`MVStepper.step` trusts its
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from . import _validate as v
 from ._generated import discrete_rigid_body as _gen
@@ -176,7 +177,9 @@ class _Kron:
         return dX
 
 
-def _newton_n(X: Array, B: Array, lam: Array, kron: _Kron, eye: Array) -> tuple[Array, int, Array]:
+def _newton_n(
+    X: Array, B: Array, lam: Array, kron: _Kron, eye: Array
+) -> tuple[Array, int, NDArray[np.bool_]]:
     """Newton with the Lyapunov solve; returns (X, sweeps, converged mask)."""
     conv = np.zeros(X.shape[0], dtype=bool)
     for it in range(1, _MAXITER + 1):
@@ -193,7 +196,9 @@ def _newton_n(X: Array, B: Array, lam: Array, kron: _Kron, eye: Array) -> tuple[
     return X, _MAXITER, conv
 
 
-def _fixed_point_n(X: Array, B: Array, lam: Array, Wh: Array) -> tuple[Array, int, Array]:
+def _fixed_point_n(
+    X: Array, B: Array, lam: Array, Wh: Array
+) -> tuple[Array, int, NDArray[np.bool_]]:
     """X <- X - W o G(X) / 2 until the change is at the rounding floor; (X, sweeps, converged)."""
     prev = np.full(X.shape[0], np.inf)
     conv = np.zeros(X.shape[0], dtype=bool)
@@ -213,17 +218,19 @@ def _fixed_point_n(X: Array, B: Array, lam: Array, Wh: Array) -> tuple[Array, in
 
 
 def _cay(X: Array, eye: Array) -> Array:
-    return np.linalg.solve(eye - X, eye + X)
+    U: Array = np.asarray(np.linalg.solve(eye - X, eye + X), dtype=np.float64)
+    return U
 
 
 def _cay_inverse(U: Array, eye: Array) -> Array:
     """X = (U - I)(U + I)^{-1}, made exactly skew."""
     X = np.swapaxes(np.linalg.solve(np.swapaxes(U + eye, -1, -2), np.swapaxes(U - eye, -1, -2)),
                     -1, -2)  # fmt: skip
-    return 0.5 * (X - np.swapaxes(X, -1, -2))
+    out: Array = np.asarray(0.5 * (X - np.swapaxes(X, -1, -2)), dtype=np.float64)
+    return out
 
 
-def _on_branch(X: Array, lam: Array, eye: Array) -> np.ndarray:
+def _on_branch(X: Array, lam: Array, eye: Array) -> NDArray[np.bool_]:
     """Every eigenvalue of U Lambda in the open right half-plane (the branch through I)."""
     UL = _cay(X, eye) * lam[:, None, :]
     S = 0.5 * (UL + np.swapaxes(UL, -1, -2))
@@ -338,7 +345,7 @@ class MVStepper:
     # general n ------------------------------------------------------------------------------
     def _X_n(self, B: Array, h: float) -> Array:
         cold = self._w is None
-        X0 = self._Wh * B if cold else h * self._w  # type: ignore[operator]
+        X0: Array = self._Wh * B if cold else h * self._w  # type: ignore[operator,assignment]
         use_newton = self.method == "newton" or (self.method == "auto" and self.n <= _KRON_MAX_N)
         if use_newton and self._kron is not None:
             X, it, conv = _newton_n(X0, B, self.lam, self._kron, self._eye)
@@ -532,6 +539,8 @@ def mv_flow(
         failure = f"step {k} of {steps} failed: {exc}"
         k -= 1
         if ks[-1] != k:
+            Ql: Any
+            Ml: Any
             Ql, Ml = last["s"]  # type: ignore[misc]
             if isinstance(Ql, list):  # component vectors
                 Ql, Ml = np.stack(Ql, axis=-1), _hat_cols(Ml)
@@ -542,7 +551,7 @@ def mv_flow(
             Ms.append(np.asarray(Ml).reshape(M.shape))
     kk = np.asarray(ks, dtype=np.int64)
     return DiscreteFlowSolution(
-        t=kk * h,
+        t=kk.astype(np.float64) * h,
         k=kk,
         y=Trajectory({"Q": np.stack(Qs), "M": np.stack(Ms)}),
         iterations=iters[: max(k, 0)] if failure else iters,
