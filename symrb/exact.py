@@ -273,11 +273,16 @@ def rigid_body_exact(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike)
 
     T = tt.reshape((-1,) + (1,) * len(batch))
     tau = nu * T + tau0
-    sn, cn, dn, _ = ellipj(tau, k2)
     K = ellipk(k2)
-    j = np.round(tau / (2 * K))  # K = inf on the separatrix: j = 0
+    # reduce tau modulo the period 4K (scipy's dn loses digits like eps * tau otherwise); on the
+    # separatrix K = inf and nothing is reduced
+    j4 = np.round(tau / (4 * K))
+    with np.errstate(invalid="ignore"):  # 0 * inf on the separatrix, not selected
+        r = np.where(j4 == 0, tau, tau - 4 * K * j4)
+    sn, cn, dn, _ = ellipj(r, k2)
+    j = 2 * j4 + np.round(r / (2 * K))  # tau = 2 K j + (a remainder in [-K, K])
     ZK = elliprj(0.0, 1.0 - k2, 1.0, 1.0 - n) / 3.0
-    with np.errstate(invalid="ignore"):  # 0 * inf on the separatrix
+    with np.errstate(invalid="ignore"):  # 0 * inf on the separatrix, not selected
         periods = np.where(j == 0, 0.0, 2 * j * ZK)
     Zt = (
         periods
