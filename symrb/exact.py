@@ -77,7 +77,7 @@ from scipy.special import ellipj, ellipk, elliprf, elliprj
 from . import _validate as v
 from ._results import Trajectory
 from ._validate import Array
-from .algebra import _Jinv_weights, hat, inertia_from_lam, vee
+from .algebra import _Jinv_weights
 from .errors import InputError
 
 __all__ = ["ExactSolution", "rigid_body_exact"]
@@ -120,24 +120,38 @@ class ExactSolution:
     axis: np.ndarray
 
 
+_EPS = np.zeros((3, 3, 3))
+_EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
+_EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
+_SWAP = np.array([-1.0, 1.0, 0.0])
+
+
+def _hat(w: Array) -> Array:
+    """hat(w)_ij = -eps_ijk w_k (no validation; one einsum)."""
+    return np.einsum("ijk,...k->...ij", -_EPS, w)
+
+
 def _rotation_exp(w: Array) -> Array:
     r""":math:`\exp(\hat w)` by Rodrigues' formula, ``w`` of shape (..., 3)."""
     th = np.linalg.norm(w, axis=-1)[..., None, None]
-    W = hat(w)
+    W = _hat(w)
     a = np.sinc(th / np.pi)  # sin(th) / th
     b = 0.5 * np.sinc(th / (2 * np.pi)) ** 2  # (1 - cos th) / th^2
     return np.eye(3) + a * W + b * (W @ W)
 
 
-def _frame(m: Array) -> Array:
-    r"""The rotation :math:`B` with rows :math:`u, v, m/|m|` (needs :math:`m_1^2 + m_2^2 > 0`)."""
-    m1, m2, m3 = m[..., 0], m[..., 1], m[..., 2]
-    mu = np.linalg.norm(m, axis=-1)
-    rho = np.hypot(m1, m2)
-    zero = np.zeros_like(m1)
-    u = np.stack([m1 * m3 / rho, m2 * m3 / rho, -rho], axis=-1) / mu[..., None]
-    vv = np.stack([-m2 / rho, m1 / rho, zero], axis=-1)
-    return np.stack([u, vv, m / mu[..., None]], axis=-2)
+def _turned_frame(m: Array, mu: Array, psi: Array | None = None) -> Array:
+    r""":math:`R_z(\psi)B(m)`, where :math:`B` has rows :math:`u, v, m/\mu`,
+    :math:`v = (-m_2, m_1, 0)/\rho`, :math:`u = v\times m/\mu = (m_1m_3, m_2m_3, -\rho^2)/(\mu\rho)`,
+    :math:`\rho^2 = m_1^2 + m_2^2 > 0`; ``m`` of shape (..., 3), ``mu`` and ``psi`` (...)."""
+    rho = np.hypot(m[..., 0], m[..., 1])[..., None]
+    mu_ = mu[..., None]
+    v = m[..., [1, 0, 2]] * _SWAP / rho
+    u = np.concatenate([m[..., :2] * (m[..., 2:] / (mu_ * rho)), -rho / mu_], axis=-1)
+    if psi is None:
+        return np.stack([u, v, m / mu_], axis=-2)
+    c, s = np.cos(psi)[..., None], np.sin(psi)[..., None]
+    return np.stack([c * u - s * v, s * u + c * v, m / mu_], axis=-2)
 
 
 def _working_frame(inertia: Array, m: Array) -> tuple[Array, Array, np.ndarray]:
@@ -163,7 +177,9 @@ def _working_frame(inertia: Array, m: Array) -> tuple[Array, Array, np.ndarray]:
     return R, a, perm[..., 2]
 
 
-def rigid_body_exact(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike) -> ExactSolution:
+def rigid_body_exact(
+    Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike, *, check: bool = True
+) -> ExactSolution:
     r"""The exact solution :math:`Q(t), M(t)` of the rigid body :math:`\dot Q = Q\Omega`,
     :math:`\dot M = [M,\Omega]`, :math:`M = J(\Omega)`, for n = 3.
 
@@ -185,6 +201,11 @@ def rigid_body_exact(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike)
         ``Q0``, ``M0`` and ``lam`` broadcast.
     t : array_like, shape (K,) or scalar
         The times (any real values, in any order; a scalar is read as one time).
+    check : bool, optional
+        Validate the values of the input (default).  ``check=False`` keeps only the conversion to
+        float arrays and the shape checks, for inner loops (a splitting method) whose data are
+        known to be valid: a ``Q0`` off SO(3) or a ``M0`` that is not skew then gives a wrong
+        answer or NaN instead of an error.
 
     Returns
     -------
@@ -214,17 +235,22 @@ def rigid_body_exact(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike)
     >>> float(np.ptp(symrb.kinetic_energy(sol.y.M, lam))) < 1e-14
     True
     """
-    L = v.inertia(lam)
-    if L.shape[-1] != 3:
-        raise InputError(
-            f"rigid_body_exact is for n = 3: lam must have shape (..., 3), got {L.shape}"
-        )
-    Qa = v.orthogonal(Q0, "Q0", 3)
-    Ma = v.skew(M0, "M0", 3)
-    tt = v.as_float_array(t, "t")
+    if check:
+        L = v.inertia(lam)
+        Qa = v.orthogonal(Q0, "Q0")
+        Ma = v.skew(M0, "M0")
+        tt = v.as_float_array(t, "t")
+    else:
+        L, Qa, Ma, tt = (np.asarray(x, dtype=float) for x in (lam, Q0, M0, t))
+    for name, x, want in (("lam", L, (3,)), ("Q0", Qa, (3, 3)), ("M0", Ma, (3, 3))):
+        if x.shape[x.ndim - len(want) :] != want:
+            raise InputError(
+                f"rigid_body_exact is for n = 3: {name} must have shape (..., "
+                f"{', '.join(map(str, want))}), got {x.shape}"
+            )
     if tt.ndim > 1:
         raise InputError(f"t must be a scalar or a 1-D array of times, got shape {tt.shape}")
-    tt = np.atleast_1d(tt)
+    tt = tt.reshape(-1)
     try:
         batch = np.broadcast_shapes(Qa.shape[:-2], Ma.shape[:-2], L.shape[:-1])
     except ValueError as exc:
@@ -233,8 +259,8 @@ def rigid_body_exact(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike)
     Ma = np.broadcast_to(Ma, batch + (3, 3))
     L = np.broadcast_to(L, batch + (3,))
 
-    inertia = inertia_from_lam(L)
-    m0 = vee(Ma)
+    inertia = L.sum(axis=-1, keepdims=True) - L  # I_1 = lam_2 + lam_3 (inertia_from_lam)
+    m0 = Ma[..., [2, 0, 1], [1, 2, 0]]  # vee(M0)
     R, a, axis = _working_frame(inertia, m0)
     mp = np.einsum("...ij,...j->...i", R, m0)
     a1, a2, a3 = a[..., 0], a[..., 1], a[..., 2]
@@ -245,26 +271,26 @@ def rigid_body_exact(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike)
     # steady rotations: m0 an eigenvector of the inertia (m0 = 0, a sphere, m0 on the middle
     # axis (the saddle), or d1 = 0 or d3 = 0: m0 in the eigenspace of a1 or a3)
     steady = (mu == 0) | (a1 == a3) | ((x1 == 0) & (x3 == 0)) | (d1 == 0) | (d3 == 0)
-    ok = ~steady
+    any_steady = bool(steady.any())
+    if any_steady:  # dummy values keep the formulas finite there (the results are replaced)
+        ok = ~steady
+        a1, a2, a3 = np.where(ok, a1, 1.0), np.where(ok, a2, 2.0), np.where(ok, a3, 3.0)
+        d1, d3, mu = np.where(ok, d1, 1.0), np.where(ok, d3, 1.0), np.where(ok, mu, 1.0)
+        x1, x2 = np.where(ok, x1, 1.0), np.where(ok, x2, 0.0)
 
-    # dummy values on the steady items keep the formulas finite there (their results are replaced)
-    def safe(x: Array, fill: float = 1.0) -> Array:
-        return np.where(ok, x, fill)
-
-    a1s, a2s, a3s = safe(a1, 1.0), safe(a2, 2.0), safe(a3, 3.0)
-    d1s, d3s, mus = np.abs(safe(d1)), np.abs(safe(d3)), safe(mu)
-    sigma = np.sign(a3s - a1s)
-    h21, h31, h32 = np.abs(a2s - a1s), np.abs(a3s - a1s), np.abs(a3s - a2s)
-    c1 = np.sqrt(a1s * d3s / h31)
-    c2 = np.sqrt(a2s * d3s / h32)
-    c3 = np.sqrt(a3s * d1s / h31)
-    nu = np.sqrt(d1s * h32 / (a1s * a2s * a3s))
-    k2 = np.minimum(1.0, h21 * d3s / (h32 * d1s))
-    n = -a3s * h21 / (a1s * h32)
-    gamma = -sigma * mus * h31 * h21 / (a1s**2 * h32 * nu)
+    sigma = np.sign(a3 - a1)
+    h21, h31, h32 = np.abs(a2 - a1), np.abs(a3 - a1), np.abs(a3 - a2)
+    d1, d3 = np.abs(d1), np.abs(d3)
+    c1 = np.sqrt(a1 * d3 / h31)
+    c2 = sigma * np.sqrt(a2 * d3 / h32)
+    c3 = np.sqrt(a3 * d1 / h31)
+    nu = np.sqrt(d1 * h32 / (a1 * a2 * a3))
+    k2 = np.minimum(1.0, h21 * d3 / (h32 * d1))
+    n = -a3 * h21 / (a1 * h32)
+    gamma = -sigma * mu * h31 * h21 / (a1**2 * h32 * nu)
 
     # the initial phase: sn(tau0) = s0, cn(tau0) = c0 >= 0, tau0 = F(asin s0 | k2)
-    y, x = sigma * safe(x2, 0.0) * np.sqrt(a1s / h31), safe(x1) * np.sqrt(a2s / h32)
+    y, x = sigma * x2 * np.sqrt(a1 / h31), x1 * np.sqrt(a2 / h32)
     h = np.hypot(x, y)
     s0, c0 = y / h, x / h
     dn0sq = 1.0 - k2 * s0**2
@@ -273,54 +299,31 @@ def rigid_body_exact(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike)
 
     T = tt.reshape((-1,) + (1,) * len(batch))
     tau = nu * T + tau0
-    K = ellipk(k2)
     # reduce tau modulo the period 4K (scipy's dn loses digits like eps * tau otherwise); on the
-    # separatrix K = inf and nothing is reduced
+    # separatrix K and Z(K) are infinite and j = 0 (the caps avoid 0 * inf)
+    K = np.minimum(ellipk(k2), 1e300)
     j4 = np.round(tau / (4 * K))
-    with np.errstate(invalid="ignore"):  # 0 * inf on the separatrix, not selected
-        r = np.where(j4 == 0, tau, tau - 4 * K * j4)
+    r = tau - 4 * K * j4
     sn, cn, dn, _ = ellipj(r, k2)
     j = 2 * j4 + np.round(r / (2 * K))  # tau = 2 K j + (a remainder in [-K, K])
-    ZK = elliprj(0.0, 1.0 - k2, 1.0, 1.0 - n) / 3.0
-    with np.errstate(invalid="ignore"):  # 0 * inf on the separatrix, not selected
-        periods = np.where(j == 0, 0.0, 2 * j * ZK)
-    Zt = (
-        periods
-        + np.where(j % 2 == 0, 1.0, -1.0)
-        * sn**3
-        * elliprj(cn**2, dn**2, 1.0, 1.0 - n * sn**2)
-        / 3.0
-    )
-    psi = mus * T / a1s + gamma * (Zt - Z0)
+    ZK = np.minimum(elliprj(0.0, 1.0 - k2, 1.0, 1.0 - n), 1e300) / 3.0
+    sign = 1.0 - 2.0 * (j % 2)
+    Zt = 2 * j * ZK + sign * sn**3 * elliprj(cn**2, dn**2, 1.0, 1.0 - n * sn**2) / 3.0
+    psi = mu * T / a1 + gamma * (Zt - Z0)
 
-    mt = np.stack([c1 * cn, sigma * c2 * sn, c3 * dn], axis=-1)  # (K, ..., 3) working frame
-    mp0 = np.stack([c1 * c0, sigma * c2 * s0, c3 * np.sqrt(dn0sq)], axis=-1)
-    cpsi, spsi = np.cos(psi), np.sin(psi)
-    zero, one = np.zeros_like(psi), np.ones_like(psi)
-    Rz = np.stack(
-        [
-            np.stack([cpsi, -spsi, zero], axis=-1),
-            np.stack([spsi, cpsi, zero], axis=-1),
-            np.stack([zero, zero, one], axis=-1),
-        ],
-        axis=-2,
-    )
+    # Q(t) = Q0 R^T B(0)^T R_z(psi) B(t) R, M(t) = hat(R^T m'(t)) (working-frame m')
+    c = np.stack([c1, c2, c3], axis=-1)
+    mt = c * np.stack([cn, sn, dn], axis=-1)
+    mp0 = c * np.stack([c0, s0, np.sqrt(dn0sq)], axis=-1)
     Rt = np.swapaxes(R, -1, -2)
-    G = Qa @ Rt @ np.swapaxes(_frame(mp0), -1, -2)
-    Q = G @ Rz @ _frame(mt) @ R
-    m = np.einsum("...ji,...j->...i", R, mt)  # R^T m'
-
-    # steady rotations: M constant, Q = Q0 exp(t Omega0)
-    w0 = m0 / inertia
-    Qs = Qa @ _rotation_exp(T[..., None] * w0)
-    st = np.broadcast_to(steady, Q.shape[:-2])
-    Q = np.where(st[..., None, None], Qs, Q)
-    M = np.where(st[..., None, None], Ma, hat(m))
+    G = Qa @ Rt @ np.swapaxes(_turned_frame(mp0, mu), -1, -2)
+    Q = G @ _turned_frame(mt, mu, psi) @ R
+    M = _hat(np.einsum("...ij,...j->...i", Rt, mt))
+    if any_steady:  # M constant, Q = Q0 exp(t Omega0)
+        Qs = Qa @ _rotation_exp(T[..., None] * (m0 / inertia))
+        st = steady[..., None, None]
+        Q = np.where(st, Qs, Q)
+        M = np.where(st, Ma, M)
+        k2, nu, axis = np.where(ok, k2, 0.0), np.where(ok, nu, 0.0), np.where(ok, axis, -1)
     y_out = Trajectory(Q=Q, M=M, Omega=_Jinv_weights(L) * M)
-    return ExactSolution(
-        t=tt,
-        y=y_out,
-        k2=np.where(ok, k2, 0.0),
-        nu=np.where(ok, nu, 0.0),
-        axis=np.where(ok, axis, -1),
-    )
+    return ExactSolution(t=tt, y=y_out, k2=k2, nu=nu, axis=axis)

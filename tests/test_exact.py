@@ -211,7 +211,8 @@ def test_negative_and_unsorted_times() -> None:
     "kwargs, match",
     [
         (dict(lam=[0.7, 1.1, 1.6, 2.0]), "n = 3"),
-        (dict(Q0=np.eye(4), M0=symrb.hat([0.5, 1.0, 1.5])), "3 x 3"),
+        (dict(Q0=np.eye(4)), "n = 3: Q0 must have shape \\(..., 3, 3\\)"),
+        (dict(M0=np.zeros((2, 2))), "M0 must have shape"),
         (dict(Q0=np.diag([1.0, 1.0, -1.0])), "det"),
         (dict(Q0=1.01 * np.eye(3)), "orthogonal"),
         (dict(M0=np.ones((3, 3))), "skew"),
