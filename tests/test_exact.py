@@ -192,6 +192,17 @@ def test_batch_equals_loop_and_broadcasts() -> None:
     assert single.y.Q.shape == (3, 3, 3, 3)
 
 
+def test_unchecked_equals_checked() -> None:
+    Q0, M0, lam = _random_case(15, (4,))
+    t = np.array([0.0, 3.0, 70.0])
+    a = rigid_body_exact(Q0, M0, lam, t)
+    b = rigid_body_exact(Q0, M0, lam, t, check=False)
+    for key in ("Q", "M", "Omega"):
+        np.testing.assert_array_equal(a.y[key], b.y[key])
+    with pytest.raises(InputError, match="n = 3"):
+        rigid_body_exact(np.eye(4), np.zeros((4, 4)), np.ones(4), t, check=False)
+
+
 def test_negative_and_unsorted_times() -> None:
     """Q(-t) from the exact solution equals DOP853 run backwards."""
     Q0, M0, lam = _random_case(14)
