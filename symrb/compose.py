@@ -28,7 +28,7 @@ The textbook alternatives, with the same result object
   :math:`\bar\Omega = J^{-1}(\bar M)`, with :math:`Q_{k+1} = Q_k\,\mathrm{cay}(h\bar\Omega)`
   (:math:`\mathrm{cay}(A) = (I - A/2)^{-1}(I + A/2)`, so :math:`Q` stays orthogonal); symmetric,
   order 2, conserves the quadratic invariants (energy and :math:`\mathrm{tr}\,M^2`) but not
-  the higher Casimirs (:math:`\mathrm{tr}\,M^4` for :math:`n\ge 4`).
+  the higher Casimirs (:math:`\mathrm{tr}\,M^4` for :math:`n\ge 5`).
 
 Momenta here are on the continuous scale (the body momentum :math:`M(t_k)`; a base step at
 step :math:`h` solves :math:`J_D(U) = hM`).  A *base step* is any object with a method
@@ -321,8 +321,7 @@ class MVStep:
 
 def _cayley(A: Array) -> Array:
     eye = np.eye(A.shape[-1])
-    out: Array = np.linalg.solve(eye - 0.5 * A, eye + 0.5 * A)
-    return out
+    return np.asarray(np.linalg.solve(eye - 0.5 * A, eye + 0.5 * A), dtype=np.float64)
 
 
 class MidpointStep:
@@ -373,21 +372,23 @@ class MidpointStep:
         """Advance ``(Q, M)`` by ``h`` (any real number); see the class docstring."""
         tol = 4.0 * _EPS * max(float(np.max(np.abs(M), initial=0.0)), 1e-300)
         Mb = M
-        it, diff = 0, np.inf
-        while not diff <= tol:
-            if it >= self.maxiter:
+        it = 0
+        while True:
+            Om = Mb * self.W
+            with np.errstate(over="ignore", invalid="ignore"):
+                new = M + 0.5 * h * (Mb @ Om - Om @ Mb)
+                diff = float(np.max(np.abs(new - Mb), initial=0.0))
+            Mb = new
+            it += 1
+            if diff <= tol:
+                break
+            if it >= self.maxiter or not np.isfinite(diff):
                 raise NotConvergedError(
-                    f"implicit midpoint: the fixed point iteration did not converge in "
-                    f"{self.maxiter} iterations (last change {diff:.3e}, h = {h!r}); take a "
-                    f"smaller h",
+                    f"implicit midpoint: the fixed point iteration did not converge in {it} "
+                    f"iterations (last change {diff:.3e}, h = {h!r}); take a smaller h",
                     diff,
                     it,
                 )
-            Om = Mb * self.W
-            new = M + 0.5 * h * (Mb @ Om - Om @ Mb)
-            diff = float(np.max(np.abs(new - Mb), initial=0.0))
-            Mb = new
-            it += 1
         self.last_iterations = it
         Om = Mb * self.W
         return Q @ _cayley(h * Om), _skew(2.0 * Mb - M)
