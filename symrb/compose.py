@@ -212,17 +212,18 @@ def compose(step: Callable[[S, float], S], gammas: ArrayLike) -> Callable[[S, fl
 
     Parameters
     ----------
-    step : callable ``(state, h) -> state``
-        The base map :math:`\Phi_h`; it must accept negative ``h`` when some
-        :math:`\gamma_i < 0`.  For the orders of :func:`composition_coefficients` it must be
-        symmetric and of order 2.
+    step : callable
+        The base map :math:`\Phi_h`, called as ``step(state, h)`` and returning the new state;
+        it must accept negative ``h`` when some :math:`\gamma_i < 0`.  For the orders of
+        :func:`composition_coefficients` it must be symmetric and of order 2.
     gammas : array_like, shape (s,)
         The coefficients (finite, at least one).
 
     Returns
     -------
-    callable ``(state, h) -> state``
-        :math:`\Psi_h`, which calls ``step(state, gamma_i * h)`` for ``i = 1, ..., s``.
+    callable
+        :math:`\Psi_h` as ``psi(state, h) -> state``, which calls ``step(state, gamma_i * h)``
+        for ``i = 1, ..., s``.
 
     Examples
     --------
