@@ -21,6 +21,11 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
         "inertia_from_lam", "lam_from_inertia", "random_so", "random_SO", "random_lam",
         "as_generator",
     ),
+    "compose": (
+        "composition_coefficients", "compose_steps", "MVStep", "MidpointStep", "RKMK4Step",
+        "composed_rigid_body_flow", "rkmk4_rigid_body_flow", "midpoint_rigid_body_flow",
+        "benchmark_cost",
+    ),
     "continuous": (
         "symmetric_momentum", "symmetric_rigid_body_rhs", "mclachlan_scovel_rhs",
         "multi_sample_control", "multi_sample_rhs", "gl_hamiltonian", "P_from_M", "Flow",
@@ -71,6 +76,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # static type checkers see the eager imports
     from . import (  # noqa: F401
         algebra,
+        compose,
         continuous,
         discrete,
         engine,
@@ -82,6 +88,7 @@ if TYPE_CHECKING:  # static type checkers see the eager imports
         solvers,
     )
     from .algebra import *  # noqa: F403
+    from .compose import *  # noqa: F403
     from .continuous import *  # noqa: F403
     from .discrete import *  # noqa: F403
     from .engine import *  # noqa: F403

@@ -54,12 +54,13 @@ from ._progress import progress_bar
 from ._results import Trajectory
 from ._validate import Array
 from .discrete import DiscreteFlowSolution
+from .engine import MVStepper
 from .errors import InputError, NotConvergedError, OutOfDomainError
 from .solvers import solve_moser_veselov
 
 __all__ = [
     "composition_coefficients",
-    "compose",
+    "compose_steps",
     "MVStep",
     "MidpointStep",
     "RKMK4Step",
@@ -207,7 +208,7 @@ def composition_coefficients(order: int, kind: str | None = None) -> Array:
 S = TypeVar("S")
 
 
-def compose(step: Callable[[S, float], S], gammas: ArrayLike) -> Callable[[S, float], S]:
+def compose_steps(step: Callable[[S, float], S], gammas: ArrayLike) -> Callable[[S, float], S]:
     r"""The composition :math:`\Psi_h = \Phi_{\gamma_s h}\circ\cdots\circ\Phi_{\gamma_1 h}`.
 
     Parameters
@@ -231,8 +232,8 @@ def compose(step: Callable[[S, float], S], gammas: ArrayLike) -> Callable[[S, fl
     coefficients sum to 1:
 
     >>> import numpy as np
-    >>> from symrb.compose import compose, composition_coefficients
-    >>> psi = compose(lambda x, h: np.exp(h) * x, composition_coefficients(6))
+    >>> from symrb.compose import compose_steps, composition_coefficients
+    >>> psi = compose_steps(lambda x, h: np.exp(h) * x, composition_coefficients(6))
     >>> bool(np.isclose(psi(1.0, 0.5), np.exp(0.5), rtol=1e-14, atol=0))
     True
     """
@@ -579,7 +580,9 @@ def composed_rigid_body_flow(
         The coefficients (see :func:`composition_coefficients`; by default Suzuki's 5 stages at
         order 4 and Kahan-Li at orders 6 and 8).
     step : {"mv", "midpoint"} or object, optional
-        The base step: ``"mv"`` (:class:`MVStep`), ``"midpoint"`` (:class:`MidpointStep`), or any
+        The base step: ``"mv"`` (:class:`symrb.engine.MVStepper`, the fast Moser-Veselov step;
+        :class:`MVStep` is the same map through :func:`symrb.solve_moser_veselov`),
+        ``"midpoint"`` (:class:`MidpointStep`), or any
         object with a method ``step(Q, M, h) -> (Q, M)`` that is symmetric and of order 2 (e.g.
         a faster engine); its ``last_iterations`` attribute, if any, is recorded.
     save_every : int, optional
@@ -614,8 +617,8 @@ def composed_rigid_body_flow(
     Q, M, L, hv, steps, save_every = _prepare(Q0, M0, lam, h, steps, save_every)
     gammas = composition_coefficients(order, kind)
     if isinstance(step, str):
-        if step == "mv":
-            base: Any = MVStep(L)
+        if step == "mv":  # the fast engine (Cayley-parametrised Newton, warm started)
+            base: Any = MVStepper(L, np.broadcast_shapes(Q.shape[:-2], M.shape[:-2]))
             name = "MV-Algorithm 2"
         elif step == "midpoint":
             base = MidpointStep(L)
@@ -631,7 +634,7 @@ def composed_rigid_body_flow(
             f"{type(step).__name__}"
         )
     counter = _Counter(base)
-    psi = compose(counter.wrap, gammas)
+    psi = compose_steps(counter.wrap, gammas)
     kind_name = kind or _DEFAULT_KIND[int(order)]
     method = f"{name} composed to order {int(order)} ({kind_name}, {gammas.size} stages)"
     return _run(

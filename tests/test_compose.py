@@ -19,7 +19,7 @@ from symrb.compose import (
     MidpointStep,
     MVStep,
     RKMK4Step,
-    compose,
+    compose_steps,
     composed_rigid_body_flow,
     composition_coefficients,
     midpoint_rigid_body_flow,
@@ -111,7 +111,7 @@ def test_compose_calls_step_with_scaled_h():
         calls.append(h)
         return x + h
 
-    psi = compose(step, [0.25, 0.5, 0.25])
+    psi = compose_steps(step, [0.25, 0.5, 0.25])
     assert psi(1.0, 2.0) == 3.0
     assert calls == [0.5, 1.0, 0.5]
 
@@ -124,7 +124,7 @@ def test_mv_step_is_the_discrete_rigid_body_step():
     h, n = 0.1, 5
     ref = symrb.discrete_rigid_body_flow(Q0, M0, LAM, h, n)
     base = MVStep(LAM)
-    psi = compose(lambda s, hh: base.step(s[0], s[1], hh), [1.0])
+    psi = compose_steps(lambda s, hh: base.step(s[0], s[1], hh), [1.0])
     state = (Q0, M0)
     for k in range(1, n + 1):
         state = psi(state, h)
@@ -153,11 +153,15 @@ def test_pluggable_base_step():
 
     w = Wrapped()
     a = composed_rigid_body_flow(Q0, M0, LAM, 0.1, 4, order=6, step=w)
-    b = composed_rigid_body_flow(Q0, M0, LAM, 0.1, 4, order=6)
+    b = composed_rigid_body_flow(Q0, M0, LAM, 0.1, 4, order=6, step=MVStep(LAM))
     assert w.calls == 4 * 9
     np.testing.assert_allclose(a.y.Q, b.y.Q, rtol=0, atol=1e-15)
     np.testing.assert_allclose(a.y.M, b.y.M, rtol=0, atol=1e-15)
     assert a.success and b.success
+    # the default "mv" is the fast engine (symrb.engine.MVStepper): the same map, to rounding
+    c = composed_rigid_body_flow(Q0, M0, LAM, 0.1, 4, order=6)
+    np.testing.assert_allclose(c.y.Q, b.y.Q, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(c.y.M, b.y.M, rtol=0, atol=1e-13)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -303,7 +307,7 @@ def _as_state_step(base):
 def test_symmetric_compositions_are_time_reversible(so4, order, kind, base):
     Q, M, lam = so4
     step = MVStep(lam) if base == "mv" else MidpointStep(lam)
-    psi = compose(_as_state_step(step), composition_coefficients(order, kind))
+    psi = compose_steps(_as_state_step(step), composition_coefficients(order, kind))
     Q1, M1 = psi((Q, M), 0.1)
     Qb, Mb = psi((Q1, M1), -0.1)
     assert np.abs(Q1 - Q).max() > 1e-3  # it moved
@@ -375,10 +379,10 @@ def test_inputs_not_mutated():
         (lambda: composition_coefficients(4.0), "order"),
         (lambda: composition_coefficients(4, "kahan_li"), "kind"),
         (lambda: composition_coefficients(8, "nope"), "kind"),
-        (lambda: compose(3, [1.0]), "step"),
-        (lambda: compose(lambda x, h: x, []), "gammas"),
-        (lambda: compose(lambda x, h: x, [[1.0]]), "gammas"),
-        (lambda: compose(lambda x, h: x, [np.nan]), "gammas"),
+        (lambda: compose_steps(3, [1.0]), "step"),
+        (lambda: compose_steps(lambda x, h: x, []), "gammas"),
+        (lambda: compose_steps(lambda x, h: x, [[1.0]]), "gammas"),
+        (lambda: compose_steps(lambda x, h: x, [np.nan]), "gammas"),
         (lambda: composed_rigid_body_flow(Q0, M0, LAM, 0.0, 3), "h"),
         (lambda: composed_rigid_body_flow(Q0, M0, LAM, -0.1, 3), "h"),
         (lambda: composed_rigid_body_flow(Q0, M0, LAM, 0.1, -1), "steps"),
