@@ -973,21 +973,23 @@ def _goals(res: BenchResult, quick: bool, sections: Sequence[str]) -> list[dict[
     # the exact propagator
     name = "exact propagator >= 100x faster than DOP853 at rtol 1e-12"
     name2 = "exact propagator accurate to 1e-13"
-    w = wp.get(10.0)
+    w = wp.get(10.0) or next(iter(wp.values()), None)
     ex = w["methods"].get("exact", {}) if w else {}
     if ex.get("available"):
         dops = [q for q in w["methods"]["DOP853"]["points"] if abs(q["rtol"] - 1e-12) < 1e-20]
         pt = ex["points"][0]
         if dops:
             ratio = dops[0]["cpu"]["median"] / pt["cpu"]["median"]
-            goals.append(_goal(name, ratio, ">= 100", ratio >= 100, "T = 10, CPU time ratio"))
+            goals.append(
+                _goal(name, ratio, ">= 100", ratio >= 100, f"T = {w['T']:g}, CPU time ratio")
+            )
         else:
             goals.append(_goal(name, None, ">= 100", None, "DOP853 at rtol 1e-12 not in the grid"))
         est = w["reference_error_estimate"]
         met = pt["error"] <= 1e-13 if est <= 1e-13 else None
         goals.append(
             _goal(name2, pt["error"], "<= 1e-13", met,
-                  f"T = 10, max entry error against DOP853 rtol 1e-13, whose own error is about "
+                  f"T = {w['T']:g}, max entry error against DOP853 rtol 1e-13, whose own error is about "
                   f"{est:.1e}" + ("" if met is not None else ": cannot certify 1e-13"))
         )  # fmt: skip
     else:
