@@ -65,13 +65,16 @@ GOAL_NAMES = [
 def verify_json(tmp_path_factory: pytest.TempPathFactory) -> Path:
     data = {
         "claims": [
-            {"id": "S1", "evidence": [
-                {"level": "float64", "seconds": "0.5", "passed": "True"},
-                {"level": "symbolic, general n", "seconds": "2.0", "passed": "True"},
-            ]},
+            {
+                "id": "S1",
+                "evidence": [
+                    {"level": "float64", "seconds": "0.5", "passed": "True"},
+                    {"level": "symbolic, general n", "seconds": "2.0", "passed": "True"},
+                ],
+            },
             {"id": "D2", "evidence": [{"level": "float64", "seconds": "0.25", "passed": "False"}]},
         ]
-    }  # fmt: skip
+    }
     path = tmp_path_factory.mktemp("verify") / "verify.json"
     path.write_text(json.dumps(data))
     return path
@@ -181,9 +184,13 @@ def _euler_reference(T: float) -> np.ndarray:
     lam, _Q0, M0 = bench._problem(3, 0)
     inertia = symrb.inertia_from_lam(lam)
     sol = solve_ivp(
-        lambda _t, m: np.cross(m, m / inertia), (0.0, T), symrb.vee(M0), method="Radau",
-        rtol=1e-12, atol=1e-14,
-    )  # fmt: skip
+        lambda _t, m: np.cross(m, m / inertia),
+        (0.0, T),
+        symrb.vee(M0),
+        method="Radau",
+        rtol=1e-12,
+        atol=1e-14,
+    )
     return sol.y[:, -1]
 
 
