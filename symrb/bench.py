@@ -1436,7 +1436,27 @@ def build_parser(prog: str = "symrb bench") -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None, prog: str = "symrb bench") -> int:
-    """Run ``symrb bench`` with ``argv``; returns the exit status (0, 1 or 2, see ``--help``)."""
+    """Run ``symrb bench`` with ``argv``; returns the exit status (0, 1 or 2, see ``--help``).
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after ``bench`` (default ``sys.argv[1:]``).
+    prog : str, optional
+        The program name shown in the usage.
+
+    Returns
+    -------
+    int
+        0 the benchmarks ran, 1 with ``--strict`` a measured goal was not met, 2 bad usage or
+        environment.
+
+    Examples
+    --------
+    >>> from symrb.bench import main
+    >>> main(["--only", "no-such-section"])  # the reason goes to stderr
+    2
+    """
     parser = build_parser(prog)
     try:
         args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
