@@ -1189,6 +1189,7 @@ def run(
     sections: Iterable[str] | None = None,
     verify_json: str | os.PathLike[str] | None = None,
     config: Mapping[str, Any] | None = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> BenchResult:
     """Run the benchmarks and evaluate the goals of issue 9.
 
@@ -1209,6 +1210,9 @@ def run(
         A ``symrb verify --json`` output for the evidence section (skipped with a note if None).
     config : mapping, optional
         Overrides of the parameters (keys as in ``BenchResult.parameters``), e.g. for a tiny run.
+    checkpoint : path, optional
+        Write the results so far (JSON, goals not yet evaluated) to this file after each part,
+        so that a long run interrupted keeps what it measured.
 
     Returns
     -------
@@ -1240,6 +1244,9 @@ def run(
         raise InputError(f"progress must be True or False, got {progress!r}")
 
     def log(msg: str) -> None:
+        if checkpoint is not None and res.measurements:
+            res.seconds = time.perf_counter() - start
+            res.write_json(checkpoint)
         if progress:
             print(f"[bench {time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr)
 
@@ -1277,16 +1284,16 @@ def run(
             warnings.simplefilter("always")
             if "work-precision" in chosen:
                 wp = res.measurements.setdefault("work-precision", {})
-                wp["n3"] = [
-                    _work_precision(3, float(T), p, meths, mods, notes, log) for T in p["wp_T"]
-                ]
+                wp["n3"] = []
+                for T in p["wp_T"]:
+                    wp["n3"].append(_work_precision(3, float(T), p, meths, mods, notes, log))
                 if p["wp_n10_T"]:
                     sub = [m for m in meths if m in ("DOP853", *_STEP_ORDERS)]
                     wp["n10"] = _work_precision(10, float(p["wp_n10_T"]), p, sub, mods, notes, log)
             if "long-time" in chosen:
-                res.measurements["long-time"] = [
-                    _long_time(n, p, mods, progress, log) for n in p["long_n"]
-                ]
+                lts = res.measurements.setdefault("long-time", [])
+                for n in p["long_n"]:
+                    lts.append(_long_time(n, p, mods, progress, log))
             if "throughput" in chosen:
                 res.measurements["throughput"] = _throughput(p, mods, log)
             if "cost-vs-n" in chosen:
@@ -1478,6 +1485,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "symrb bench") -> int:
             progress=not args.no_progress,
             sections=args.only,
             verify_json=args.verify_json,
+            checkpoint=args.json,
         )
     except InputError as exc:
         print(f"{prog}: {exc}", file=sys.stderr)
