@@ -207,6 +207,9 @@ class Kernel:
     components : argument name -> Matrix of scalar symbols for its entries (``arg[..., i, j]`` or
         ``arg[..., i]``); such kernels are printed through scalar CSE
     register : False for a kernel that is only rendered (tests), never emitted
+    convert : False to skip the ``numpy.asarray`` conversion of the arguments, for scalar
+        kernels called with Python floats as well as arrays (a hot loop on one body: arithmetic
+        on 0-d arrays costs about 1 us an operation, on floats about 50 ns)
 
     Reading an output with ``kernel["name"]`` records which claim's evidence is running (the
     registry sets it), so ``symrb verify`` can list, for every kernel, the claims that checked it.
@@ -222,6 +225,7 @@ class Kernel:
     components: dict[str, sp.Matrix] = field(default_factory=dict)
     source: str = ""
     register: bool = True
+    convert: bool = True
     checked_by: set[str] = field(default_factory=set)
     order: int = field(default_factory=lambda: next(_counter))
 
@@ -712,6 +716,8 @@ def render_kernel(k: Kernel) -> str:
     argnames = [a.name for a in k.args]
     head = [f"def {k.name}({', '.join(argnames)}):\n"]
     conv = [f"    {name} = numpy.asarray({name}, dtype=float)\n" for name in argnames]
+    if not k.convert:
+        conv = []
     if k.components:
         body, printed, ops = _component_code(k, printer)
     else:

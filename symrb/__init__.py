@@ -31,7 +31,9 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
         "jd_residual", "symmetric_step", "symmetric_flow", "mv_algorithm1", "mv_algorithm2",
         "discrete_rigid_body_flow", "DiscreteFlowSolution",
     ),
+    "engine": ("MVStepper", "mv_flow"),
     "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
+    "exact": ("ExactSolution", "rigid_body_exact"),
     "learning": (
         "resnet_forward", "squared_error", "costate_sweep", "loss_gradients", "train",
         "TrainResult", "toy_classification",
@@ -71,7 +73,9 @@ if TYPE_CHECKING:  # static type checkers see the eager imports
         algebra,
         continuous,
         discrete,
+        engine,
         errors,
+        exact,
         learning,
         orbits,
         rigid_body,
@@ -80,7 +84,9 @@ if TYPE_CHECKING:  # static type checkers see the eager imports
     from .algebra import *  # noqa: F403
     from .continuous import *  # noqa: F403
     from .discrete import *  # noqa: F403
+    from .engine import *  # noqa: F403
     from .errors import *  # noqa: F403
+    from .exact import *  # noqa: F403
     from .learning import *  # noqa: F403
     from .orbits import *  # noqa: F403
     from .rigid_body import *  # noqa: F403

@@ -87,6 +87,9 @@ def test_kernel_equals_lambdify_of_its_source(kernel: Kernel) -> None:
             want = np.asarray(fn(*np.concatenate(vals)), dtype=float)
             np.testing.assert_allclose(got[b], want, rtol=1e-12, atol=1e-12)
         return
+    if all(a.shape == "(...)" for a in kernel.args):  # scalar arguments (e.g. mv3_cayley_*)
+        _check_scalar_kernel(kernel, gen, rng)
+        return
     size = 4
     data = _data(kernel, rng, size)
     exprs = list(kernel.outputs.values())
@@ -106,6 +109,25 @@ def test_kernel_equals_lambdify_of_its_source(kernel: Kernel) -> None:
             w = np.asarray(w, dtype=float)
             scale = max(1.0, float(np.max(np.abs(w))))
             np.testing.assert_allclose(g[b], w, rtol=0, atol=1e-12 * scale)
+
+
+def _check_scalar_kernel(kernel: Kernel, gen: object, rng: np.random.Generator) -> None:
+    """A kernel of scalar arguments: on arrays of 3 items against lambdify item by item, and
+    called with Python floats (kernels with ``convert=False`` must accept them) equal to the
+    array result."""
+    names = [a.name for a in kernel.args]
+    data = {
+        a: rng.uniform(0.4, 1.6, 3) if a.startswith("l") else 0.3 * rng.standard_normal(3)
+        for a in names
+    }
+    fn = _lambdify([sp.Symbol(a, real=True) for a in names], list(kernel.outputs.values()))
+    got = np.asarray(gen(*[data[a] for a in names]), dtype=float)  # type: ignore[operator]
+    for b in range(3):
+        want = np.asarray(fn(*[data[a][b] for a in names]), dtype=float)
+        np.testing.assert_allclose(got[:, b], want, rtol=1e-12, atol=1e-12)
+        floats = gen(*[float(data[a][b]) for a in names])  # type: ignore[operator]
+        assert all(type(x) is float for x in floats) or kernel.convert
+        np.testing.assert_allclose(np.asarray(floats, dtype=float), got[:, b], rtol=0, atol=0)
 
 
 def test_kernels_are_emitted_once_and_used() -> None:

@@ -41,9 +41,11 @@ from derivations.symbolic import (
     eq,
     explicit,
     general_matrix,
+    hat3,
     lhs_minus_rhs,
     residual,
     skew_matrix,
+    sym_vector,
 )
 
 # =============================================================================================
@@ -1029,6 +1031,142 @@ def d10_mv1_equals_symmetric_50_digits() -> float:
     reproduces the symmetric representation's Q_k (n = 3, 6 steps)."""
     run, mv = _mp_run(), _mp_mv_runs()
     return float(_mp_gap(mv["mv1_Q"], run["Qs"][: _MP_STEPS + 2]))
+
+
+# ---------------------------------------------------------------------------------------------
+# n = 3 in Cayley coordinates (the kernels of symrb.engine)
+#
+# With U = cay(X) = (I + X)(I - X)^{-1}, X = hat(x), multiplying J_D(U) = B (B = h M = hat(b))
+# by (I - X) on the left and (I + X) on the right gives 2 J(X) = (I - X) B (I + X), i.e. the
+# quadratic vector equation G(x) = 2 I o x - b - b x x - (b.x) x = 0 (I_1 = lam_2 + lam_3,
+# cyclic).  The engine solves it by Newton (mv3_cayley_newton) and then moves the state
+# (mv3_cayley_update): Q_{k+1} = Q_k U, M_{k+1} = U^T M_k U (MV3 with Omega_k = U^T).
+
+_CX, _CB, _CL = sym_vector("x", 3), sym_vector("b", 3), sym_vector("l", 3)
+_CM = sym_vector("m", 3)
+_CQ = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"q{i + 1}{j + 1}", real=True))
+
+
+def _cayley3_inertia(lam: sp.Matrix) -> sp.Matrix:
+    return sp.Matrix([lam[1] + lam[2], lam[0] + lam[2], lam[0] + lam[1]])
+
+
+def _cayley3_G(x: sp.Matrix, b: sp.Matrix, lam: sp.Matrix) -> sp.Matrix:
+    """G(x) = 2 I o x - b - b x x - (b.x) x, zero exactly when J_D(cay(hat x)) = hat(b)."""
+    inertia = _cayley3_inertia(lam)
+    lin = sp.Matrix([2 * inertia[i] * x[i] for i in range(3)])
+    return lin - b - b.cross(x) - b.dot(x) * x
+
+
+def _cayley3_jacobian(x: sp.Matrix, b: sp.Matrix, lam: sp.Matrix) -> sp.Matrix:
+    """G'(x) = 2 diag(I) - (b.x) Id - hat(b) - x b^T (closed form; the evidence compares it with
+    SymPy's Jacobian of G)."""
+    inertia = _cayley3_inertia(lam)
+    return sp.diag(*[2 * inertia[i] for i in range(3)]) - b.dot(x) * sp.eye(3) - hat3(b) - x * b.T
+
+
+def _cayley3_newton_step() -> sp.Matrix:
+    """dx = -G'^{-1} G by cross products of the rows r_i of G' (the adjugate's columns are
+    r_2 x r_3, r_3 x r_1, r_1 x r_2 and det G' = r_1 . (r_2 x r_3)), kept unexpanded so that CSE
+    shares the entries of G'."""
+    Jg = _cayley3_jacobian(_CX, _CB, _CL)
+    G = _cayley3_G(_CX, _CB, _CL)
+    r1, r2, r3 = (Jg[i, :].T for i in range(3))
+    c1, c2, c3 = r2.cross(r3), r3.cross(r1), r1.cross(r2)
+    det = r1.dot(c1)
+    return -(G[0] * c1 + G[1] * c2 + G[2] * c3) / det
+
+
+def _cayley3_matrix(x: sp.Matrix) -> sp.Matrix:
+    """cay(hat x) = I + 2 (X + X^2)/(1 + |x|^2) (closed form)."""
+    X = hat3(x)
+    return sp.eye(3) + 2 * (X + X * X) / (1 + x.dot(x))
+
+
+_CDX = _cayley3_newton_step()
+_CU = _cayley3_matrix(_CX)
+_CM_NEXT = _CU.T * _CM
+_CQ_NEXT = _CQ * _CU
+_SCALAR3 = "(...)"
+MV3_CAYLEY_NEWTON = Kernel(
+    name="mv3_cayley_newton",
+    target="discrete_rigid_body",
+    args=[Arg(f"x{i}", _SCALAR3, f"Cayley vector, component {i}") for i in (1, 2, 3)]
+    + [Arg(f"b{i}", _SCALAR3, f"discrete momentum h m, component {i}") for i in (1, 2, 3)]
+    + [Arg(f"l{i}", _SCALAR3, f"lam_{i}, diagonal of Lambda") for i in (1, 2, 3)],
+    outputs={f"dx{i + 1}": _CDX[i] for i in range(3)},
+    doc="Newton step for the second Moser-Veselov equation in Cayley coordinates, n = 3.\n\n"
+    "With U = cay(hat x) = (I + X)(I - X)^{-1}, J_D(U) = hat(b) is equivalent to\n"
+    "G(x) = 2 I o x - b - b x x - (b.x) x = 0 (I_1 = l2 + l3, cyclic); returns the Newton step\n"
+    "dx = -G'(x)^{-1} G(x), G'(x) = 2 diag(I) - (b.x) Id - hat(b) - x b^T, by the adjugate.\n"
+    "Arguments may be floats or arrays of one broadcast shape (no conversion).",
+    claims=("D10",),
+    convert=False,
+)
+MV3_CAYLEY_UPDATE = Kernel(
+    name="mv3_cayley_update",
+    target="discrete_rigid_body",
+    args=[Arg(f"x{i}", _SCALAR3, f"Cayley vector, component {i}") for i in (1, 2, 3)]
+    + [Arg(f"m{i}", _SCALAR3, f"body momentum, component {i}") for i in (1, 2, 3)]
+    + [
+        Arg(f"q{i}{j}", _SCALAR3, f"attitude Q, entry ({i}, {j})")
+        for i in (1, 2, 3)
+        for j in (1, 2, 3)
+    ],
+    outputs={f"m{i + 1}_next": _CM_NEXT[i] for i in range(3)}
+    | {f"q{i + 1}{j + 1}_next": _CQ_NEXT[i, j] for i in range(3) for j in range(3)},
+    doc="One Moser-Veselov step of the state given the Cayley vector x of U, n = 3.\n\n"
+    "U = cay(hat x) = I + 2 (X + X^2)/(1 + |x|^2), m_next = U^T m (M_{k+1} = U^T M_k U, the\n"
+    "third Moser-Veselov equation with Omega_k = U^T), Q_next = Q U.  Arguments may be floats\n"
+    "or arrays of one broadcast shape (no conversion).",
+    claims=("D10",),
+    convert=False,
+)
+
+
+@D10.check(Level.SYMBOLIC_FIXED_N)
+def d10_cayley_equation_n3() -> sp.Expr:
+    """n = 3, Cayley coordinates (symbolic): the emitted update's U is cay(X) = (I + X)(I - X)^-1
+    and in SO(3); (I - X)(J_D(U) - hat b)(I + X) = hat(G(x)) with the emitted J_D, so G(x) = 0
+    exactly when J_D(U) = hat b; the emitted Newton step solves G'(x) dx = -G(x) with G' the
+    Jacobian computed by SymPy; the emitted momentum update is the emitted mv3 at Omega = U^T
+    and the attitude update is Q U."""
+    x, b, lam = _CX, _CB, list(_CL)
+    X, eye = hat3(x), sp.eye(3)
+    U = _cayley3_matrix(x)
+    r = residual(sp.simplify(U * (eye - X) - (eye + X)))  # U = (I + X)(I - X)^{-1}
+    r += residual(sp.simplify(U.T * U - eye)) + residual(sp.simplify(U.det() - 1))
+    jd = explicit(JD["JD"], {"U": U}, lam)
+    r += residual(sp.simplify((eye - X) * (jd - hat3(b)) * (eye + X) - hat3(_cayley3_G(x, b, _CL))))
+    G = _cayley3_G(x, b, _CL)
+    dx = sp.Matrix([MV3_CAYLEY_NEWTON[f"dx{i + 1}"] for i in range(3)])
+    r += residual(sp.simplify(G.jacobian(x) - _cayley3_jacobian(x, b, _CL)))
+    r += residual(sp.Matrix([sp.numer(sp.together(e)) for e in G.jacobian(x) * dx + G]))
+    m_next = sp.Matrix([MV3_CAYLEY_UPDATE[f"m{i + 1}_next"] for i in range(3)])
+    mv3 = explicit(MV_TRANSPORT["M_next"], {"Omega": U.T, "M": hat3(_CM)})
+    r += residual(sp.simplify(hat3(m_next) - mv3))
+    q_next = sp.Matrix(3, 3, lambda i, j: MV3_CAYLEY_UPDATE[f"q{i + 1}{j + 1}_next"])
+    r += residual(sp.simplify(q_next - _CQ * U))
+    return r
+
+
+@D10.check(Level.FLOAT64, tol=1e-13)
+def d10_engine_against_50_digits() -> float:
+    """symrb.engine.mv_flow (Cayley-Newton, the emitted n = 3 kernels) from (Q_0, M_0) at
+    h = 0.1, 12 steps, single body and a batch of 2 copies, against the Q_k and continuous
+    momenta of the 50-digit reference run of the symmetric representation: max absolute error."""
+    from symrb import engine
+
+    run = _mp_run()
+    one = engine.mv_flow(run["Q0"], run["M0"], _LAM3, _H, _STEPS)
+    two = engine.mv_flow(np.stack([run["Q0"]] * 2), np.stack([run["M0"]] * 2), _LAM3, _H, _STEPS)
+    errs = [
+        np.abs(one.y.Q - run["Qf"]).max(),
+        np.abs(one.y.M - run["Mcf"]).max(),
+        np.abs(two.y.Q - run["Qf"][:, None]).max(),
+        np.abs(two.y.M - run["Mcf"][:, None]).max(),
+    ]
+    return float(np.max(errs))
 
 
 # =============================================================================================

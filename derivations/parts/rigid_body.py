@@ -292,6 +292,111 @@ def s2_flow_against_elliptic() -> float:
     return float(np.abs(ref.vee(sol.y.M) - m).max() / np.linalg.norm(m[0]))
 
 
+@S2.check(Level.FLOAT64, tol=1e-12)
+def s2_exact_against_elliptic() -> float:
+    """symrb.exact.rigid_body_exact (n = 3) against the Landau-Lifshitz Jacobi elliptic solution
+    (reference.euler_elliptic) at 201 times in [0, 200], with the principal axes in the three
+    cyclic orders of lam (the body momentum circles the largest axis): max |M error| / |M|."""
+    from symrb.exact import rigid_body_exact
+
+    inertia = np.array([1.0, 1.7, 2.6])
+    t = np.linspace(0.0, 200.0, 201)
+    m = ref.euler_elliptic(inertia, 0.8, 1.1, t)
+    worst = 0.0
+    for shift in range(3):  # a cyclic relabelling of the axes is a rotation: same dynamics
+        I_s, m_s = np.roll(inertia, shift), np.roll(m, shift, axis=-1)
+        lam = 0.5 * I_s.sum() - I_s  # I_1 = lam_2 + lam_3 (cyclic)
+        Q0 = ref.random_rotation(3, np.random.default_rng(shift))
+        sol = rigid_body_exact(Q0, ref.hat(m_s[0]), lam, t)
+        err = np.abs(ref.vee(sol.y.M) - m_s).max() / np.linalg.norm(m_s[0])
+        worst = max(worst, float(err))
+    return worst
+
+
+# the 6 random bodies of the next check, and the special cases it adds
+_EXACT_SPECIAL = [
+    ([0.0, 0.0, 1.3], [0.7, 1.1, 1.6]),  # a steady rotation about a principal axis
+    ([0.5, 1.0, 1.5], [0.8, 0.8, 1.5]),  # a symmetric body
+    ([0.7, 0.3, -1.1], [-0.2, 1.1, 1.6]),  # lam_1 < 0 with J positive definite
+]
+
+
+@S2.check(Level.FLOAT64, tol=1e-10)
+def s2_exact_against_flow() -> float:
+    """symrb.exact.rigid_body_exact against symrb.integrate(RigidBody) (DOP853, rtol = atol =
+    1e-13) at 11 times in [0, 60], for 6 random bodies (|m| = 1; the momentum circles the largest
+    axis for some, the smallest for others) plus a steady rotation, a symmetric body and a body
+    with lam_1 < 0: max |Q error| and |M error| / |M|."""
+    import symrb
+    from symrb.exact import rigid_body_exact
+
+    rng = np.random.default_rng(17)
+    lam = rng.uniform(0.4, 2.0, (6, 3))
+    m = rng.standard_normal((6, 3))
+    m /= np.linalg.norm(m, axis=-1, keepdims=True)
+    lam = np.concatenate([lam, [c[1] for c in _EXACT_SPECIAL]])
+    m = np.concatenate([m, [c[0] for c in _EXACT_SPECIAL]])
+    Q0 = np.stack([ref.random_rotation(3, rng) for _ in range(len(m))])
+    M0 = ref.hat(m)
+    t = np.linspace(0.0, 60.0, 11)
+    sol = rigid_body_exact(Q0, M0, lam, t)
+    inertia = lam.sum(axis=-1, keepdims=True) - lam
+    circled = np.take_along_axis(inertia, np.maximum(sol.axis, 0)[:, None], -1)[:, 0]
+    if not (np.any(circled == inertia.max(-1)) and np.any(circled == inertia.min(-1))):
+        return np.inf  # both elliptic cases must be exercised
+    flow = symrb.integrate(
+        symrb.RigidBody, (0.0, 60.0), {"Q": Q0, "M": M0}, lam=lam, rtol=1e-13, atol=1e-13,
+        t_eval=t,
+    )  # fmt: skip
+    eQ = np.abs(sol.y.Q - flow.y.Q).max()
+    eM = (np.abs(sol.y.M - flow.y.M).max(axis=(0, -2, -1)) / np.abs(M0).max(axis=(-2, -1))).max()
+    return float(max(eQ, eM))
+
+
+def _mp_rigid_body(inertia: np.ndarray, Q0: np.ndarray, m0: np.ndarray, T: float, dps: int):
+    """Q(T), m(T) of Qdot = Q hat(omega), mdot = m x omega, omega_i = m_i / I_i by mpmath's
+    Taylor-series solver (mpmath.odefun) in ``dps`` digits."""
+    import mpmath
+
+    with mpmath.workdps(dps):
+        inv = [1 / mpmath.mpf(float(x)) for x in inertia]
+
+        def field(_t, y):
+            m = y[9:]
+            w = [m[i] * inv[i] for i in range(3)]
+            W = [[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]]
+            Qd = [sum(y[3 * i + k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
+            md = [m[1] * w[2] - m[2] * w[1], m[2] * w[0] - m[0] * w[2], m[0] * w[1] - m[1] * w[0]]
+            return Qd + md
+
+        y0 = [mpmath.mpf(float(x)) for x in np.concatenate([np.ravel(Q0), m0])]
+        yT = mpmath.odefun(field, 0, y0)(T)
+        out = np.array([float(x) for x in yT])
+    return out[:9].reshape(3, 3), out[9:]
+
+
+@S2.check(Level.MPMATH, tol=1e-13)
+def s2_exact_against_mpmath_ode() -> float:
+    """symrb.exact.rigid_body_exact at t = 4 against a 20-digit Taylor integration of the rigid
+    body (mpmath.odefun on Qdot = Q hat(omega), mdot = m x omega), for a body whose momentum
+    circles its largest axis and one whose momentum circles its smallest: max |Q error| and
+    |m error| / |m|."""
+    from symrb.exact import rigid_body_exact
+
+    worst = 0.0
+    rng = np.random.default_rng(5)
+    for lam, m0 in (([0.7, 1.1, 1.6], [0.5, 1.0, 1.5]), ([0.7, 1.1, 1.6], [1.5, 1.0, 0.5])):
+        lam_a, m0_a = np.array(lam), np.array(m0)
+        inertia = lam_a.sum() - lam_a
+        Q0 = ref.random_rotation(3, rng)
+        QT, mT = _mp_rigid_body(inertia, Q0, m0_a, 4.0, 20)
+        sol = rigid_body_exact(Q0, ref.hat(m0_a), lam_a, [4.0])
+        eQ = np.abs(sol.y.Q[0] - QT).max()
+        eM = np.abs(ref.vee(sol.y.M[0]) - mT).max() / np.linalg.norm(m0_a)
+        worst = max(worst, float(eQ), float(eM))
+    return worst
+
+
 @S2.check(Level.FLOAT64, tol=1e-13)
 def s2_symrb_euler_pointwise() -> float:
     """symrb.euler_rhs_so3 against numpy.cross(m, m / I) with I from symrb's convention checked

@@ -1,0 +1,144 @@
+"""symrb.engine (Cayley-Newton Moser-Veselov) against independent references.
+
+The reference is symrb.discrete_rigid_body_flow (U-parametrised Newton with a Riccati start, a
+different solver of the same map); the orthogonality and conservation checks compare with exact
+invariants (Q^T Q = I, the energy and |M| are conserved by the exact discrete map).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import symrb
+from symrb.engine import MVStepper, mv_flow
+from symrb.errors import InputError
+
+
+def _case(n: int, seed: int, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    lam = rng.uniform(0.5, 2.0, n)
+    A = rng.normal(size=(n, n))
+    M0 = scale * (A - A.T) / np.sqrt(n)
+    Q0, _ = np.linalg.qr(rng.normal(size=(n, n)))
+    if np.linalg.det(Q0) < 0:
+        Q0[:, 0] *= -1
+    return Q0, M0, lam
+
+
+@pytest.mark.parametrize(
+    ("n", "method"), [(3, "auto"), (4, "newton"), (4, "fixed-point"), (10, "auto"), (10, "newton")]
+)
+def test_agrees_with_discrete_rigid_body_flow(n: int, method: str) -> None:
+    Q0, M0, lam = _case(n, 7 + n)
+    steps = 1000 if n < 10 else 200
+    got = mv_flow(Q0, M0, lam, 0.05, steps, save_every=50, method=method)
+    ref = symrb.discrete_rigid_body_flow(Q0, M0, lam, 0.05, steps, save_every=50)
+    assert got.success and ref.success
+    np.testing.assert_array_equal(got.k, ref.k)
+    assert np.abs(got.y.Q - ref.y.Q).max() < 2e-12
+    assert np.abs(got.y.M - ref.y.M).max() < 2e-12 * max(1.0, np.abs(M0).max())
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(0, 2**16), st.floats(0.01, 0.3), st.floats(0.1, 3.0))
+def test_n3_one_step_solves_jd(seed: int, h: float, scale: float) -> None:
+    """One step from a cold start: U = Q0^T Q1 solves J_D(U) = h M0 (the reference residual)."""
+    Q0, M0, lam = _case(3, seed, scale)
+    stepper = MVStepper(lam)
+    Q1, M1 = stepper.step(Q0, M0, h)
+    U = Q0.T @ Q1
+    assert np.abs(U @ np.diag(lam) - np.diag(lam) @ U.T - h * M0).max() < 1e-13
+    assert np.abs(M1 - U.T @ M0 @ U).max() < 1e-13
+
+
+@pytest.mark.parametrize("n", [3, 5])
+def test_batch_equals_loop(n: int) -> None:
+    Q0, M0, lam = _case(n, 3)
+    scales = np.linspace(0.2, 1.5, 6)
+    Ms = M0 * scales[:, None, None]
+    Qs = np.stack([Q0] * 6)
+    batch = mv_flow(Qs, Ms, lam, 0.05, 100, save_every=25)
+    for i in range(6):
+        one = mv_flow(Q0, Ms[i], lam, 0.05, 100, save_every=25)
+        assert np.abs(batch.y.Q[:, i] - one.y.Q).max() < 1e-14
+        assert np.abs(batch.y.M[:, i] - one.y.M).max() < 1e-14
+
+
+def test_stepper_matches_flow_and_survives_h_changes() -> None:
+    """A composition-like sequence of sub-steps (negative one included) on one stepper gives the
+    same states as fresh steppers (cold starts) for each sub-step."""
+    Q, M, lam = _case(3, 11)
+    warm = MVStepper(lam)
+    Qw, Mw = Q, M
+    Qc, Mc = Q, M
+    for h in (0.05, -0.03, 0.05, 0.02, 0.05):
+        Qw, Mw = warm.step(Qw, Mw, h)
+        Qc, Mc = MVStepper(lam).step(Qc, Mc, h)
+    assert np.abs(Qw - Qc).max() < 1e-14
+    assert np.abs(Mw - Mc).max() < 1e-14
+
+
+def test_orthogonality_after_1e4_steps() -> None:
+    Q0, M0, lam = _case(3, 5)
+    sol = mv_flow(Q0, M0, lam, 0.05, 10_000, save_every=10_000)
+    Q = sol.y.Q[-1]
+    assert np.abs(Q.T @ Q - np.eye(3)).max() < 2e-14  # random walk, not 1e4 * eps
+
+
+def test_energy_and_casimir_short_run() -> None:
+    """2 * 10^4 steps: energy and |m| stay within a random-walk band (sqrt(k) eps), far below
+    linear drift (k eps = 4e-12)."""
+    Q0, M0, lam = _case(3, 9)
+    sol = mv_flow(Q0, M0, lam, 0.05, 20_000, save_every=1000)
+    H = symrb.kinetic_energy(sol.y.M, lam)
+    C = np.einsum("kij,kij->k", sol.y.M, sol.y.M)
+    assert np.abs(H / H[0] - 1).max() < 2e-13
+    assert np.abs(C / C[0] - 1).max() < 2e-13
+
+
+def test_past_the_fold_ends_run() -> None:
+    M = symrb.hat([0.5, 1.0, 1.5])
+    lam = np.array([0.7, 1.1, 1.6])
+    t = float(symrb.fold_scale(M, lam))
+    sol = mv_flow(np.eye(3), M, lam, 1.2 * t, 3)
+    assert not sol.success and "failed" in sol.message
+    assert sol.k[-1] == 0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"h": 0.0}, "h must be"),
+        ({"h": float("nan")}, "h"),
+        ({"steps": -1}, "steps"),
+        ({"save_every": 0}, "save_every"),
+        ({"lam": [1.0, -1.0, 2.0]}, "lam"),
+        ({"M0": np.ones((3, 3))}, "M0 must be skew"),
+        ({"Q0": 2 * np.eye(3)}, "Q0"),
+        ({"method": "magic"}, "method"),
+        ({"lam": [1.0, 2.0]}, "to match lam"),
+    ],
+)
+def test_bad_input(kwargs: dict, match: str) -> None:
+    args = {"Q0": np.eye(3), "M0": symrb.hat([0.1, 0.2, 0.3]), "lam": [0.7, 1.1, 1.6],
+            "h": 0.1, "steps": 3} | kwargs  # fmt: skip
+    with pytest.raises(InputError, match=match):
+        mv_flow(**args)
+
+
+def test_stepper_bad_input() -> None:
+    with pytest.raises(InputError, match="batch_shape"):
+        MVStepper([0.7, 1.1, 1.6], batch_shape=(2, "x"))  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="lam"):
+        MVStepper([0.0, 1.1, 1.6])
+
+
+def test_inputs_not_mutated() -> None:
+    Q0, M0, lam = _case(3, 1)
+    Qc, Mc, lc = Q0.copy(), M0.copy(), lam.copy()
+    MVStepper(lam).step(Q0, M0, 0.1)
+    mv_flow(Q0, M0, lam, 0.1, 5)
+    assert np.array_equal(Q0, Qc) and np.array_equal(M0, Mc) and np.array_equal(lam, lc)
