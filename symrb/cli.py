@@ -1,9 +1,12 @@
-"""The ``symrb`` command: ``claims``, ``show ID``, ``verify [IDS]`` and ``derive [--check]``.
+"""The ``symrb`` command: ``claims``, ``show ID``, ``verify [IDS]``, ``derive [--check]`` and
+``bench``.
 
-The commands are development tools that run the SymPy derivations of a source checkout
+The first four are development tools that run the SymPy derivations of a source checkout
 (:mod:`derivations`, not part of the wheel; see ``derivations.cli`` for what each does).  This
-launcher imports none of symrb's numerics, so it works while ``symrb/_generated`` is missing;
-``symrb --version`` and ``symrb --help`` work without SymPy and without the derivations.
+launcher imports none of symrb's numerics for them, so they work while ``symrb/_generated`` is
+missing; ``symrb --version`` and ``symrb --help`` work without SymPy and without the derivations.
+``symrb bench`` times the numerics (:mod:`symrb.bench`) and needs only NumPy and SciPy, so it is
+handled here, before the derivations are looked for.
 
 Exit status: 0 everything as recorded; 1 a surprise (a computed outcome differs from the record,
 a kernel not evaluated by its claims, a stale generated file); 2 usage or environment (bad
@@ -18,6 +21,13 @@ from pathlib import Path
 from types import ModuleType
 
 COMMANDS = ("claims", "show", "verify", "derive")
+
+_BENCH_HELP = """\
+numerics command (needs only NumPy and SciPy, no source checkout):
+  bench [--quick] [--json PATH] [--plots DIR] [--only SECTION ...]
+                   time the integrators against SciPy and report the speed goals
+                   (symrb bench --help; exit status 1 only with --strict)
+"""
 
 _NEED = (
     "symrb {cmd} runs the derivations of a source checkout of symrb and needs its 'derive' extra: "
@@ -36,6 +46,7 @@ commands (they need a source checkout of symrb with its 'derive' extra):
   verify [ID ...]  run the evidence and compare the outcomes with the record
   derive [--check] regenerate (or only compare) symrb/_generated
 
+{bench}
 {why}
 
 exit status: 0 everything as recorded, 1 a surprise (an outcome differs from the record, a stale
@@ -85,6 +96,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"symrb {version()}")
         return 0
     cmd = next((a for a in args if not a.startswith("-")), "")
+    if cmd == "bench":
+        from symrb.bench import main as bench_main
+
+        i = args.index("bench")
+        if any(a not in ("-h", "--help") for a in args[:i]):
+            return _exit2(f"usage: symrb bench [options]; got options before 'bench': {args[:i]}")
+        return int(bench_main(args[i + 1 :], prog="symrb bench"))
     if cmd in COMMANDS:
         try:
             import sympy  # noqa: F401
@@ -94,12 +112,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     if dcli is None:  # an installed wheel: no derivations to run
         need = _NEED.format(cmd=cmd if cmd in COMMANDS else "COMMAND")
         if cmd not in COMMANDS and any(a in ("-h", "--help") for a in args):
-            print(_USAGE.format(why=need + "."))
+            print(_USAGE.format(why=need + ".", bench=_BENCH_HELP))
             return 0
         if cmd in COMMANDS:
             return _exit2(need + " (no derivations package next to symrb)")
-        return _exit2(_USAGE.format(why=need + "."))
+        return _exit2(_USAGE.format(why=need + ".", bench=_BENCH_HELP))
+    if not cmd and (not args or any(a in ("-h", "--help") for a in args)):
+        return _with_bench_help(dcli, args)
     return int(dcli.main(args, prog="symrb"))
+
+
+def _with_bench_help(dcli: ModuleType, args: list[str]) -> int:
+    """The derivations' top-level help (or usage) with the ``bench`` command added before its
+    exit status paragraph."""
+    import contextlib
+    import io
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = int(dcli.main(args, prog="symrb"))
+    for buf, stream in ((out, sys.stdout), (err, sys.stderr)):
+        text = buf.getvalue()
+        if text and "exit status:" in text:
+            head, sep, tail = text.partition("exit status:")
+            text = head + _BENCH_HELP + "\n" + sep + tail
+        stream.write(text)
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

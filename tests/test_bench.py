@@ -1,0 +1,320 @@
+"""``symrb.bench`` and ``symrb bench``: the JSON schema with its goals, a tiny run of every
+section, the exit statuses, errors measured against an independent reference, and the order fit.
+
+Nothing here is timed: the benchmark's speed is what it reports, not what these tests check.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
+
+import symrb
+from symrb import bench
+from symrb import cli as launcher
+
+ROOT = Path(__file__).resolve().parents[1]
+
+TINY: dict[str, Any] = {
+    "rounds": 1,
+    "min_time": 0.0005,
+    "wp_T": (2.0,),
+    "wp_rtols": (1e-4, 1e-7),
+    "wp_h": {2: (0.2, 0.1), 4: (0.4, 0.2), 6: (0.5, 0.25), 8: (0.5, 0.25)},
+    "wp_n10_T": None,
+    "long_steps": 100,
+    "long_n": (3,),
+    "batches": (1, 10),
+    "cold_batch": 10,
+    "cold_budget": 1.0,
+    "cost_n": (3, 4),
+}
+
+GOAL_NAMES = [
+    "n = 3 single MV step <= 3x one 3x3 matmul",
+    "n = 3, T = 10, error 1e-08",
+    "n = 3, T = 100, error 1e-08",
+    "n = 3, T = 100, error 1e-10",
+    "exact propagator >= 100x faster than DOP853 at rtol 1e-12",
+    "exact propagator accurate to 1e-13",
+    "n = 10, T = 100, error 1e-08",
+    "n = 50 one MV step <= 100 matmul-equivalents",
+    "batch 10^4, n = 3: >= 5e6 body-steps/s",
+    "batch 10^4 within 3x of batched matmul",
+    "cold start within 10x of a warm step",
+    "10^6 steps n = 3: invariant errors",
+    "10^6 steps n = 3: slope",
+    "10^6 steps n = 10: invariant errors",
+    "10^6 steps n = 10: slope",
+    "every method's order within 0.2 of nominal",
+    "symrb.integrate <= 1.2x solve_ivp",
+]
+
+
+@pytest.fixture(scope="module")
+def verify_json(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    data = {
+        "claims": [
+            {
+                "id": "S1",
+                "evidence": [
+                    {"level": "float64", "seconds": "0.5", "passed": "True"},
+                    {"level": "symbolic, general n", "seconds": "2.0", "passed": "True"},
+                ],
+            },
+            {"id": "D2", "evidence": [{"level": "float64", "seconds": "0.25", "passed": "False"}]},
+        ]
+    }
+    path = tmp_path_factory.mktemp("verify") / "verify.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.fixture(scope="module")
+def tiny(verify_json: Path) -> bench.BenchResult:
+    return bench.run(
+        quick=True,
+        methods=["DOP853", "LSODA", "integrate", "MV", "MV-fast", "MV-comp4", "exact"],
+        progress=False,
+        verify_json=verify_json,
+        config=TINY,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# the result and its JSON
+
+
+def test_json_has_the_machine_parameters_measurements_and_every_goal(
+    tiny: bench.BenchResult, tmp_path: Path
+) -> None:
+    path = tiny.write_json(tmp_path / "sub" / "bench.json")
+    data = json.loads(path.read_text())  # strict JSON: no NaN (allow_nan=False on writing)
+    assert set(data) == {"machine", "parameters", "measurements", "goals", "notes", "seconds"}
+    for key in ("platform", "cpu_count", "python", "numpy", "scipy", "blas"):
+        assert key in data["machine"], key
+    assert data["parameters"]["quick"] is True and data["parameters"]["rounds"] == 1
+    assert set(data["measurements"]) == set(bench.SECTIONS)
+    goals = data["goals"]
+    for goal in goals:
+        assert set(goal) == {"name", "measured", "target", "met", "note"}
+        assert goal["met"] in (True, False, None)
+        if goal["met"] is None:
+            assert goal["note"], goal  # why it was not measured
+        else:
+            assert isinstance(goal["measured"], float)
+    names = [g["name"] for g in goals]
+    for expected in GOAL_NAMES:
+        assert sum(n.startswith(expected) for n in names) == 1, (expected, names)
+    long_runs = [g for g in goals if g["name"].startswith(("10^6", "n = 3, T = 100", "n = 10,"))]
+    assert long_runs and all(
+        g["met"] is None and "not measured in --quick" in g["note"] for g in long_runs
+    )
+
+
+def test_missing_optional_methods_are_listed_with_met_none(tiny: bench.BenchResult) -> None:
+    exact_goals = [g for g in tiny.goals if g["name"].startswith("exact propagator")]
+    try:
+        import symrb.exact  # noqa: F401
+    except ImportError:
+        assert all(g["met"] is None and "not available" in g["note"] for g in exact_goals)
+        assert any("symrb.exact" in note for note in tiny.notes)
+    wp = tiny.measurements["work-precision"]["n3"][0]
+    assert wp["methods"]["MV"]["available"] and wp["methods"]["DOP853"]["available"]
+
+
+def test_every_section_measured_something(tiny: bench.BenchResult) -> None:
+    ms = tiny.measurements
+    wp = ms["work-precision"]["n3"][0]
+    for point in wp["methods"]["DOP853"]["points"] + wp["methods"]["MV"]["points"]:
+        cpu = point["cpu"]
+        assert 0 < cpu["min"] <= cpu["median"] <= cpu["max"]
+        assert point["error"] == max(point["error_Q"], point["error_M"])
+    (lt,) = ms["long-time"]
+    assert lt["N"][-1] == 100 and len(lt["N"]) == len(lt["errors"]["energy"])
+    assert all(np.diff(lt["errors"]["energy"]) >= 0)  # running maxima
+    assert max(lt["errors"]["orthogonality"]) < 1e-12
+    assert [r["batch"] for r in ms["throughput"]["rows"]] == [1, 10]
+    assert ms["throughput"]["cold_start"]["ratio"] > 0
+    assert [r["n"] for r in ms["cost-vs-n"]["rows"]] == [3, 4]
+    ev = ms["evidence"]["levels"]
+    assert ev["float64"]["checks"] == 2 and ev["float64"]["passed"] == 1
+    assert ev["float64"]["claims"] == ["D2", "S1"]
+    assert ev["float64"]["total_seconds"] == pytest.approx(0.75)
+    assert "every n" in ev["symbolic, general n"]["certifies"]
+
+
+def test_plots_are_png_and_svg(tiny: bench.BenchResult, tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    files = tiny.plot(tmp_path)
+    stems = {f.stem for f in files}
+    assert stems == {"work_precision", "long_time", "throughput", "cost_vs_n"}
+    assert {f.suffix for f in files} == {".png", ".svg"}
+    assert all(f.stat().st_size > 1000 for f in files)
+
+
+def test_bad_arguments_raise_input_error() -> None:
+    with pytest.raises(symrb.errors.InputError, match="sections"):
+        bench.run(sections=["nonsense"], progress=False)
+    with pytest.raises(symrb.errors.InputError, match="methods"):
+        bench.run(methods=["Euler"], progress=False)
+    with pytest.raises(symrb.errors.InputError, match="unknown keys"):
+        bench.run(config={"steps": 3}, progress=False)
+    with pytest.raises(symrb.errors.InputError, match="rounds"):
+        bench.time_interleaved({"f": lambda: None}, rounds=0)
+
+
+# ---------------------------------------------------------------------------------------------
+# errors against an independent reference
+
+
+def _euler_reference(T: float) -> np.ndarray:
+    """m(T) of Euler's equations in vector form, m' = m x (m / I): another route than the
+    matrix field the benchmark integrates."""
+    lam, _Q0, M0 = bench._problem(3, 0)
+    inertia = symrb.inertia_from_lam(lam)
+    sol = solve_ivp(
+        lambda _t, m: np.cross(m, m / inertia),
+        (0.0, T),
+        symrb.vee(M0),
+        method="Radau",
+        rtol=1e-12,
+        atol=1e-14,
+    )
+    return sol.y[:, -1]
+
+
+def test_the_reference_agrees_with_an_independent_integration() -> None:
+    lam, Q0, M0 = bench._problem(3, 0)
+    _Q, M = bench._solve_ivp_end(lam, Q0, M0, 5.0, "DOP853", 1e-13)()
+    assert np.abs(symrb.vee(M) - _euler_reference(5.0)).max() < 1e-9
+
+
+def test_a_wrong_method_gets_a_large_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    right = symrb.discrete.discrete_rigid_body_flow
+
+    def wrong(Q0, M0, lam, h, steps, **kw):  # the inertia in the wrong order
+        return right(Q0, M0, np.asarray(lam)[::-1], h, steps, **kw)
+
+    def measured() -> dict[str, Any]:
+        wp = bench._work_precision(
+            3, 2.0, dict(bench._QUICK, **TINY), ["MV"], {}, [], lambda _m: None
+        )
+        return {p["h"]: p["error"] for p in wp["methods"]["MV"]["points"]}
+
+    good = measured()
+    monkeypatch.setattr(symrb.discrete, "discrete_rigid_body_flow", wrong)
+    bad = measured()
+    assert max(good.values()) < 0.05
+    assert min(bad.values()) > 0.1
+    # the good errors are those of an independent comparison
+    lam, Q0, M0 = bench._problem(3, 0)
+    sol = right(Q0, M0, lam, 0.1, 20, save_every=20)
+    m_end = _euler_reference(2.0)
+    assert good[0.1] >= np.abs(symrb.vee(sol.y.M[-1]) - m_end).max() * (1 - 1e-6)
+
+
+# ---------------------------------------------------------------------------------------------
+# fitting
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    order=st.floats(1.0, 9.0),
+    const=st.floats(1e-3, 1e3),
+    noise=st.lists(st.floats(-0.02, 0.02), min_size=5, max_size=5),
+)
+def test_the_order_fit_recovers_a_known_slope(order: float, const: float, noise: list) -> None:
+    h = 0.2 / 2.0 ** np.arange(5)
+    err = const * h**order * np.exp(noise)  # up to 2 % scatter
+    assert abs(bench.fit_slope(h, err) - order) < 0.05
+
+
+def test_the_fit_leaves_out_errors_at_the_reference_floor() -> None:
+    h = np.array([0.1, 0.05, 0.025, 0.0125])
+    err = np.maximum(1e-10 * (h / 0.1) ** 4, 1e-13)  # the last point is at the floor
+    assert bench.fit_slope(h, err, floor=1e-12) == pytest.approx(4.0)
+    assert bench.fit_slope(h, err) < 3.5
+
+
+def test_cost_at_an_error_interpolates_and_extrapolates() -> None:
+    h = np.array([0.1, 0.05, 0.025])
+    err, cost = 2.0 * h**2, 1e-4 / h  # cost ~ 1/h, error ~ h^2
+    target = 2.0 * 0.07**2
+    got, how = bench._cost_at(err, cost, target, 2.0)
+    assert how == "interpolated" and got == pytest.approx(1e-4 / 0.07, rel=1e-12)
+    got, how = bench._cost_at(err, cost, 2.0 * 0.001**2, 2.0)
+    assert how.startswith("extrapolated") and got == pytest.approx(1e-4 / 0.001, rel=1e-12)
+    assert bench._cost_at(err, cost, 1e-12, None)[0] is None
+
+
+# ---------------------------------------------------------------------------------------------
+# the command line
+
+
+def test_cli_help_and_usage_errors(capsys: pytest.CaptureFixture[str]) -> None:
+    assert launcher.main(["bench", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "exit status:" in out and "--quick" in out
+    assert launcher.main(["bench", "--bogus"]) == 2
+    assert launcher.main(["bench", "--only", "nonsense"]) == 2
+    assert "sections must be among" in capsys.readouterr().err
+    assert launcher.main(["bench", "--verify-json", "/nonexistent/verify.json"]) == 2
+    assert launcher.main(["--help"]) == 0
+    assert "bench [--quick]" in capsys.readouterr().out
+
+
+def test_cli_runs_and_writes_json(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(bench, "_QUICK", dict(bench._QUICK, **TINY))
+    path = tmp_path / "out.json"
+    argv = ["bench", "--quick", "--only", "cost-vs-n", "--no-progress", "--json", str(path)]
+    assert launcher.main(argv) == 0
+    out = capsys.readouterr().out
+    assert "n = 3 single MV step" in out and f"wrote {path}" in out
+    assert json.loads(path.read_text())["parameters"]["sections"] == ["cost-vs-n"]
+
+
+def test_cli_strict_exits_1_on_an_unmet_goal(monkeypatch: pytest.MonkeyPatch) -> None:
+    def fake(met: bool | None):
+        def run(**_kw: Any) -> bench.BenchResult:
+            res = bench.BenchResult(machine={}, parameters={})
+            res.goals = [bench._goal("g", 1.0, "<= 0", met, "")]
+            return res
+
+        return run
+
+    for met, plain, strict in ((False, 0, 1), (True, 0, 0), (None, 0, 0)):
+        monkeypatch.setattr(bench, "run", fake(met))
+        assert launcher.main(["bench", "--no-progress"]) == plain
+        assert launcher.main(["bench", "--no-progress", "--strict"]) == strict
+
+
+def test_bench_needs_neither_sympy_nor_the_derivations() -> None:
+    code = (
+        "import sys; sys.modules['sympy'] = None; sys.modules['derivations'] = None\n"
+        "sys.modules['derivations.cli'] = None\n"
+        "from symrb.cli import main\n"
+        "assert main(['bench', '--help']) == 0\n"
+        "assert main(['bench', '--bogus']) == 2\n"
+        "import symrb.bench\n"
+        "r = symrb.bench.run(quick=True, sections=['cost-vs-n'], progress=False,\n"
+        "                    config={'cost_n': (3,), 'rounds': 1, 'min_time': 0.001})\n"
+        "assert r.measurements['cost-vs-n']['rows'][0]['n'] == 3\n"
+    )
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
