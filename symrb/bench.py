@@ -44,6 +44,7 @@ import math
 import os
 import platform
 import sys
+import textwrap
 import time
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -343,12 +344,9 @@ def _fixed_step_runner(kind: str, mods: dict[str, Any]) -> Callable[..., Any] | 
             return base(Q0, M0, lam, h, steps, order=order, **kw)
 
     elif kind == "RKMK4":
-        fn = _find(compose, ["rkmk4_flow", "rkmk4_rigid_body_flow", "rkmk4"])
+        fn = _find(compose, ["rkmk4_rigid_body_flow"])
     elif kind == "midpoint":
-        fn = _find(
-            compose,
-            ["implicit_midpoint_flow", "midpoint_flow", "midpoint_rigid_body_flow", "midpoint"],
-        )
+        fn = _find(compose, ["midpoint_rigid_body_flow"])
     else:  # pragma: no cover - internal
         raise ValueError(kind)
     if fn is None:
@@ -898,9 +896,13 @@ class BenchResult:
             m = g["measured"]
             ms = "-" if m is None else (m if isinstance(m, str) else f"{m:.3g}")
             met = {True: "yes", False: "NO", None: "-"}[g["met"]]
-            lines.append(f"{g['name'][:62]:<62} {ms:>12} {g['target'][:12]:>12}  {met}")
+            name = textwrap.wrap(g["name"], 62) or [""]
+            lines.append(f"{name[0]:<62} {ms:>12} {g['target'][:12]:>12}  {met}")
+            lines += [f"  {more}" for more in name[1:]]
             if g["note"]:
-                lines.append(f"    {g['note'][:94]}")
+                lines += textwrap.wrap(
+                    g["note"], 100, initial_indent="    ", subsequent_indent="    "
+                )
         return "\n".join(lines)
 
     def plot(self, directory: str | os.PathLike[str]) -> list[Path]:
