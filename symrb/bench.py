@@ -57,7 +57,7 @@ import numpy as np
 from ._validate import Array
 from .errors import InputError
 
-__all__ = ["SECTIONS", "BenchResult", "run", "time_interleaved", "fit_slope", "main"]
+__all__ = ["SECTIONS", "BenchResult", "run", "load", "time_interleaved", "fit_slope", "main"]
 
 #: The sections of :func:`run`, in order.
 SECTIONS = ("work-precision", "long-time", "throughput", "cost-vs-n", "evidence")
@@ -909,6 +909,12 @@ class BenchResult:
         """PNG and SVG diagrams of the sections run (matplotlib, Agg backend); returns the files."""
         return _plot(self, Path(directory))
 
+    def figures(self, *names: str) -> dict[str, Any]:
+        """The diagrams of the sections run as matplotlib figures, by name (``work_precision``,
+        ``long_time``, ``throughput``, ``cost_vs_n``; all when no name is given), e.g. to show
+        them in a notebook."""
+        return _figures(self, set(names))
+
 
 def _jsonable(x: Any) -> Any:
     if isinstance(x, dict):
@@ -1322,51 +1328,59 @@ def run(
 # plots
 
 
-def _plot(res: BenchResult, directory: Path) -> list[Path]:
-    import matplotlib
-
-    matplotlib.use("Agg")
+def _figures(res: BenchResult, names: set[str] | None = None) -> dict[str, Any]:
     import matplotlib.pyplot as plt
 
-    directory.mkdir(parents=True, exist_ok=True)
-    files: list[Path] = []
+    figs: dict[str, Any] = {}
+    unknown = (names or set()) - {"work_precision", "long_time", "throughput", "cost_vs_n"}
+    if unknown:
+        raise InputError(
+            f"figures: names must be among work_precision, long_time, throughput, cost_vs_n; "
+            f"got {sorted(unknown)}"
+        )
+
+    def wanted(stem: str) -> bool:
+        return not names or stem in names
 
     def save(fig: Any, stem: str) -> None:
         fig.tight_layout()
-        for ext in ("png", "svg"):
-            path = directory / f"{stem}.{ext}"
-            fig.savefig(path, dpi=120)
-            files.append(path)
-        plt.close(fig)
+        figs[stem] = fig
 
     ms = res.measurements
     wps = list(ms.get("work-precision", {}).get("n3", []))
     if ms.get("work-precision", {}).get("n10"):
         wps.append(ms["work-precision"]["n10"])
-    if wps:
-        fig, axes = plt.subplots(1, len(wps), figsize=(6.5 * len(wps), 5), squeeze=False)
-        for ax, w in zip(axes[0], wps, strict=True):
-            for m, e in w["methods"].items():
+    if wps and wanted("work_precision"):
+        # one panel under another, so that each stays legible at a page's width
+        fig, axes = plt.subplots(len(wps), 1, figsize=(7.5, 5.2 * len(wps)), squeeze=False)
+        for ax, w in zip(axes[:, 0], wps, strict=True):
+            for i, (m, e) in enumerate(w["methods"].items()):
                 if not e.get("available"):
                     continue
+                # SciPy's methods dashed, symrb's solid; twelve methods, twelve colours
+                style = {
+                    "color": plt.get_cmap("tab20")(i % 20),
+                    "marker": "osD^v<>ph*XP"[i % 12],
+                    "ls": "--" if m in ("RK45", "DOP853", "LSODA", "integrate") else "-",
+                }
                 pts = sorted(e["points"], key=lambda q: q["error"])
                 err = [max(q["error"], 1e-17) for q in pts]
                 med = [q["cpu"]["median"] for q in pts]
                 lo = [q["cpu"]["median"] - q["cpu"]["min"] for q in pts]
                 hi = [q["cpu"]["max"] - q["cpu"]["median"] for q in pts]
-                ax.errorbar(err, med, yerr=[lo, hi], marker="o", ms=4, capsize=2, label=m)
+                ax.errorbar(err, med, yerr=[lo, hi], ms=5, capsize=2, label=m, **style)
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.set_xlabel("error: largest entry of M(T) and Q(T) minus the reference")
             ax.set_ylabel("CPU time per run [s] (median, min-max)")
             ax.set_title(f"work-precision, n = {w['n']}, T = {w['T']:g}")
             ax.grid(True, which="major", alpha=0.3)
-            ax.legend(fontsize=8)
+            ax.legend(fontsize=8, ncol=2)
         save(fig, "work_precision")
     lts = ms.get("long-time", [])
-    if lts:
-        fig, axes = plt.subplots(1, len(lts), figsize=(6.5 * len(lts), 5), squeeze=False)
-        for ax, d in zip(axes[0], lts, strict=True):
+    if lts and wanted("long_time"):
+        fig, axes = plt.subplots(len(lts), 1, figsize=(7.5, 4.6 * len(lts)), squeeze=False)
+        for ax, d in zip(axes[:, 0], lts, strict=True):
             N = np.asarray(d["N"], dtype=float)
             for key, vals in d["errors"].items():
                 s = d["slope"][key]
@@ -1380,7 +1394,7 @@ def _plot(res: BenchResult, directory: Path) -> list[Path]:
             ax.legend(fontsize=8)
         save(fig, "long_time")
     thr = ms.get("throughput")
-    if thr:
+    if thr and wanted("throughput"):
         fig, ax = plt.subplots(figsize=(6.5, 5))
         B = [r["batch"] for r in thr["rows"]]
         ax.loglog(B, [r["step_body_steps_per_s"] for r in thr["rows"]], "o-", label="MV step")
@@ -1394,7 +1408,7 @@ def _plot(res: BenchResult, directory: Path) -> list[Path]:
         ax.legend(fontsize=8)
         save(fig, "throughput")
     cost = ms.get("cost-vs-n")
-    if cost:
+    if cost and wanted("cost_vs_n"):
         fig, ax = plt.subplots(figsize=(6.5, 5))
         ns = [r["n"] for r in cost["rows"]]
         ax.loglog(ns, [r["matmul_equivalents"] for r in cost["rows"]], "o-", label="one MV step")
@@ -1403,7 +1417,63 @@ def _plot(res: BenchResult, directory: Path) -> list[Path]:
         ax.set_title("per-step cost against n (single body)")
         ax.legend(fontsize=8)
         save(fig, "cost_vs_n")
+    return figs
+
+
+def _plot(res: BenchResult, directory: Path) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    directory.mkdir(parents=True, exist_ok=True)
+    files: list[Path] = []
+    for stem, fig in _figures(res).items():
+        for ext in ("png", "svg"):
+            path = directory / f"{stem}.{ext}"
+            fig.savefig(path, dpi=120)
+            files.append(path)
+        plt.close(fig)
     return files
+
+
+def load(path: str | os.PathLike[str]) -> BenchResult:
+    """Read a :class:`BenchResult` written by :meth:`BenchResult.write_json` (``--json``).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The JSON file.
+
+    Returns
+    -------
+    BenchResult
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from symrb.bench import load, run
+    >>> res = run(quick=True, sections=["cost-vs-n"], progress=False,
+    ...           config={"cost_n": (3,), "rounds": 1, "min_time": 0.001})
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     f = pathlib.Path(d) / "bench.json"
+    ...     _ = res.write_json(f)
+    ...     again = load(f)
+    >>> again.goals == res.to_dict()["goals"]
+    True
+    """
+    data = json.loads(Path(path).read_text())
+    missing = {"machine", "parameters", "measurements", "goals"} - set(data)
+    if missing:
+        raise InputError(f"path {str(path)!r} is not a symrb bench result: no {sorted(missing)}")
+    return BenchResult(
+        machine=data["machine"],
+        parameters=data["parameters"],
+        measurements=data["measurements"],
+        goals=data["goals"],
+        notes=data.get("notes", []),
+        seconds=float(data.get("seconds", 0.0)),
+    )
 
 
 # ---------------------------------------------------------------------------------------------
