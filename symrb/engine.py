@@ -371,9 +371,9 @@ class MVStepper:
 
         Parameters
         ----------
-        Q : array_like, shape (*batch_shape, n, n)
+        Q : array_like, shape (..., n, n)
             The attitude, in SO(n).
-        M : array_like, shape (*batch_shape, n, n)
+        M : array_like, shape (..., n, n)
             The body momentum (skew, continuous scale).
         h : float
             The (sub-)step, nonzero.
