@@ -380,7 +380,7 @@ class MVStepper:
 
         Returns
         -------
-        Q1, M1 : ndarray, shape (*batch_shape, n, n)
+        Q1, M1 : ndarray, shape (..., n, n)
 
         Raises
         ------
