@@ -558,9 +558,9 @@ def composed_rigid_body_flow(
 
     Each step is :math:`\Phi_{\gamma_s h}\circ\cdots\circ\Phi_{\gamma_1 h}` with the
     coefficients :func:`composition_coefficients` ``(order, kind)`` and the base step
-    :math:`\Phi` (by default one MV-Algorithm 2 step, :class:`MVStep`), approximating
-    :math:`\dot Q = Q\Omega`, :math:`\dot M = [M, \Omega]`, :math:`\Omega = J^{-1}(M)` to
-    order ``order``.
+    :math:`\Phi` (by default one MV-Algorithm 2 step of :class:`symrb.engine.MVStepper`),
+    approximating :math:`\dot Q = Q\Omega`, :math:`\dot M = [M, \Omega]`,
+    :math:`\Omega = J^{-1}(M)` to order ``order``.
 
     Parameters
     ----------
