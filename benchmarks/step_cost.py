@@ -173,7 +173,7 @@ def profile(size: int, h: float) -> dict[str, str]:
         code()
         pr.disable()
         buf = io.StringIO()
-        pstats.Stats(pr, stream=buf).sort_stats("tottime").print_stats(8)
+        pstats.Stats(pr, stream=buf).strip_dirs().sort_stats("tottime").print_stats(8)
         out[name] = buf.getvalue()
     return out
 

@@ -818,7 +818,12 @@ def _machine() -> dict[str, Any]:
         from threadpoolctl import threadpool_info
 
         info["blas"] = [
-            {k: str(d.get(k)) for k in ("internal_api", "version", "num_threads", "filepath")}
+            {  # the library's file name only: no path of the machine in a committed result
+                "internal_api": str(d.get("internal_api")),
+                "version": str(d.get("version")),
+                "num_threads": str(d.get("num_threads")),
+                "library": os.path.basename(str(d.get("filepath"))),
+            }
             for d in threadpool_info()
         ]
     except ImportError:
@@ -1283,6 +1288,7 @@ def run(
         from threadpoolctl import threadpool_limits
 
         limiter = threadpool_limits(limits=1)
+        res.machine["blas_threads_while_timing"] = 1
     except ImportError:
         notes.append(
             "threadpoolctl not installed: BLAS threads not pinned (pip install threadpoolctl)"

@@ -318,3 +318,14 @@ def test_bench_needs_neither_sympy_nor_the_derivations() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_committed_results_carry_no_path_of_the_machine() -> None:
+    """Benchmark results in the repository name files, never where they were on the machine."""
+    import re
+    from pathlib import Path
+
+    results = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    for f in sorted(results.glob("*.json")):
+        hits = re.findall(r"(?:/root/|/home/|/work/|/tmp/|[A-Z]:\\\\)[^\s\"]*", f.read_text())
+        assert not hits, f"{f.name}: {hits[:3]}"
