@@ -142,3 +142,22 @@ def test_inputs_not_mutated() -> None:
     MVStepper(lam).step(Q0, M0, 0.1)
     mv_flow(Q0, M0, lam, 0.1, 5)
     assert np.array_equal(Q0, Qc) and np.array_equal(M0, Mc) and np.array_equal(lam, lc)
+
+
+def test_batch_with_a_lam_per_body() -> None:
+    """n = 3, lam of shape (4, 3) (component vectors of lam in the kernels) against
+    discrete_rigid_body_flow body by body."""
+    Q0, M0, _ = _case(3, 21)
+    lams = np.random.default_rng(2).uniform(0.5, 2.0, (4, 3))
+    got = mv_flow(np.stack([Q0] * 4), np.stack([M0] * 4), lams, 0.05, 300, save_every=100)
+    for i in range(4):
+        ref = symrb.discrete_rigid_body_flow(Q0, M0, lams[i], 0.05, 300, save_every=100)
+        assert np.abs(got.y.Q[:, i] - ref.y.Q).max() < 1e-12
+        assert np.abs(got.y.M[:, i] - ref.y.M).max() < 1e-12
+
+
+def test_n3_one_newton_step_per_step() -> None:
+    """At a fixed h, s = b.x is conserved, so every step after the first is one kernel call."""
+    Q0, M0, lam = _case(3, 4)
+    sol = mv_flow(Q0, M0, lam, 0.05, 500, save_every=500)
+    assert np.all(sol.iterations[1:] == 1)
