@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _compiled
 from . import _validate as v
 from ._generated import discrete_rigid_body as _gen
 from ._results import Trajectory
@@ -65,6 +66,10 @@ _NEWTON_DX = 1e-9
 _MAXITER = 12
 _MAXITER_FP = 60
 _KRON_MAX_N = 6
+_SOLVERS = ("auto", "newton", "fixed-point")
+_FLOW_METHODS = _SOLVERS + ("numpy", "numba")
+#: method="auto" compiles (numba) n = 3 runs of at least this many body-steps
+_NUMBA_MIN_WORK = 20_000
 _snewton3 = _gen.mv3_cayley_s_newton
 _step3 = _gen.mv3_cayley_step
 
@@ -455,8 +460,12 @@ def mv_flow(
         The number of steps, >= 0.
     save_every : int, optional
         Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
-    method : {"auto", "newton", "fixed-point"}, optional
-        The solver for n != 3 (see :class:`MVStepper`).
+    method : {"auto", "newton", "fixed-point", "numpy", "numba"}, optional
+        The solver for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or for
+        n = 3 the backend: ``"numpy"`` the NumPy path (the reference), ``"numba"`` the compiled
+        loop of :mod:`symrb._compiled` (needs numba; the same kernels, results equal to rounding),
+        ``"auto"`` the compiled loop when numba is importable and the run has at least
+        2 * 10^4 body-steps, else NumPy (and Newton for n <= 6, the fixed point above).
 
     Returns
     -------
@@ -488,11 +497,22 @@ def mv_flow(
     """
     h = _check_h(h)
     steps, save_every = _check_steps(steps, save_every)
+    if method not in _FLOW_METHODS:
+        raise InputError(f"method must be one of {', '.join(_FLOW_METHODS)}, got {method!r}")
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     M = 0.5 * (M - np.swapaxes(M, -1, -2))
-    stepper = MVStepper(L, batch, method=method)
+    stepper = MVStepper(L, batch, method=method if method in _SOLVERS else "auto")
     n = L.shape[-1]
     size = stepper.size
+    if method == "numba" and (n != 3 or not _compiled.AVAILABLE):
+        raise InputError(
+            "method 'numba' needs n = 3 and numba installed, got "
+            f"n = {n}, numba {'installed' if _compiled.AVAILABLE else 'not installed'}"
+        )
+    use_numba = n == 3 and (
+        method == "numba"
+        or (method == "auto" and _compiled.AVAILABLE and steps * size >= _NUMBA_MIN_WORK)
+    )
     ks: list[int] = [0]
     Qs: list[Array] = [Q.copy()]
     Ms: list[Array] = [M.copy()]
@@ -527,7 +547,7 @@ def mv_flow(
             # stepper's slow path
             lam_c, tol = stepper._lam_c, stepper._tol_max
             s: Any = None
-            for k in range(1, steps + 1):
+            for k in range(1, (min(steps, 1) if use_numba else steps) + 1):
                 out = None
                 if s is not None:
                     out = _step3(s, h, *m, *lam_c, *q)
@@ -542,6 +562,23 @@ def mv_flow(
                     ks.append(k)
                     save_n3()
             iters *= size
+            if use_numba and steps > 1:
+                k = 1
+                st = np.broadcast_to(np.asarray(s, dtype=float), (size,))
+                mv = np.stack(np.broadcast_arrays(*m), axis=-1).reshape(size, 3)
+                qv = np.stack(np.broadcast_arrays(*q), axis=-1).reshape(size, 9)
+                tv = np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,))
+                ms, qs, fail, extra = _compiled.run_mv3(
+                    st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1
+                )
+                if fail.any():  # the NumPy path has the Riccati fallback and the fold diagnosis
+                    return mv_flow(Q0, M0, lam, h, steps, save_every=save_every, method="numpy")
+                iters[1:] += extra
+                for j, kj in enumerate(range(max(save_every, 2), steps + 1, save_every)):
+                    ks.append(kj)
+                    Qs.append(qs[j].reshape(Q.shape))
+                    Ms.append(_hat_cols([ms[j, :, 0], ms[j, :, 1], ms[j, :, 2]]).reshape(M.shape))
+                k = steps
         else:
             for k in range(1, steps + 1):
                 Qk, Mk = stepper.step(Qk, Mk, h)
