@@ -165,7 +165,7 @@ class _Kron:
 
     def __init__(self, n: int) -> None:
         iu, ju = np.triu_indices(n, 1)
-        self.iu, self.ju = iu, ju
+        self.n, self.iu, self.ju = n, iu, ju
         r_i, r_j = iu[:, None], ju[:, None]
         c_a, c_b = iu[None, :], ju[None, :]
         self.idx = (r_i, r_j, c_a, c_b)
@@ -176,16 +176,25 @@ class _Kron:
             (r_i == c_b).astype(float),
         ]
 
-    def solve(self, P: Array, C: Array) -> Array:
-        """dX skew with P dX + dX P^T = C (C skew), batched."""
+    def matrix(self, P: Array) -> Array:
+        """The matrix of dX -> P dX + dX P^T on the skew unknowns, batched."""
         r_i, r_j, c_a, c_b = self.idx
         m1, m2, m3, m4 = self.masks
-        K = P[:, r_i, c_a] * m1 - P[:, r_i, c_b] * m2 + P[:, r_j, c_b] * m3 - P[:, r_j, c_a] * m4
-        y = np.linalg.solve(K, C[:, self.iu, self.ju][..., None])[..., 0]
-        dX = np.zeros_like(C)
+        K: Array = (
+            P[:, r_i, c_a] * m1 - P[:, r_i, c_b] * m2 + P[:, r_j, c_b] * m3 - P[:, r_j, c_a] * m4
+        )
+        return K
+
+    def unpack(self, y: Any) -> Array:
+        dX = np.zeros(y.shape[:-1] + (self.n, self.n))
         dX[:, self.iu, self.ju] = y
         dX[:, self.ju, self.iu] = -y
         return dX
+
+    def solve(self, P: Array, C: Array) -> Array:
+        """dX skew with P dX + dX P^T = C (C skew), batched."""
+        y = np.linalg.solve(self.matrix(P), C[:, self.iu, self.ju][..., None])[..., 0]
+        return self.unpack(y)
 
 
 def _newton_n(
@@ -316,7 +325,10 @@ class MVStepper:
         self.size = math.prod(batch)
         self.lam = np.ascontiguousarray(np.broadcast_to(L, batch + (n,)).reshape(-1, n))
         self.iterations = 0
-        self._w: object = None  # the warm start, X/h, in the solver's own layout
+        self._w: Any = None  # the warm start, X/h (general n)
+        self._w_prev: Any = None  # the one before, when the last two steps had the same h
+        self._h_prev: tuple[float | None, float] | None = None  # the h of the last two steps
+        self._h_last: float | None = None
         self._eye = np.eye(n)
         self._Wh = 0.5 / (self.lam[:, :, None] + self.lam[:, None, :])
         self._kron = _Kron(n) if n <= 12 else None
@@ -357,15 +369,21 @@ class MVStepper:
     # general n ------------------------------------------------------------------------------
     def _X_n(self, B: Array, h: float) -> Array:
         cold = self._w is None
-        X0: Array = self._Wh * B if cold else h * self._w  # type: ignore[operator,assignment]
+        if cold:
+            X0: Array = self._Wh * B
+        elif self._w_prev is not None and self._h_prev == (h, h):
+            X0 = h * (2.0 * self._w - self._w_prev)  # fixed h: extrapolate the last two steps
+        else:
+            X0 = h * self._w
+        kron = self._kron
         use_newton = self.method == "newton" or (self.method == "auto" and self.n <= _KRON_MAX_N)
-        if use_newton and self._kron is not None:
-            X, it, conv = _newton_n(X0, B, self.lam, self._kron, self._eye)
+        if use_newton and kron is not None:
+            X, it, conv = _newton_n(X0, B, self.lam, kron, self._eye)
         else:
             X, it, conv = _fixed_point_n(X0, B, self.lam, self._Wh)
-            if not conv.all() and self.method != "fixed-point" and self._kron is not None:
+            if not conv.all() and self.method != "fixed-point" and kron is not None:
                 idx = np.nonzero(~conv)[0]
-                X2, it2, conv2 = _newton_n(X0[idx], B[idx], self.lam[idx], self._kron, self._eye)
+                X2, it2, conv2 = _newton_n(X0[idx], B[idx], self.lam[idx], kron, self._eye)
                 X[idx], conv[idx] = X2, conv2
                 it += it2
         if cold:
@@ -375,6 +393,9 @@ class MVStepper:
             U = np.asarray(solve_moser_veselov(B[idx], self.lam[idx]))
             X[idx] = _cay_inverse(U, self._eye)
         self.iterations = it
+        self._w_prev = self._w
+        self._h_prev = (self._h_last, h)
+        self._h_last = h
         self._w = X / h
         return X
 
