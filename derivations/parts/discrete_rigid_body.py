@@ -1102,6 +1102,7 @@ MV3_CAYLEY_NEWTON = Kernel(
     "Arguments may be floats or arrays of one broadcast shape (no conversion).",
     claims=("D10",),
     convert=False,
+    register=False,  # the engine uses mv3_cayley_step; kept as the checked reference
 )
 MV3_CAYLEY_UPDATE = Kernel(
     name="mv3_cayley_update",
@@ -1121,6 +1122,7 @@ MV3_CAYLEY_UPDATE = Kernel(
     "or arrays of one broadcast shape (no conversion).",
     claims=("D10",),
     convert=False,
+    register=False,  # the engine uses mv3_cayley_step; kept as the checked reference
 )
 
 
