@@ -13,10 +13,16 @@ written :math:`U = \operatorname{cay}(X) = (I + X)(I - X)^{-1}` with :math:`X` s
 .. math:: G(X) = 2J(X) - (I - X)\,B\,(I + X) = 0, \qquad B = hM,\; J(X) = \Lambda X + X\Lambda.
 
 * n = 3: with :math:`X = \hat x`, :math:`G` is :math:`2\,I\circ x - b - b\times x - (b\cdot x)x`
-  (:math:`I_1 = \lambda_2+\lambda_3`, cyclic; :math:`b = hm`); Newton's step and the state update
-  are the generated kernels ``mv3_cayley_newton`` and ``mv3_cayley_update`` (claim D10 checks
-  them symbolically), run on Python floats for one body and on structure-of-arrays component
-  vectors for a batch.
+  (:math:`I_1 = \lambda_2+\lambda_3`, cyclic; :math:`b = hm`).  With the scalar
+  :math:`s = b\cdot x` this is the linear system :math:`(D_s - \hat b)x = b`,
+  :math:`D_s = \operatorname{diag}(2I - s)`, so :math:`x = z(s)/\det(s)` (adjugate) and :math:`s`
+  is a root of the quartic :math:`p(s) = s\det(s) - b\cdot z(s)`.  The map conserves
+  :math:`s/h^2` (to rounding), so at a fixed ``h`` the previous step's :math:`s` is the root: a
+  step is one call of the generated kernel ``mv3_cayley_step`` (one Newton step on :math:`p`,
+  whose size is checked, then :math:`x`, :math:`U` and the update :math:`(QU, U^Tm)`); the first
+  step, a changed ``h`` or a rejected check iterate ``mv3_cayley_s_newton`` and check the branch.
+  Claim D10 checks both kernels symbolically.  One body runs on Python floats, a batch on
+  structure-of-arrays component vectors.
 * general n: Newton's linear equation is the Lyapunov equation
   :math:`P\,dX + dX\,P^T = -G`, :math:`P = 2\Lambda - (I - X)B`, solved on the
   :math:`n(n-1)/2` skew unknowns as one batched dense system (``method="newton"``); or the
@@ -25,10 +31,11 @@ written :math:`U = \operatorname{cay}(X) = (I + X)(I - X)^{-1}` with :math:`X` s
   :math:`\|X\|`; ``method="fixed-point"``).  ``"auto"`` uses Newton for n <= 6 and the
   fixed point above, switching to Newton for items where it stalls.
 
-Warm start: each step starts from :math:`X = h\,w` with :math:`w = X/h` of the previous step
-(:math:`w \approx \Omega/2`), so a caller that changes ``h`` between steps (a composition
-method's sub-steps) still starts :math:`O(h^2)` from the solution.  The cold start is
-:math:`X_0 = \tfrac12 W\circ B` (:math:`= \tfrac h2 J^{-1}(M)`); an item whose Newton iteration
+Warm start: each step starts from :math:`X = h\,w` with :math:`w = X/h` of the previous
+step (:math:`w \approx \Omega/2`; for n = 3, :math:`s = h^2\sigma` with :math:`\sigma = s/h^2`), so a
+caller that changes ``h`` between steps (a composition method's sub-steps) still starts close to
+the solution.  The cold start is :math:`X_0 = \tfrac12 W\circ B` (:math:`= \tfrac h2 J^{-1}(M)`;
+n = 3: :math:`s_0 = b\cdot x_0`); an item whose Newton iteration
 fails (near the fold of :math:`J_D`) is solved by :func:`symrb.solve_moser_veselov` (Riccati start),
 which raises :class:`~symrb.errors.OutOfDomainError` past the fold.  Nothing is validated inside
 the step loop: :func:`mv_flow` validates once; :meth:`MVStepper.step` trusts its arguments.
@@ -42,6 +49,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _compiled
 from . import _validate as v
 from ._generated import discrete_rigid_body as _gen
 from ._results import Trajectory
@@ -58,8 +66,12 @@ _NEWTON_DX = 1e-9
 _MAXITER = 12
 _MAXITER_FP = 60
 _KRON_MAX_N = 6
-_newton3 = _gen.mv3_cayley_newton
-_update3 = _gen.mv3_cayley_update
+_SOLVERS = ("auto", "newton", "fixed-point")
+_FLOW_METHODS = _SOLVERS + ("numpy", "numba")
+#: method="auto" compiles (numba) n = 3 runs of at least this many body-steps
+_NUMBA_MIN_WORK = 20_000
+_snewton3 = _gen.mv3_cayley_s_newton
+_step3 = _gen.mv3_cayley_step
 
 
 # ---------------------------------------------------------------------------------------------
@@ -78,53 +90,52 @@ def _cay_inverse3(U: Array) -> Array:
     )
 
 
-def _riccati3(b: Array, lam: Array) -> Array:
-    """Cayley vectors from symrb.solve_moser_veselov (raises past the fold); b (k, 3)."""
+def _riccati3_s(b: Array, lam: Array) -> Array:
+    """s = b.x from symrb.solve_moser_veselov (raises past the fold); b, lam (k, 3)."""
     B = np.zeros(b.shape[:-1] + (3, 3))
     B[..., 2, 1], B[..., 0, 2], B[..., 1, 0] = b[..., 0], b[..., 1], b[..., 2]
     B = B - np.swapaxes(B, -1, -2)
-    return _cay_inverse3(np.asarray(solve_moser_veselov(B, lam)))
+    x = _cay_inverse3(np.asarray(solve_moser_veselov(B, lam)))
+    out: Array = np.einsum("...i,...i->...", b, x)
+    return out
 
 
-def _solve3_single(
-    x1: float, x2: float, x3: float, b1: float, b2: float, b3: float, lam: tuple[float, ...]
-) -> tuple[float, float, float, int]:
-    """Newton on floats from (x1, x2, x3); the Riccati solver when it fails."""
+_I3: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+
+
+def _s_cold(h: Any, m: Any, lam: Any) -> Any:
+    """The first-order root s = sum b_i^2 / (2 I_i) (x = J^{-1}(b)/2, b = h m)."""
     l1, l2, l3 = lam
-    for it in range(1, _MAXITER + 1):
-        d1, d2, d3 = _newton3(x1, x2, x3, b1, b2, b3, l1, l2, l3)
-        x1, x2, x3 = x1 + d1, x2 + d2, x3 + d3
-        err = max(abs(d1), abs(d2), abs(d3))
-        if err <= _NEWTON_DX:
-            return x1, x2, x3, it
-        if not err < 1e3:  # nan or diverging
-            break
-    x = _riccati3(np.array([b1, b2, b3]), np.array(lam))
-    return float(x[0]), float(x[1]), float(x[2]), _MAXITER
+    b1, b2, b3 = h * m[0], h * m[1], h * m[2]
+    return b1 * b1 / (2.0 * (l2 + l3)) + b2 * b2 / (2.0 * (l1 + l3)) + b3 * b3 / (2.0 * (l1 + l2))
 
 
-def _solve3_batch(x: list[Array], b: list[Array], lam: list[Array]) -> tuple[list[Array], int]:
-    """Newton on component vectors (structure of arrays); failed items by the Riccati solver."""
-    x1, x2, x3 = x
-    b1, b2, b3 = b
-    l1, l2, l3 = lam
-    for it in range(1, _MAXITER + 1):
-        d1, d2, d3 = _newton3(x1, x2, x3, b1, b2, b3, l1, l2, l3)
-        x1, x2, x3 = x1 + d1, x2 + d2, x3 + d3
-        err = max(np.abs(d1).max(), np.abs(d2).max(), np.abs(d3).max())
-        if err <= _NEWTON_DX:
-            return [x1, x2, x3], it
-        if not err < 1e3:
+def _solve_s3(s: Any, h: float, m: Any, lam: Any, tol: Any, *, check: bool) -> tuple[Any, int]:
+    """Newton on the quartic p(s) (floats or arrays) from s until |ds| <= tol; then, when
+    ``check``, every item whose U is off the branch through I, and every item not converged,
+    is solved by symrb.solve_moser_veselov (raises past the fold)."""
+    ds: Any = np.inf
+    it = 0
+    for it in range(1, _MAXITER + 1):  # noqa: B007
+        s, ds = _snewton3(s, h, *m, *lam)
+        if np.all(np.abs(ds) <= tol):
             break
-    # per item: redo the failed ones with the Riccati start
-    X = np.stack([x1, x2, x3], axis=-1)
-    D = np.stack([d1, d2, d3], axis=-1)
-    bad = ~(np.abs(D).max(axis=-1) <= _NEWTON_DX)
-    Bm = np.stack(b, axis=-1)
-    L = np.stack(np.broadcast_arrays(l1, l2, l3), axis=-1)
-    L = np.broadcast_to(L, Bm.shape)
-    X[bad] = _riccati3(Bm[bad], L[bad])
-    return [X[:, 0].copy(), X[:, 1].copy(), X[:, 2].copy()], _MAXITER
+        if not np.all(np.abs(ds) < 1e3):  # nan or diverging
+            break
+    conv = np.abs(ds) <= tol
+    if check:
+        U = np.stack(np.broadcast_arrays(*_step3(s, h, *m, *lam, *_I3)[5:]), axis=-1)
+        U = U.reshape(np.shape(U)[:-1] + (3, 3))
+        L = np.broadcast_to(np.stack(np.broadcast_arrays(*lam), -1), U.shape[:-1])
+        conv = conv & _on_branch(U.reshape(-1, 3, 3), L.reshape(-1, 3)).reshape(np.shape(conv))
+    if not np.all(conv):
+        bad = ~np.atleast_1d(conv)
+        b = h * np.stack(np.broadcast_arrays(*m), axis=-1).reshape(-1, 3)
+        L = np.broadcast_to(np.stack(np.broadcast_arrays(*lam), -1), b.shape)
+        sa = np.array(np.broadcast_to(s, bad.shape), dtype=float)
+        sa[bad] = _riccati3_s(b[bad], L[bad])
+        s = float(sa[0]) if np.ndim(conv) == 0 else sa
+    return s, it
 
 
 def _vee_cols(M: Array) -> list[Array]:
@@ -154,7 +165,7 @@ class _Kron:
 
     def __init__(self, n: int) -> None:
         iu, ju = np.triu_indices(n, 1)
-        self.iu, self.ju = iu, ju
+        self.n, self.iu, self.ju = n, iu, ju
         r_i, r_j = iu[:, None], ju[:, None]
         c_a, c_b = iu[None, :], ju[None, :]
         self.idx = (r_i, r_j, c_a, c_b)
@@ -165,16 +176,25 @@ class _Kron:
             (r_i == c_b).astype(float),
         ]
 
-    def solve(self, P: Array, C: Array) -> Array:
-        """dX skew with P dX + dX P^T = C (C skew), batched."""
+    def matrix(self, P: Array) -> Array:
+        """The matrix of dX -> P dX + dX P^T on the skew unknowns, batched."""
         r_i, r_j, c_a, c_b = self.idx
         m1, m2, m3, m4 = self.masks
-        K = P[:, r_i, c_a] * m1 - P[:, r_i, c_b] * m2 + P[:, r_j, c_b] * m3 - P[:, r_j, c_a] * m4
-        y = np.linalg.solve(K, C[:, self.iu, self.ju][..., None])[..., 0]
-        dX = np.zeros_like(C)
+        K: Array = (
+            P[:, r_i, c_a] * m1 - P[:, r_i, c_b] * m2 + P[:, r_j, c_b] * m3 - P[:, r_j, c_a] * m4
+        )
+        return K
+
+    def unpack(self, y: Any) -> Array:
+        dX = np.zeros(y.shape[:-1] + (self.n, self.n))
         dX[:, self.iu, self.ju] = y
         dX[:, self.ju, self.iu] = -y
         return dX
+
+    def solve(self, P: Array, C: Array) -> Array:
+        """dX skew with P dX + dX P^T = C (C skew), batched."""
+        y = np.linalg.solve(self.matrix(P), C[:, self.iu, self.ju][..., None])[..., 0]
+        return self.unpack(y)
 
 
 def _newton_n(
@@ -230,13 +250,13 @@ def _cay_inverse(U: Array, eye: Array) -> Array:
     return out
 
 
-def _on_branch(X: Array, lam: Array, eye: Array) -> NDArray[np.bool_]:
+def _on_branch(U: Array, lam: Array) -> NDArray[np.bool_]:
     """Every eigenvalue of U Lambda in the open right half-plane (the branch through I)."""
-    UL = _cay(X, eye) * lam[:, None, :]
+    UL = U * lam[:, None, :]
     S = 0.5 * (UL + np.swapaxes(UL, -1, -2))
     try:
         np.linalg.cholesky(S)  # a positive definite symmetric part suffices
-        return np.ones(X.shape[0], dtype=bool)
+        return np.ones(U.shape[0], dtype=bool)
     except np.linalg.LinAlgError:
         return np.linalg.eigvals(UL).real.min(axis=-1) > 0
 
@@ -305,64 +325,77 @@ class MVStepper:
         self.size = math.prod(batch)
         self.lam = np.ascontiguousarray(np.broadcast_to(L, batch + (n,)).reshape(-1, n))
         self.iterations = 0
-        self._w: object = None  # the warm start, X/h, in the solver's own layout
+        self._w: Any = None  # the warm start, X/h (general n)
+        self._w_prev: Any = None  # the one before, when the last two steps had the same h
+        self._h_prev: tuple[float | None, float] | None = None  # the h of the last two steps
+        self._h_last: float | None = None
         self._eye = np.eye(n)
         self._Wh = 0.5 / (self.lam[:, :, None] + self.lam[:, None, :])
         self._kron = _Kron(n) if n <= 12 else None
+        self._sigma: Any = None  # n = 3: the warm start s/h^2 (s/h^2 is conserved)
         if n == 3:
-            self._lam_f = tuple(float(x) for x in self.lam[0])
-            self._lam_c = [np.ascontiguousarray(self.lam[:, i]) for i in range(3)]
+            # floats when every body has the same lam (scalar arithmetic in the kernels)
+            one = bool(np.all(self.lam == self.lam[:1]))
+            lam_c: Any = (
+                tuple(float(x) for x in self.lam[0])
+                if one
+                else tuple(np.ascontiguousarray(self.lam[:, i]) for i in range(3))
+            )
+            self._lam_c = lam_c
+            # Newton on p stops at |ds| <= 1e-9 min_i 2 I_i: the error left, about ds^2 p''/p',
+            # is far below rounding (s itself is O(|b|^2 / I))
+            tol = 2e-9 * (self.lam.sum(axis=-1) - self.lam.max(axis=-1))
+            self._tol: Any = float(tol[0]) if one else tol
+            self._tol_max = float(np.min(tol))
 
-    # n = 3, one body: Python floats -------------------------------------------------------
-    def _x3_single(self, b: tuple[float, float, float], h: float) -> tuple[float, float, float]:
-        b1, b2, b3 = b
-        if self._w is None:
-            l1, l2, l3 = self._lam_f
-            g = (b1 / (2.0 * (l2 + l3)), b2 / (2.0 * (l1 + l3)), b3 / (2.0 * (l1 + l2)))
-        else:
-            w = self._w
-            assert isinstance(w, tuple)
-            g = (h * w[0], h * w[1], h * w[2])
-        x1, x2, x3, it = _solve3_single(g[0], g[1], g[2], b1, b2, b3, self._lam_f)
+    # n = 3: Python floats for one body, component vectors for a batch --------------------------
+    def _step3(self, h: float, m: Any, q: Any) -> tuple[Any, ...]:
+        """The outputs of mv3_cayley_step, (s, ds, m_next (3), Q_next (9)), at a root s."""
+        lam = self._lam_c
+        cold = self._sigma is None
+        s = _s_cold(h, m, lam) if cold else h * h * self._sigma
+        out = None
+        if not cold:
+            out = _step3(s, h, *m, *lam, *q)
+            it = 1
+        if out is None or not np.max(np.abs(out[1])) <= self._tol_max:
+            s, it = _solve_s3(s, h, m, lam, self._tol, check=True)
+            out = _step3(s, h, *m, *lam, *q)
+            it += 1
+        self._sigma = out[0] / (h * h)
         self.iterations = it
-        self._w = (x1 / h, x2 / h, x3 / h)
-        return x1, x2, x3
-
-    # n = 3, batch: component vectors ------------------------------------------------------
-    def _x3_batch(self, b: list[Array], h: float) -> list[Array]:
-        if self._w is None:
-            l1, l2, l3 = self._lam_c
-            g = [b[0] / (2.0 * (l2 + l3)), b[1] / (2.0 * (l1 + l3)), b[2] / (2.0 * (l1 + l2))]
-        else:
-            w = self._w
-            assert isinstance(w, list)
-            g = [h * w[0], h * w[1], h * w[2]]
-        x, it = _solve3_batch(g, b, self._lam_c)
-        self.iterations = it
-        self._w = [x[0] / h, x[1] / h, x[2] / h]
-        return x
+        return out
 
     # general n ------------------------------------------------------------------------------
     def _X_n(self, B: Array, h: float) -> Array:
         cold = self._w is None
-        X0: Array = self._Wh * B if cold else h * self._w  # type: ignore[operator,assignment]
+        if cold:
+            X0: Array = self._Wh * B
+        elif self._w_prev is not None and self._h_prev == (h, h):
+            X0 = h * (2.0 * self._w - self._w_prev)  # fixed h: extrapolate the last two steps
+        else:
+            X0 = h * self._w
+        kron = self._kron
         use_newton = self.method == "newton" or (self.method == "auto" and self.n <= _KRON_MAX_N)
-        if use_newton and self._kron is not None:
-            X, it, conv = _newton_n(X0, B, self.lam, self._kron, self._eye)
+        if use_newton and kron is not None:
+            X, it, conv = _newton_n(X0, B, self.lam, kron, self._eye)
         else:
             X, it, conv = _fixed_point_n(X0, B, self.lam, self._Wh)
-            if not conv.all() and self.method != "fixed-point" and self._kron is not None:
+            if not conv.all() and self.method != "fixed-point" and kron is not None:
                 idx = np.nonzero(~conv)[0]
-                X2, it2, conv2 = _newton_n(X0[idx], B[idx], self.lam[idx], self._kron, self._eye)
+                X2, it2, conv2 = _newton_n(X0[idx], B[idx], self.lam[idx], kron, self._eye)
                 X[idx], conv[idx] = X2, conv2
                 it += it2
         if cold:
-            conv &= _on_branch(X, self.lam, self._eye)
+            conv &= _on_branch(_cay(X, self._eye), self.lam)
         if not conv.all():
             idx = np.nonzero(~conv)[0]
             U = np.asarray(solve_moser_veselov(B[idx], self.lam[idx]))
             X[idx] = _cay_inverse(U, self._eye)
         self.iterations = it
+        self._w_prev = self._w
+        self._h_prev = (self._h_last, h)
+        self._h_last = h
         self._w = X / h
         return X
 
@@ -394,21 +427,18 @@ class MVStepper:
         if n == 3 and self.size == 1:
             q = Qa.reshape(9).tolist()
             mm = Ma.reshape(9).tolist()
-            m = (mm[7], mm[2], mm[3])
-            x = self._x3_single((h * m[0], h * m[1], h * m[2]), h)
-            out = _update3(*x, *m, *q)
-            m1 = out[:3]
+            out = self._step3(h, (mm[7], mm[2], mm[3]), q)
+            m1 = out[2:5]
             M1 = np.array([[0.0, -m1[2], m1[1]], [m1[2], 0.0, -m1[0]], [-m1[1], m1[0], 0.0]])
-            return np.array(out[3:]).reshape(Qa.shape), M1.reshape(Ma.shape)
+            return np.array(out[5:]).reshape(Qa.shape), M1.reshape(Ma.shape)
         Qf = Qa.reshape(-1, n, n)
         Mf = Ma.reshape(-1, n, n)
         if n == 3:
             mc = _vee_cols(Mf)
             qc = [Qf[:, i, j].copy() for i in range(3) for j in range(3)]
-            xc = self._x3_batch([h * mc[0], h * mc[1], h * mc[2]], h)
-            out = _update3(*xc, *mc, *qc)
-            Q1 = np.stack(out[3:], axis=-1).reshape(Qa.shape)
-            return Q1, _hat_cols(list(out[:3])).reshape(Ma.shape)
+            out = self._step3(h, mc, qc)
+            Q1 = np.stack(out[5:], axis=-1).reshape(Qa.shape)
+            return Q1, _hat_cols(list(out[2:5])).reshape(Ma.shape)
         X = self._X_n(h * Mf, h)
         U = _cay(X, self._eye)
         Ut = np.swapaxes(U, -1, -2)
@@ -451,8 +481,12 @@ def mv_flow(
         The number of steps, >= 0.
     save_every : int, optional
         Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
-    method : {"auto", "newton", "fixed-point"}, optional
-        The solver for n != 3 (see :class:`MVStepper`).
+    method : {"auto", "newton", "fixed-point", "numpy", "numba"}, optional
+        The solver for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or for
+        n = 3 the backend: ``"numpy"`` the NumPy path (the reference), ``"numba"`` the compiled
+        loop of :mod:`symrb._compiled` (needs numba; the same kernels, results equal to rounding),
+        ``"auto"`` the compiled loop when numba is importable and the run has at least
+        2 * 10^4 body-steps, else NumPy (and Newton for n <= 6, the fixed point above).
 
     Returns
     -------
@@ -484,52 +518,91 @@ def mv_flow(
     """
     h = _check_h(h)
     steps, save_every = _check_steps(steps, save_every)
+    if method not in _FLOW_METHODS:
+        raise InputError(f"method must be one of {', '.join(_FLOW_METHODS)}, got {method!r}")
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     M = 0.5 * (M - np.swapaxes(M, -1, -2))
-    stepper = MVStepper(L, batch, method=method)
+    stepper = MVStepper(L, batch, method=method if method in _SOLVERS else "auto")
     n = L.shape[-1]
     size = stepper.size
-    last: dict[str, object] = {}
+    if method == "numba" and (n != 3 or not _compiled.AVAILABLE):
+        raise InputError(
+            "method 'numba' needs n = 3 and numba installed, got "
+            f"n = {n}, numba {'installed' if _compiled.AVAILABLE else 'not installed'}"
+        )
+    use_numba = n == 3 and (
+        method == "numba"
+        or (method == "auto" and _compiled.AVAILABLE and steps * size >= _NUMBA_MIN_WORK)
+    )
     ks: list[int] = [0]
     Qs: list[Array] = [Q.copy()]
     Ms: list[Array] = [M.copy()]
-    iters = np.zeros(steps, dtype=np.int64)
+    iters = np.ones(steps, dtype=np.int64) * (1 if n == 3 else 0)
     failure = ""
     k = 0
-    try:
-        if n == 3 and size == 1:
-            q = tuple(Q.reshape(9).tolist())
+    if n == 3:
+        # the state in the kernels' layout: floats (one body) or component vectors (batch)
+        if size == 1:
+            q: Any = tuple(Q.reshape(9).tolist())
             mm = M.reshape(9).tolist()
-            m = (mm[7], mm[2], mm[3])
-            for k in range(1, steps + 1):
-                x = stepper._x3_single((h * m[0], h * m[1], h * m[2]), h)
-                out = _update3(*x, *m, *q)
-                m, q = out[:3], out[3:]
-                last["s"] = (q, m)
-                iters[k - 1] = stepper.iterations
-                if k % save_every == 0:
-                    ks.append(k)
-                    Qs.append(np.array(q).reshape(Q.shape))
-                    Ms.append(_hat_cols([np.array(c) for c in m]).reshape(M.shape))
-        elif n == 3:
-            Mf, Qf = M.reshape(-1, 3, 3), Q.reshape(-1, 3, 3)
-            mc = _vee_cols(Mf)
-            qc = [Qf[:, i, j].copy() for i in range(3) for j in range(3)]
-            for k in range(1, steps + 1):
-                xc = stepper._x3_batch([h * mc[0], h * mc[1], h * mc[2]], h)
-                out = _update3(*xc, *mc, *qc)
-                mc, qc = list(out[:3]), list(out[3:])
-                last["s"] = (qc, mc)
-                iters[k - 1] = stepper.iterations * size
-                if k % save_every == 0:
-                    ks.append(k)
-                    Qs.append(np.stack(qc, axis=-1).reshape(Q.shape))
-                    Ms.append(_hat_cols(mc).reshape(M.shape))
+            m: Any = (mm[7], mm[2], mm[3])
         else:
-            Qk, Mk = Q, M
+            Mf, Qf = M.reshape(-1, 3, 3), Q.reshape(-1, 3, 3)
+            m = tuple(_vee_cols(Mf))
+            q = tuple(Qf[:, i, j].copy() for i in range(3) for j in range(3))
+
+        def save_n3() -> None:
+            if size == 1:
+                Qs.append(np.array(q).reshape(Q.shape))
+                Ms.append(_hat_cols([np.array(c) for c in m]).reshape(M.shape))
+            else:
+                Qs.append(np.stack(q, axis=-1).reshape(Q.shape))
+                Ms.append(_hat_cols(list(m)).reshape(M.shape))
+
+    Qk, Mk = Q, M
+    try:
+        if n == 3:
+            # fast path: h is fixed and s = b.x is conserved by the map, so the previous step's
+            # s is the root to rounding and one fused kernel call (one Newton step on p, the
+            # update) is the whole step; |ds| > tol (first step, rounding trouble) takes the
+            # stepper's slow path
+            lam_c, tol = stepper._lam_c, stepper._tol_max
+            s: Any = None
+            for k in range(1, (min(steps, 1) if use_numba else steps) + 1):
+                out = None
+                if s is not None:
+                    out = _step3(s, h, *m, *lam_c, *q)
+                    ds = out[1]
+                    if not (abs(ds) if size == 1 else np.abs(ds).max()) <= tol:
+                        out = None
+                if out is None:
+                    out = stepper._step3(h, m, q)
+                    iters[k - 1] = stepper.iterations
+                s, m, q = out[0], out[2:5], out[5:]
+                if k % save_every == 0:
+                    ks.append(k)
+                    save_n3()
+            iters *= size
+            if use_numba and steps > 1:
+                k = 1
+                st = np.broadcast_to(np.asarray(s, dtype=float), (size,))
+                mv = np.stack(np.broadcast_arrays(*m), axis=-1).reshape(size, 3)
+                qv = np.stack(np.broadcast_arrays(*q), axis=-1).reshape(size, 9)
+                tv = np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,))
+                ms, qs, fail, extra = _compiled.run_mv3(
+                    st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1
+                )
+                if fail.any():  # the NumPy path has the Riccati fallback and the fold diagnosis
+                    return mv_flow(Q0, M0, lam, h, steps, save_every=save_every, method="numpy")
+                iters[1:] += extra
+                for j, kj in enumerate(range(max(save_every, 2), steps + 1, save_every)):
+                    ks.append(kj)
+                    Qs.append(qs[j].reshape(Q.shape))
+                    Ms.append(_hat_cols([ms[j, :, 0], ms[j, :, 1], ms[j, :, 2]]).reshape(M.shape))
+                k = steps
+        else:
             for k in range(1, steps + 1):
                 Qk, Mk = stepper.step(Qk, Mk, h)
-                last["s"] = (Qk, Mk)
                 iters[k - 1] = stepper.iterations * size
                 if k % save_every == 0:
                     ks.append(k)
@@ -538,17 +611,13 @@ def mv_flow(
     except (OutOfDomainError, NotConvergedError) as exc:
         failure = f"step {k} of {steps} failed: {exc}"
         k -= 1
-        if ks[-1] != k:
-            Ql: Any
-            Ml: Any
-            Ql, Ml = last["s"]  # type: ignore[misc]
-            if isinstance(Ql, list):  # component vectors
-                Ql, Ml = np.stack(Ql, axis=-1), _hat_cols(Ml)
-            elif isinstance(Ql, tuple):  # floats
-                Ql, Ml = np.array(Ql), _hat_cols([np.array(c) for c in Ml])
+        if ks[-1] != k:  # the state before the failed step
             ks.append(k)
-            Qs.append(np.asarray(Ql).reshape(Q.shape))
-            Ms.append(np.asarray(Ml).reshape(M.shape))
+            if n == 3:
+                save_n3()
+            else:
+                Qs.append(Qk)
+                Ms.append(Mk)
     kk = np.asarray(ks, dtype=np.int64)
     return DiscreteFlowSolution(
         t=kk.astype(np.float64) * h,

@@ -1102,6 +1102,7 @@ MV3_CAYLEY_NEWTON = Kernel(
     "Arguments may be floats or arrays of one broadcast shape (no conversion).",
     claims=("D10",),
     convert=False,
+    register=False,  # the engine uses mv3_cayley_step; kept as the checked reference
 )
 MV3_CAYLEY_UPDATE = Kernel(
     name="mv3_cayley_update",
@@ -1118,6 +1119,87 @@ MV3_CAYLEY_UPDATE = Kernel(
     doc="One Moser-Veselov step of the state given the Cayley vector x of U, n = 3.\n\n"
     "U = cay(hat x) = I + 2 (X + X^2)/(1 + |x|^2), m_next = U^T m (M_{k+1} = U^T M_k U, the\n"
     "third Moser-Veselov equation with Omega_k = U^T), Q_next = Q U.  Arguments may be floats\n"
+    "or arrays of one broadcast shape (no conversion).",
+    claims=("D10",),
+    convert=False,
+    register=False,  # the engine uses mv3_cayley_step; kept as the checked reference
+)
+
+
+# The scalar form.  With s = b.x and D_s = diag(2 I - s), G(x) = 0 reads (D_s - hat b) x = b and
+# s = b.x: x = z(s)/det(s) with z = adj(D_s - hat b) b, det = det(D_s - hat b), and s is a root of
+# the quartic p(s) = s det(s) - b.z(s) (d_i = 2 I_i - s; z_i = b_i (|b|^2 + d_j d_k) +
+# b_j b_k (d_j - d_k), cyclic; b.z = |b|^4 + sum b_i^2 d_j d_k).  The Moser-Veselov map conserves
+# s/h^2 (to rounding; D10's float check), so a step at the previous step's s needs one scalar
+# Newton step on p, whose size the caller checks: mv3_cayley_step fuses that Newton step, x and
+# the state update; mv3_cayley_s_newton is the bare Newton step (cold starts, changed h).
+_CS, _CH = sp.Symbol("s", real=True), sp.Symbol("h", real=True)
+
+
+def _cayley3_scalar_form(s: sp.Expr, b: sp.Matrix, lam: sp.Matrix) -> tuple[Any, ...]:
+    """(z, det, p) of the scalar form at s (unexpanded, for CSE)."""
+    c = [2 * e for e in _cayley3_inertia(lam)]
+    d = [ci - s for ci in c]
+    bb = b.dot(b)
+    sq = [bi**2 for bi in b]
+    cyc = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+    z = sp.Matrix([b[i] * (bb + d[j] * d[k]) + b[j] * b[k] * (c[j] - c[k]) for i, j, k in cyc])
+    det = d[0] * d[1] * d[2] + sq[0] * d[0] + sq[1] * d[1] + sq[2] * d[2]
+    bz = bb**2 + sum(sq[i] * d[j] * d[k] for i, j, k in cyc)
+    return z, det, s * det - bz
+
+
+def _cayley3_s_newton(s: sp.Expr, b: sp.Matrix, lam: sp.Matrix) -> sp.Expr:
+    """-p(s)/p'(s), p' by SymPy's derivative of the unexpanded p."""
+    p = _cayley3_scalar_form(s, b, lam)[2]
+    return -p / sp.diff(p, s)
+
+
+_CB_H = _CH * _CM
+_CDS = _cayley3_s_newton(_CS, _CB_H, _CL)
+_CS1 = _CS + _CDS
+_CZ1, _CDET1, _ = _cayley3_scalar_form(_CS1, _CB_H, _CL)
+
+
+def _cayley3_matrix_zd(z: sp.Matrix, det: sp.Expr) -> sp.Matrix:
+    """cay(hat(z/det)) = I + 2 (det Z + z z^T - |z|^2 I)/(det^2 + |z|^2), Z = hat z (no
+    division of z by det; the evidence compares it with _cayley3_matrix)."""
+    zz = z.dot(z)
+    return sp.eye(3) + 2 * (det * hat3(z) + z * z.T - zz * sp.eye(3)) / (det**2 + zz)
+
+
+_CU1 = _cayley3_matrix_zd(_CZ1, _CDET1)
+_SARGS = [Arg("s", _SCALAR3, "the scalar unknown s = b.x (b = h m, x the Cayley vector)"),
+          Arg("h", _SCALAR3, "the step")]  # fmt: skip
+_MARGS = [Arg(f"m{i}", _SCALAR3, f"body momentum, component {i}") for i in (1, 2, 3)]
+_LARGS = [Arg(f"l{i}", _SCALAR3, f"lam_{i}, diagonal of Lambda") for i in (1, 2, 3)]
+_QARGS = [Arg(f"q{i}{j}", _SCALAR3, f"attitude Q, entry ({i}, {j})") for i in (1, 2, 3)
+          for j in (1, 2, 3)]  # fmt: skip
+MV3_CAYLEY_S_NEWTON = Kernel(
+    name="mv3_cayley_s_newton",
+    target="discrete_rigid_body",
+    args=_SARGS + _MARGS + _LARGS,
+    outputs={"s_next": _CS1, "ds": _CDS},
+    doc="Newton step for the scalar form of the second Moser-Veselov equation, n = 3.\n\n"
+    "b = h m, d_i = 2 I_i - s (I_1 = l2 + l3, cyclic), det = d1 d2 d3 + sum b_i^2 d_i,\n"
+    "p(s) = s det - |b|^4 - sum b_i^2 d_j d_k; returns s + ds and ds = -p(s)/p'(s).  At a root\n"
+    "s of p,"
+    " x = adj(D_s - hat b) b / det solves G(x) = 0 (mv3_cayley_newton).  Arguments may be\n"
+    "floats or arrays of one broadcast shape (no conversion).",
+    claims=("D10",),
+    convert=False,
+)
+MV3_CAYLEY_STEP = Kernel(
+    name="mv3_cayley_step",
+    target="discrete_rigid_body",
+    args=_SARGS + _MARGS + _LARGS + _QARGS,
+    outputs={"s_next": _CS1, "ds": _CDS}
+    | {f"m{i + 1}_next": (_CU1.T * _CM)[i] for i in range(3)}
+    | {f"q{i + 1}{j + 1}_next": (_CQ * _CU1)[i, j] for i in range(3) for j in range(3)},
+    doc="One Moser-Veselov step, n = 3: one Newton step on the scalar form, then the update.\n\n"
+    "s_next = s + ds with ds of mv3_cayley_s_newton; x = adj(D - hat b) b / det at s_next,\n"
+    "U = cay(hat x), m_next = U^T m, Q_next = Q U (mv3_cayley_update).  The caller accepts the\n"
+    "step when |ds| is small enough (s_next then a root to rounding).  Arguments may be floats\n"
     "or arrays of one broadcast shape (no conversion).",
     claims=("D10",),
     convert=False,
@@ -1148,6 +1230,75 @@ def d10_cayley_equation_n3() -> sp.Expr:
     q_next = sp.Matrix(3, 3, lambda i, j: MV3_CAYLEY_UPDATE[f"q{i + 1}{j + 1}_next"])
     r += residual(sp.simplify(q_next - _CQ * U))
     return r
+
+
+@D10.check(Level.SYMBOLIC_FIXED_N)
+def d10_cayley_scalar_form_n3() -> sp.Expr:
+    """n = 3, the scalar form (symbolic): (D_s - hat b) z = det b with D_s = diag(2 I - s), and
+    det^2 G(z/det) = p(s) z (G(z t) as a polynomial in t), so x = z/det solves G(x) = 0 exactly
+    when p(s) = 0; the emitted Newton steps (mv3_cayley_s_newton, the ds of mv3_cayley_step) are
+    -p/p' at b = h m with p' SymPy's derivative of p, s_next = s + ds; and the emitted update's
+    cay(hat(z/det)) written without the division equals cay(hat x) of mv3_cayley_update."""
+    s, b, lam = _CS, _CB, _CL
+    z, det, p = _cayley3_scalar_form(s, b, lam)
+    Ds = sp.diag(*[2 * e - s for e in _cayley3_inertia(lam)])
+    r = residual((Ds - hat3(b)) * z - det * b)
+    t = sp.Symbol("t")
+    for i, Gi in enumerate(_cayley3_G(z * t, b, lam)):
+        g0, g1, g2 = (sp.expand(Gi).coeff(t, k) for k in range(3))
+        r += residual(det**2 * g0 + det * g1 + g2 - p * z[i])
+    p_h = _cayley3_scalar_form(s, _CB_H, lam)[2]
+    r += residual(p_h - p.xreplace({b[i]: _CB_H[i] for i in range(3)}))
+    for k in (MV3_CAYLEY_S_NEWTON, MV3_CAYLEY_STEP):
+        r += 0 if k["ds"] == -p_h / sp.diff(p_h, s) else 1  # the emitted tree itself
+        r += residual(k["s_next"] - s - k["ds"])
+    zs, dd = sym_vector("z", 3), sp.Symbol("det", positive=True)
+    diff = _cayley3_matrix_zd(zs, dd) - _cayley3_matrix(zs / dd)
+    return r + residual(diff.applyfunc(lambda e: sp.numer(sp.together(e))))
+
+
+@D10.check(Level.EXACT_RATIONAL)
+def d10_cayley_step_composition_n3() -> sp.Expr:
+    """n = 3 (exact rationals, 4 random points): mv3_cayley_step's m_next and Q_next are the
+    checked mv3_cayley_update at x = z(s_next)/det(s_next) (the scalar form's x, which
+    d10_cayley_scalar_form_n3 shows solves G(x) = 0 at a root of p)."""
+    rng = np.random.default_rng(10)
+    total = sp.Integer(0)
+    for _ in range(4):
+        vals = {_CS: sp.Rational(int(rng.integers(1, 50)), 1000), _CH: sp.Rational(1, 10)}
+        vals |= {_CM[i]: sp.Rational(int(rng.integers(-20, 21)), 10) for i in range(3)}
+        vals |= {_CL[i]: sp.Rational(int(rng.integers(5, 20)), 10) for i in range(3)}
+        vals |= {_CQ[i, j]: sp.Rational(int(rng.integers(-9, 10)), 7) for i in range(3)
+                 for j in range(3)}  # fmt: skip
+        s1 = MV3_CAYLEY_STEP["s_next"].xreplace(vals)
+        z, det, _ = _cayley3_scalar_form(s1, _CB_H.xreplace(vals), _CL.xreplace(vals))
+        x = z / det
+        upd = {_CX[i]: x[i] for i in range(3)} | vals
+        for i in range(3):
+            total += abs(MV3_CAYLEY_STEP[f"m{i + 1}_next"].xreplace(vals)
+                         - MV3_CAYLEY_UPDATE[f"m{i + 1}_next"].xreplace(upd))  # fmt: skip
+            for j in range(3):
+                key = f"q{i + 1}{j + 1}_next"
+                total += abs(MV3_CAYLEY_STEP[key].xreplace(vals)
+                             - MV3_CAYLEY_UPDATE[key].xreplace(upd))  # fmt: skip
+    return total
+
+
+@D10.check(Level.FLOAT64, tol=1e-12)
+def d10_cayley_s_conserved() -> float:
+    """The scalar s_k = h m_k . x_k (x_k the Cayley vector of U_k = Q_k^T Q_{k+1}) along 2000
+    steps of symrb.discrete_rigid_body_flow (U-parametrised solver, n = 3, h = 0.05) is constant:
+    max |s_k/s_0 - 1| (what lets symrb.engine take one Newton step on p a step)."""
+    import symrb
+
+    M0 = ref.hat(np.array([0.9, -0.5, 0.7]))
+    sol = symrb.discrete_rigid_body_flow(np.eye(3), M0, _LAM3, 0.05, 2000)
+    Q, M = sol.y.Q, sol.y.M[:-1]
+    U = np.swapaxes(Q[:-1], -1, -2) @ Q[1:]
+    x = np.stack([U[:, 2, 1] - U[:, 1, 2], U[:, 0, 2] - U[:, 2, 0], U[:, 1, 0] - U[:, 0, 1]], -1)
+    x /= 1.0 + np.trace(U, axis1=-2, axis2=-1)[:, None]
+    s = 0.05 * np.einsum("ki,ki->k", np.stack([M[:, 2, 1], M[:, 0, 2], M[:, 1, 0]], -1), x)
+    return float(np.abs(s / s[0] - 1).max())
 
 
 @D10.check(Level.FLOAT64, tol=1e-13)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy
 
-__all__ = ["jd", "mv_momentum", "mv_transport", "mv3_cayley_newton", "mv3_cayley_update"]
+__all__ = ["jd", "mv_momentum", "mv_transport", "mv3_cayley_s_newton", "mv3_cayley_step"]
 
 
 def jd(U, lam):
@@ -92,28 +92,26 @@ def mv_transport(Omega, M):
     return (Omega @ M) @ numpy.swapaxes(Omega, -1, -2)
 
 
-def mv3_cayley_newton(x1, x2, x3, b1, b2, b3, l1, l2, l3):
-    r"""Newton step for the second Moser-Veselov equation in Cayley coordinates, n = 3.
+def mv3_cayley_s_newton(s, h, m1, m2, m3, l1, l2, l3):
+    r"""Newton step for the scalar form of the second Moser-Veselov equation, n = 3.
 
-    With U = cay(hat x) = (I + X)(I - X)^{-1}, J_D(U) = hat(b) is equivalent to
-    G(x) = 2 I o x - b - b x x - (b.x) x = 0 (I_1 = l2 + l3, cyclic); returns the Newton step
-    dx = -G'(x)^{-1} G(x), G'(x) = 2 diag(I) - (b.x) Id - hat(b) - x b^T, by the adjugate.
-    Arguments may be floats or arrays of one broadcast shape (no conversion).
+    b = h m, d_i = 2 I_i - s (I_1 = l2 + l3, cyclic), det = d1 d2 d3 + sum b_i^2 d_i,
+    p(s) = s det - |b|^4 - sum b_i^2 d_j d_k; returns s + ds and ds = -p(s)/p'(s).  At a root
+    s of p, x = adj(D_s - hat b) b / det solves G(x) = 0 (mv3_cayley_newton).  Arguments may be
+    floats or arrays of one broadcast shape (no conversion).
 
     Parameters
     ----------
-    x1 : array, shape (...)
-        Cayley vector, component 1
-    x2 : array, shape (...)
-        Cayley vector, component 2
-    x3 : array, shape (...)
-        Cayley vector, component 3
-    b1 : array, shape (...)
-        discrete momentum h m, component 1
-    b2 : array, shape (...)
-        discrete momentum h m, component 2
-    b3 : array, shape (...)
-        discrete momentum h m, component 3
+    s : array, shape (...)
+        the scalar unknown s = b.x (b = h m, x the Cayley vector)
+    h : array, shape (...)
+        the step
+    m1 : array, shape (...)
+        body momentum, component 1
+    m2 : array, shape (...)
+        body momentum, component 2
+    m3 : array, shape (...)
+        body momentum, component 3
     l1 : array, shape (...)
         lam_1, diagonal of Lambda
     l2 : array, shape (...)
@@ -123,77 +121,71 @@ def mv3_cayley_newton(x1, x2, x3, b1, b2, b3, l1, l2, l3):
 
     Returns
     -------
-    dx1 : array
-    dx2 : array
-    dx3 : array
+    s_next : array
+    ds : array
 
     Notes
     -----
     Checked by claim D10 (``symrb verify D10``);
     expressions from ``derivations.parts.discrete_rigid_body``.
 
-    Total ops per batch item: 146 scalar.
+    Total ops per batch item: 62 scalar.
     """
-    t0 = b2 * x1
-    t1 = b3 - t0
-    t2 = b1 - b3 * x2
-    t3 = b1 * x3
-    t4 = b2 - t3
-    t5 = b1 * x2 + b3
-    t6 = -t5
-    t7 = -2 * l1
-    t8 = -2 * l2
-    t9 = b3 * x3
-    t10 = b1 * x1
-    t11 = b2 * x2
-    t12 = t10 + t11
-    t13 = -t12 - t7 - t8 - 2 * t9
-    t14 = -t13 * t6 + t2 * t4
-    t15 = b2 + b3 * x1
-    t16 = -t15
-    t17 = b2 * x3
-    t18 = -b1 - t17
-    t19 = -2 * l3 + t9
-    t20 = -t10 - 2 * t11 - t19 - t7
-    t21 = t18 * t6 - t20 * t4
-    t22 = t13 * t20 - t18 * t2
-    t23 = -2 * t10 - t11 - t19 - t8
-    t24 = 1.0 / (t1 * t14 + t16 * t21 + t22 * t23)
-    t25 = t12 + t9
-    t26 = 2 * l1
-    t27 = 2 * l2
-    t28 = t0 - t25 * x3 - t5 + x3 * (t26 + t27)
-    t29 = 2 * l3
-    t30 = -t15 - t25 * x2 + t3 + x2 * (t26 + t29)
-    t31 = -t17 - t2 - t25 * x1 + x1 * (t27 + t29)
-    return (
-        t24 * (-t22 * t31 - t28 * (t1 * t2 - t16 * t20) - t30 * (-t1 * t13 + t16 * t18)),
-        t24 * (-t14 * t31 - t28 * (t16 * t6 - t2 * t23) - t30 * (t13 * t23 - t16 * t4)),
-        t24 * (-t21 * t31 - t28 * (-t1 * t6 + t20 * t23) - t30 * (t1 * t4 - t18 * t23)),
+    t0 = 2 * l2
+    t1 = -s
+    t2 = 2 * l1 + t1
+    t3 = t0 + t2
+    t4 = 2 * l3
+    t5 = t2 + t4
+    t6 = t3 * t5
+    t7 = t0 + t1 + t4
+    t8 = t3 * t7
+    t9 = t5 * t7
+    t10 = h**2
+    t11 = m1**2 * t10
+    t12 = m2**2 * t10
+    t13 = m3**2 * t10
+    t14 = t11 + t12 + t13
+    t15 = t11 * t7 + t12 * t5 + t13 * t3 + t6 * t7
+    t16 = (-s * t15 + t11 * t6 + t12 * t8 + t13 * t9 + t14**2) / (
+        s * (-t14 - t6 - t8 - t9)
+        + t11 * t3
+        + t11 * t5
+        + t12 * t3
+        + t12 * t7
+        + t13 * t5
+        + t13 * t7
+        + t15
     )
+    return (s + t16, t16)
 
 
-def mv3_cayley_update(x1, x2, x3, m1, m2, m3, q11, q12, q13, q21, q22, q23, q31, q32, q33):
-    r"""One Moser-Veselov step of the state given the Cayley vector x of U, n = 3.
+def mv3_cayley_step(s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, q31, q32, q33):
+    r"""One Moser-Veselov step, n = 3: one Newton step on the scalar form, then the update.
 
-    U = cay(hat x) = I + 2 (X + X^2)/(1 + |x|^2), m_next = U^T m (M_{k+1} = U^T M_k U, the
-    third Moser-Veselov equation with Omega_k = U^T), Q_next = Q U.  Arguments may be floats
+    s_next = s + ds with ds of mv3_cayley_s_newton; x = adj(D - hat b) b / det at s_next,
+    U = cay(hat x), m_next = U^T m, Q_next = Q U (mv3_cayley_update).  The caller accepts the
+    step when |ds| is small enough (s_next then a root to rounding).  Arguments may be floats
     or arrays of one broadcast shape (no conversion).
 
     Parameters
     ----------
-    x1 : array, shape (...)
-        Cayley vector, component 1
-    x2 : array, shape (...)
-        Cayley vector, component 2
-    x3 : array, shape (...)
-        Cayley vector, component 3
+    s : array, shape (...)
+        the scalar unknown s = b.x (b = h m, x the Cayley vector)
+    h : array, shape (...)
+        the step
     m1 : array, shape (...)
         body momentum, component 1
     m2 : array, shape (...)
         body momentum, component 2
     m3 : array, shape (...)
         body momentum, component 3
+    l1 : array, shape (...)
+        lam_1, diagonal of Lambda
+    l2 : array, shape (...)
+        lam_2, diagonal of Lambda
+    l3 : array, shape (...)
+        lam_3, diagonal of Lambda
     q11 : array, shape (...)
         attitude Q, entry (1, 1)
     q12 : array, shape (...)
@@ -215,6 +207,8 @@ def mv3_cayley_update(x1, x2, x3, m1, m2, m3, q11, q12, q13, q21, q22, q23, q31,
 
     Returns
     -------
+    s_next : array
+    ds : array
     m1_next : array
     m2_next : array
     m3_next : array
@@ -233,52 +227,92 @@ def mv3_cayley_update(x1, x2, x3, m1, m2, m3, q11, q12, q13, q21, q22, q23, q31,
     Checked by claim D10 (``symrb verify D10``);
     expressions from ``derivations.parts.discrete_rigid_body``.
 
-    Total ops per batch item: 114 scalar.
+    Total ops per batch item: 222 scalar.
     """
-    t0 = x1**2
-    t1 = x2**2
-    t2 = x3**2
-    t3 = 1.0 / (t0 + t1 + t2 + 1)
-    t4 = 2 * t1
-    t5 = 2 * t2
-    t6 = t3 * (-t4 - t5) + 1
-    t7 = 2 * x3
-    t8 = 2 * x2
-    t9 = t8 * x1
-    t10 = t7 + t9
-    t11 = m2 * t3
-    t12 = t7 * x1
-    t13 = t12 - t8
-    t14 = m3 * t3
-    t15 = 2 * t0
-    t16 = t3 * (-t15 - t5) + 1
-    t17 = -t7 + t9
-    t18 = m1 * t3
-    t19 = 2 * x1
-    t20 = t19 + t7 * x2
-    t21 = t3 * (-t15 - t4) + 1
-    t22 = t12 + t8
-    t23 = -t19 + 2 * x2 * x3
-    t24 = q12 * t3
-    t25 = q13 * t3
-    t26 = q11 * t3
-    t27 = q22 * t3
-    t28 = q23 * t3
-    t29 = q21 * t3
-    t30 = q32 * t3
-    t31 = q33 * t3
-    t32 = q31 * t3
+    t0 = 2 * l2
+    t1 = 2 * l1
+    t2 = -s
+    t3 = t1 + t2
+    t4 = t0 + t3
+    t5 = 2 * l3
+    t6 = t3 + t5
+    t7 = t4 * t6
+    t8 = t0 + t2 + t5
+    t9 = t4 * t8
+    t10 = t6 * t8
+    t11 = h**2
+    t12 = m1**2 * t11
+    t13 = m2**2 * t11
+    t14 = m3**2 * t11
+    t15 = t12 + t13 + t14
+    t16 = t12 * t8 + t13 * t6 + t14 * t4 + t7 * t8
+    t17 = (-s * t16 + t10 * t14 + t12 * t7 + t13 * t9 + t15**2) / (
+        s * (-t10 - t15 - t7 - t9)
+        + t12 * t4
+        + t12 * t6
+        + t13 * t4
+        + t13 * t8
+        + t14 * t6
+        + t14 * t8
+        + t16
+    )
+    t18 = -t17
+    t19 = t18 + t4
+    t20 = t18 + t6
+    t21 = t19 * t20
+    t22 = -t5
+    t23 = m3 * t11
+    t24 = h * m1 * (t15 + t21) + m2 * t23 * (-t0 - t22)
+    t25 = t24**2
+    t26 = t18 + t8
+    t27 = h * m2 * (t15 + t19 * t26) + m1 * t23 * (t1 + t22)
+    t28 = t27**2
+    t29 = h * m3 * (t15 + t20 * t26) + m1 * m2 * t11 * (t0 - t1)
+    t30 = t29**2
+    t31 = t12 * t26 + t13 * t20 + t14 * t19 + t21 * t26
+    t32 = 1.0 / (t25 + t28 + t30 + t31**2)
+    t33 = 2 * t28
+    t34 = 2 * t30
+    t35 = t32 * (-t33 - t34) + 1
+    t36 = 2 * t24
+    t37 = t27 * t36
+    t38 = 2 * t31
+    t39 = t29 * t38 + t37
+    t40 = m2 * t32
+    t41 = t29 * t36
+    t42 = -t27 * t38 + t41
+    t43 = m3 * t32
+    t44 = 2 * t25
+    t45 = t32 * (-t34 - t44) + 1
+    t46 = -t29 * t38 + t37
+    t47 = m1 * t32
+    t48 = 2 * t27 * t29
+    t49 = t31 * t36 + t48
+    t50 = t32 * (-t33 - t44) + 1
+    t51 = t27 * t38 + t41
+    t52 = -t24 * t38 + t48
+    t53 = q12 * t32
+    t54 = q13 * t32
+    t55 = q11 * t32
+    t56 = q22 * t32
+    t57 = q23 * t32
+    t58 = q21 * t32
+    t59 = q32 * t32
+    t60 = q33 * t32
+    t61 = q31 * t32
     return (
-        m1 * t6 + t10 * t11 + t13 * t14,
-        m2 * t16 + t14 * t20 + t17 * t18,
-        m3 * t21 + t11 * t23 + t18 * t22,
-        q11 * t6 + t10 * t24 + t13 * t25,
-        q12 * t16 + t17 * t26 + t20 * t25,
-        q13 * t21 + t22 * t26 + t23 * t24,
-        q21 * t6 + t10 * t27 + t13 * t28,
-        q22 * t16 + t17 * t29 + t20 * t28,
-        q23 * t21 + t22 * t29 + t23 * t27,
-        q31 * t6 + t10 * t30 + t13 * t31,
-        q32 * t16 + t17 * t32 + t20 * t31,
-        q33 * t21 + t22 * t32 + t23 * t30,
+        s + t17,
+        t17,
+        m1 * t35 + t39 * t40 + t42 * t43,
+        m2 * t45 + t43 * t49 + t46 * t47,
+        m3 * t50 + t40 * t52 + t47 * t51,
+        q11 * t35 + t39 * t53 + t42 * t54,
+        q12 * t45 + t46 * t55 + t49 * t54,
+        q13 * t50 + t51 * t55 + t52 * t53,
+        q21 * t35 + t39 * t56 + t42 * t57,
+        q22 * t45 + t46 * t58 + t49 * t57,
+        q23 * t50 + t51 * t58 + t52 * t56,
+        q31 * t35 + t39 * t59 + t42 * t60,
+        q32 * t45 + t46 * t61 + t49 * t60,
+        q33 * t50 + t51 * t61 + t52 * t59,
     )
