@@ -19,6 +19,9 @@ implementation instead of agreeing with it:
 from __future__ import annotations
 
 import numpy as np
+from fractions import Fraction
+from typing import Any
+
 from numpy.typing import NDArray
 from scipy.special import ellipj
 
@@ -38,6 +41,9 @@ __all__ = [
     "random_rotation",
     "random_skew",
     "MPDiscrete",
+    "Series",
+    "series_eval",
+    "rigid_body_taylor",
 ]
 
 
@@ -280,3 +286,141 @@ class MPDiscrete:
         with self.mp.workdps(self.dps):
             d = a - self.matrix(b)
             return float(np.max([float(abs(d[i, j])) for i in range(3) for j in range(3)]))
+
+
+# ---------------------------------------------------------------------------------------------
+# truncated power series with exact rational coefficients
+
+
+class Series:
+    """A power series :math:`\\sum_{k<N} a_k h^k` truncated after ``N`` terms, with
+    :class:`fractions.Fraction` coefficients; ``+ - * /`` and integer powers (the inverse needs
+    :math:`a_0 \\ne 0`)."""
+
+    __slots__ = ("c",)
+
+    def __init__(self, coeffs: list[Fraction]) -> None:
+        self.c = coeffs
+
+    @classmethod
+    def const(cls, value: Any, N: int) -> Series:
+        return cls([Fraction(value)] + [Fraction(0)] * (N - 1))
+
+    @classmethod
+    def var(cls, N: int) -> Series:
+        return cls([Fraction(0), Fraction(1)] + [Fraction(0)] * (N - 2))
+
+    def _lift(self, other: Any) -> Series:
+        return other if isinstance(other, Series) else Series.const(other, len(self.c))
+
+    def __add__(self, other: Any) -> Series:
+        o = self._lift(other)
+        return Series([a + b for a, b in zip(self.c, o.c, strict=True)])
+
+    __radd__ = __add__
+
+    def __neg__(self) -> Series:
+        return Series([-a for a in self.c])
+
+    def __sub__(self, other: Any) -> Series:
+        return self + (-self._lift(other))
+
+    def __rsub__(self, other: Any) -> Series:
+        return self._lift(other) - self
+
+    def __mul__(self, other: Any) -> Series:
+        o, N = self._lift(other), len(self.c)
+        out = [Fraction(0)] * N
+        for i, a in enumerate(self.c):
+            if a:
+                for j in range(N - i):
+                    if o.c[j]:
+                        out[i + j] += a * o.c[j]
+        return Series(out)
+
+    __rmul__ = __mul__
+
+    def inverse(self) -> Series:
+        a, N = self.c, len(self.c)
+        if a[0] == 0:
+            raise ZeroDivisionError("series with a zero constant term has no inverse")
+        inv = [Fraction(0)] * N
+        inv[0] = 1 / a[0]
+        for k in range(1, N):
+            inv[k] = -sum((a[j] * inv[k - j] for j in range(1, k + 1)), Fraction(0)) / a[0]
+        return Series(inv)
+
+    def __truediv__(self, other: Any) -> Series:
+        return self * self._lift(other).inverse()
+
+    def __rtruediv__(self, other: Any) -> Series:
+        return self._lift(other) * self.inverse()
+
+    def __pow__(self, k: int) -> Series:
+        if k < 0:
+            return self.inverse() ** (-k)
+        out, base = Series.const(1, len(self.c)), self
+        while k:
+            if k & 1:
+                out = out * base
+            base, k = base * base, k >> 1
+        return out
+
+    def integral(self) -> Series:
+        """The antiderivative vanishing at 0 (truncated)."""
+        return Series([Fraction(0)] + [a / (k + 1) for k, a in enumerate(self.c[:-1])])
+
+
+def series_eval(expr: Any, values: dict[Any, Any], N: int) -> Series:
+    """Evaluate a SymPy expression built from ``+``, ``*`` and integer powers of symbols and
+    rational numbers on :class:`Series` (``values``: symbol -> Series or number), memoised on
+    the expression's subtrees (shared subexpressions are evaluated once)."""
+    import sympy as sp
+
+    memo: dict[Any, Series] = {}
+
+    def go(e: Any) -> Series:
+        if e in memo:
+            return memo[e]
+        if e in values:
+            v = values[e]
+            r = v if isinstance(v, Series) else Series.const(v, N)
+        elif e.is_Rational:
+            r = Series.const(Fraction(int(e.p), int(e.q)), N)
+        elif isinstance(e, sp.Add):
+            r = go(e.args[0])
+            for a in e.args[1:]:
+                r = r + go(a)
+        elif isinstance(e, sp.Mul):
+            r = go(e.args[0])
+            for a in e.args[1:]:
+                r = r * go(a)
+        elif isinstance(e, sp.Pow) and e.exp.is_Integer:
+            r = go(e.base) ** int(e.exp)
+        else:
+            raise TypeError(f"series_eval: unsupported node {type(e).__name__}: {e}")
+        memo[e] = r
+        return r
+
+    return go(expr)
+
+
+def rigid_body_taylor(
+    inertia: list[Fraction], m0: list[Fraction], N: int
+) -> tuple[list[Series], list[list[Series]]]:
+    r"""The Taylor series in :math:`t` of the free rigid body from :math:`m(0) = m_0`,
+    :math:`Q(0) = I`: :math:`\dot m = m\times\omega`, :math:`\dot Q = Q\hat\omega`,
+    :math:`\omega_i = m_i/I_i`, by Picard iteration (``N`` iterations fix ``N`` coefficients).
+    Returns (m as 3 series, Q as 3 x 3 series)."""
+    m = [Series.const(x, N) for x in m0]
+    Q = [[Series.const(int(i == j), N) for j in range(3)] for i in range(3)]
+    for _ in range(N):
+        w = [m[i] * Fraction(1) / Fraction(inertia[i]) for i in range(3)]
+        dm = [m[1] * w[2] - m[2] * w[1], m[2] * w[0] - m[0] * w[2], m[0] * w[1] - m[1] * w[0]]
+        W = [[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]]
+        dQ = [[sum((Q[i][k] * W[k][j] for k in range(3) if k != j), Series.const(0, N))
+               for j in range(3)] for i in range(3)]  # fmt: skip
+        m = [Series.const(m0[i], N) + dm[i].integral() for i in range(3)]
+        Q = [[Series.const(int(i == j), N) + dQ[i][j].integral() for j in range(3)]
+             for i in range(3)]  # fmt: skip
+    return m, Q

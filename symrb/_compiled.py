@@ -49,19 +49,28 @@ _loop: Callable[..., Any] | None = None
 def _build() -> Callable[..., Any]:
     step = numba.njit(cache=True)(_gen.mv3_cayley_step)
     snewton = numba.njit(cache=True)(_gen.mv3_cayley_s_newton)
+    prelam = numba.njit(cache=True)(_gen.mv3_preprocessed_lam)
 
     @numba.njit(cache=True)
-    def loop(s0, h, m0, lam, q0, tol, steps, k0, save_every, ms, qs, fail, extra):  # type: ignore[no-untyped-def]  # noqa: E501
+    def loop(s0, h, m0, lam, q0, tol, steps, k0, save_every, ms, qs, fail, extra, pre, cf):  # type: ignore[no-untyped-def]  # noqa: E501
         for b in range(m0.shape[0]):
             s = s0[b]
             m1, m2, m3 = m0[b, 0], m0[b, 1], m0[b, 2]
-            l1, l2, l3 = lam[b, 0], lam[b, 1], lam[b, 2]
+            L1, L2, L3 = lam[b, 0], lam[b, 1], lam[b, 2]
+            l1, l2, l3 = L1, L2, L3
+            c = cf[b]
             q = q0[b]
             q11, q12, q13, q21, q22, q23, q31, q32, q33 = (
                 q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8]
             )  # fmt: skip
             j = 0
             for k in range(1, steps + 1):
+                if pre:  # the preprocessed method: this step's modified Lambda
+                    l1, l2, l3 = prelam(
+                        h, m1, m2, m3, L1, L2, L3, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
+                        c[7], c[8], c[9], c[10], c[11], c[12], c[13], c[14], c[15], c[16], c[17],
+                        c[18], c[19], c[20], c[21], c[22], c[23], c[24], c[25], c[26], c[27],
+                    )  # fmt: skip
                 o = step(s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, q31, q32, q33)
                 if not abs(o[1]) <= tol[b]:
                     ok = False
@@ -103,6 +112,7 @@ def run_mv3(
     steps: int,
     save_every: int,
     k0: int = 0,
+    coef: Array | None = None,
 ) -> tuple[Array, Array, NDArray[np.int64], NDArray[np.int64]]:
     r"""Continue ``steps`` steps of n = 3 bodies from a state on the branch (compiled loop).
 
@@ -123,6 +133,9 @@ def run_mv3(
     steps, save_every, k0 : int
         Steps to take, numbered k0 + 1, ..., k0 + steps; the states after the steps whose number
         is a multiple of ``save_every`` are saved.
+    coef : ndarray, shape (B, 28), optional
+        The constants of ``mv3_preprocessed_lam`` (preprocessed method): each step then uses
+        the modified Lambda of the current momentum.
 
     Returns
     -------
@@ -162,6 +175,8 @@ def run_mv3(
     qs = np.full((K, B, 9), np.nan)
     fail = np.zeros(B, dtype=np.int64)
     extra = np.zeros(steps, dtype=np.int64)
+    pre = coef is not None
+    cf = np.ascontiguousarray(coef, dtype=float) if pre else np.zeros((B, 28))
     _loop(
         np.ascontiguousarray(s, dtype=float),
         float(h),
@@ -176,5 +191,7 @@ def run_mv3(
         qs,
         fail,
         extra,
+        pre,
+        cf,
     )
     return ms, qs, fail, extra

@@ -39,6 +39,16 @@ n = 3: :math:`s_0 = b\cdot x_0`); an item whose Newton iteration
 fails (near the fold of :math:`J_D`) is solved by :func:`symrb.solve_moser_veselov` (Riccati start),
 which raises :class:`~symrb.errors.OutOfDomainError` past the fold.  Nothing is validated inside
 the step loop: :func:`mv_flow` validates once; :meth:`MVStepper.step` trusts its arguments.
+
+Preprocessing (n = 3, ``mv_flow(..., order=4, 6, 8 or 10)``): Hairer and Vilmart (2006) showed
+that one Moser-Veselov step of a body whose inertia is modified as a function of ``h``, of
+:math:`|m|^2` and of the energy, :math:`1/\tilde I_i = c/I_i + d`, is the step ``h`` of the
+original body's flow to order 4, 6, 8 or 10, in the momentum and the attitude.  The constants
+of :math:`c` and :math:`d` are the generated ``mv3_preprocessing_coefficients`` (computed once),
+the modified :math:`\tilde\Lambda` of a step the generated ``mv3_preprocessed_lam``; claim D10
+checks the composition with exact rational power series in ``h`` against the Taylor series of
+the exact flow.  The cost of a step is one more kernel call; the map stays symplectic and
+conserves :math:`|m|` exactly (the modified body is a rigid body), the energy to the order.
 """
 
 from __future__ import annotations
@@ -58,7 +68,10 @@ from .discrete import DiscreteFlowSolution, _check_h, _check_steps, _prepare
 from .errors import InputError, NotConvergedError, OutOfDomainError
 from .solvers import solve_moser_veselov
 
-__all__ = ["MVStepper", "mv_flow"]
+__all__ = ["MVStepper", "mv_flow", "PREPROCESSED_ORDERS"]
+
+#: The orders of the preprocessed Moser-Veselov method (n = 3), 2 meaning none.
+PREPROCESSED_ORDERS = (2, 4, 6, 8, 10)
 
 _EPS = float(np.finfo(float).eps)
 #: Newton stops after a step with max |dx| <= this: the error left is about ||x|| dx^2 << eps.
@@ -349,9 +362,10 @@ class MVStepper:
             self._tol_max = float(np.min(tol))
 
     # n = 3: Python floats for one body, component vectors for a batch --------------------------
-    def _step3(self, h: float, m: Any, q: Any) -> tuple[Any, ...]:
-        """The outputs of mv3_cayley_step, (s, ds, m_next (3), Q_next (9)), at a root s."""
-        lam = self._lam_c
+    def _step3(self, h: float, m: Any, q: Any, lam: Any = None) -> tuple[Any, ...]:
+        """The outputs of mv3_cayley_step, (s, ds, m_next (3), Q_next (9)), at a root s
+        (``lam``: a modified Lambda for this step, as components, instead of the stepper's)."""
+        lam = self._lam_c if lam is None else lam
         cold = self._sigma is None
         s = _s_cold(h, m, lam) if cold else h * h * self._sigma
         out = None
@@ -446,6 +460,38 @@ class MVStepper:
 
 
 # ---------------------------------------------------------------------------------------------
+# preprocessing (n = 3)
+
+
+def _preprocessing(order: int, lam_c: Any) -> tuple[Any, ...] | None:
+    """The 28 constants of mv3_preprocessed_lam for ``order`` (zeros above it), or None."""
+    if order == 2:
+        return None
+    c = _gen.mv3_preprocessing_coefficients(*lam_c)
+    keep = order // 2 - 1  # the h^2k terms kept, k = 1..keep
+    # the constants come as c_kj (k = 1..4, j = 0..k), then d_kj in the same order
+    sizes = [k + 2 for k in range(4)]
+    out: list[Any] = []
+    for half in (c[:14], c[14:]):
+        i = 0
+        for k, size in enumerate(sizes):
+            out += [x if k < keep else 0.0 * x for x in half[i : i + size]]
+            i += size
+    return tuple(out)
+
+
+def _check_modified(lam_k: Any, h: float, order: int) -> None:
+    """The modified Lambda must be finite and positive (h small enough for the series)."""
+    low = min(float(np.min(x)) for x in lam_k)
+    if not np.isfinite(low) or low <= 0:
+        raise OutOfDomainError(
+            f"h = {h:g}: the preprocessed method of order {order} gives a modified Lambda with "
+            f"min = {low:.3g} (must be finite and > 0); h |m| is too large for the series, "
+            "take a smaller h or a lower order"
+        )
+
+
+# ---------------------------------------------------------------------------------------------
 # the flow
 
 
@@ -458,6 +504,7 @@ def mv_flow(
     *,
     save_every: int = 1,
     method: str = "auto",
+    order: int = 2,
 ) -> DiscreteFlowSolution:
     r"""The discrete rigid body at step ``h`` by the Cayley-Newton engine (module docstring).
 
@@ -487,6 +534,11 @@ def mv_flow(
         loop of :mod:`symrb._compiled` (needs numba; the same kernels, results equal to rounding),
         ``"auto"`` the compiled loop when numba is importable and the run has at least
         2 * 10^4 body-steps, else NumPy (and Newton for n <= 6, the fixed point above).
+    order : {2, 4, 6, 8, 10}, optional
+        2: the Moser-Veselov map itself.  4 to 10 (n = 3 only): the preprocessed method of
+        Hairer and Vilmart (2006), each step with the modified :math:`\tilde\Lambda(h, m)` of
+        the module docstring; an approximation of the continuous flow of that order in both
+        :math:`M` and :math:`Q`.
 
     Returns
     -------
@@ -515,16 +567,30 @@ def mv_flow(
     >>> Ms = M0 * np.linspace(0.5, 1.0, 4)[:, None, None]
     >>> mv_flow(np.eye(3), Ms, lam, 0.01, 10).y.M.shape
     (11, 4, 3, 3)
+
+    Order 10 at a step of 0.1 against the exact solution (:func:`symrb.rigid_body_exact`):
+
+    >>> ex = symrb.rigid_body_exact(np.eye(3), M0, lam, [10.0])
+    >>> sol = mv_flow(np.eye(3), M0, lam, 0.1, 100, save_every=100, order=10)
+    >>> bool(np.abs(sol.y.M[-1] - ex.y.M[-1]).max() < 1e-11)
+    True
     """
     h = _check_h(h)
     steps, save_every = _check_steps(steps, save_every)
     if method not in _FLOW_METHODS:
         raise InputError(f"method must be one of {', '.join(_FLOW_METHODS)}, got {method!r}")
+    if isinstance(order, bool) or order not in PREPROCESSED_ORDERS:
+        raise InputError(f"order must be one of {PREPROCESSED_ORDERS}, got {order!r}")
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     M = 0.5 * (M - np.swapaxes(M, -1, -2))
     stepper = MVStepper(L, batch, method=method if method in _SOLVERS else "auto")
     n = L.shape[-1]
     size = stepper.size
+    if order != 2 and n != 3:
+        raise InputError(
+            f"order {order} (the preprocessed Moser-Veselov method) needs n = 3, got n = {n}; "
+            "for higher order at any n use symrb.composed_rigid_body_flow"
+        )
     if method == "numba" and (n != 3 or not _compiled.AVAILABLE):
         raise InputError(
             "method 'numba' needs n = 3 and numba installed, got "
@@ -567,16 +633,20 @@ def mv_flow(
             # update) is the whole step; |ds| > tol (first step, rounding trouble) takes the
             # stepper's slow path
             lam_c, tol = stepper._lam_c, stepper._tol_max
+            coef = _preprocessing(order, lam_c)
             s: Any = None
             for k in range(1, (min(steps, 1) if use_numba else steps) + 1):
                 out = None
+                lam_k = lam_c if coef is None else _gen.mv3_preprocessed_lam(h, *m, *lam_c, *coef)
                 if s is not None:
-                    out = _step3(s, h, *m, *lam_c, *q)
+                    out = _step3(s, h, *m, *lam_k, *q)
                     ds = out[1]
                     if not (abs(ds) if size == 1 else np.abs(ds).max()) <= tol:
                         out = None
                 if out is None:
-                    out = stepper._step3(h, m, q)
+                    if coef is not None:
+                        _check_modified(lam_k, h, order)
+                    out = stepper._step3(h, m, q, lam_k)
                     iters[k - 1] = stepper.iterations
                 s, m, q = out[0], out[2:5], out[5:]
                 if k % save_every == 0:
@@ -589,11 +659,17 @@ def mv_flow(
                 mv = np.stack(np.broadcast_arrays(*m), axis=-1).reshape(size, 3)
                 qv = np.stack(np.broadcast_arrays(*q), axis=-1).reshape(size, 9)
                 tv = np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,))
+                cv = None
+                if coef is not None:
+                    cv = np.stack(np.broadcast_arrays(*coef, stepper.lam[:, 0]), -1)[:, :-1]
+                    cv = np.broadcast_to(cv, (size, len(coef)))
                 ms, qs, fail, extra = _compiled.run_mv3(
-                    st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1
+                    st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1, coef=cv
                 )
                 if fail.any():  # the NumPy path has the Riccati fallback and the fold diagnosis
-                    return mv_flow(Q0, M0, lam, h, steps, save_every=save_every, method="numpy")
+                    return mv_flow(
+                        Q0, M0, lam, h, steps, save_every=save_every, method="numpy", order=order
+                    )
                 iters[1:] += extra
                 for j, kj in enumerate(range(max(save_every, 2), steps + 1, save_every)):
                     ks.append(kj)
@@ -627,6 +703,7 @@ def mv_flow(
         success=not failure,
         status=-1 if failure else 0,
         message=failure or f"all {steps} steps taken",
-        method="Moser-Veselov, Cayley-Newton engine",
+        method="Moser-Veselov, Cayley-Newton engine"
+        + (f", preprocessed to order {order}" if order != 2 else ""),
         h=h,
     )
