@@ -18,10 +18,10 @@ implementation instead of agreeing with it:
 
 from __future__ import annotations
 
-import numpy as np
 from fractions import Fraction
 from typing import Any
 
+import numpy as np
 from numpy.typing import NDArray
 from scipy.special import ellipj
 

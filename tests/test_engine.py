@@ -230,8 +230,10 @@ def test_preprocessed_invariants_and_batch(batch: int | None) -> None:
     per body equals the bodies run one at a time."""
     rng = np.random.default_rng(5)
     lam = rng.uniform(0.5, 2.0, (3, 3)) if batch else np.array([0.7, 1.1, 1.6])
-    M0 = np.stack([symrb.hat(rng.normal(size=3)) for _ in range(3)]) if batch else symrb.hat(
-        [0.5, 1.0, 1.5]
+    M0 = (
+        np.stack([symrb.hat(rng.normal(size=3)) for _ in range(3)])
+        if batch
+        else symrb.hat([0.5, 1.0, 1.5])
     )
     sol = mv_flow(np.eye(3), M0, lam, 0.1, 300, save_every=100, order=8, method="numpy")
     norm = np.linalg.norm(sol.y.M, axis=(-2, -1))

@@ -1464,12 +1464,16 @@ MV3_PREPROCESSING_COEFFICIENTS = Kernel(
 MV3_PREPROCESSED_LAM = Kernel(
     name="mv3_preprocessed_lam",
     target="discrete_rigid_body",
-    args=[Arg("h", _SCALAR3, "the step")] + _MARGS + _LARGS
-    + [Arg(str(sym), "()", f"preprocessing constant {sym} (mv3_preprocessing_coefficients)")
-       for row in _HV_CS + _HV_DS for sym in row],  # fmt: skip
+    args=[Arg("h", _SCALAR3, "the step")]
+    + _MARGS
+    + _LARGS
+    + [
+        Arg(str(sym), "()", f"preprocessing constant {sym} (mv3_preprocessing_coefficients)")
+        for row in _HV_CS + _HV_DS
+        for sym in row
+    ],  # fmt: skip
     outputs={
-        f"l{i + 1}_mod": e
-        for i, e in enumerate(_hv_modified_lam(_CH, _CM, _CL, _HV_CS, _HV_DS))
+        f"l{i + 1}_mod": e for i, e in enumerate(_hv_modified_lam(_CH, _CM, _CL, _HV_CS, _HV_DS))
     },
     doc="The modified Lambda of one preprocessed Moser-Veselov step, n = 3.\n\n"
     "A = h^2 |m|^2 / 2, E = h^2 sum m_i^2/(2 I_i), c = 1 + sum c_kj A^(k-j) E^j,\n"
@@ -1530,14 +1534,16 @@ def d10_preprocessed_local_error() -> sp.Expr:
         Q1 = [[ref.series_eval(MV3_CAYLEY_STEP[f"q{i + 1}{j + 1}_next"], vals, N)
                for j in range(3)] for i in range(3)]  # fmt: skip
         for i in range(3):
-            total += sum(abs(a - b) for a, b in zip(m1[i].c[: order + 1], m_ex[i].c[: order + 1]))
+            total += sum(
+                abs(a - b)
+                for a, b in zip(m1[i].c[: order + 1], m_ex[i].c[: order + 1], strict=True)
+            )
             for j in range(3):
                 got, want = Q1[i][j].c[: order + 1], Q_ex[i][j].c[: order + 1]
-                total += sum(abs(a - b) for a, b in zip(got, want))
+                total += sum(abs(a - b) for a, b in zip(got, want, strict=True))
         if all(m1[i].c[order + 1] == m_ex[i].c[order + 1] for i in range(3)):
             total += 1  # the order is higher than stated: the check could not tell a change
     return sp.Rational(total.numerator, total.denominator)
-
 
 
 @D10.check(Level.FLOAT64, tol=0.25)
@@ -1566,6 +1572,7 @@ def d10_preprocessed_order_against_elliptic() -> float:
         observed = np.log2(error(order, h) / error(order, h / 2))
         gaps.append(abs(observed - order))
     return float(max(gaps))
+
 
 # =============================================================================================
 # D11: the discrete variational principle
