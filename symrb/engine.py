@@ -344,7 +344,7 @@ class MVStepper:
         self._h_last: float | None = None
         self._eye = np.eye(n)
         self._Wh = 0.5 / (self.lam[:, :, None] + self.lam[:, None, :])
-        self._kron = _Kron(n) if n <= 12 else None
+        self._kron = _Kron(n) if 3 < n <= 12 else None  # n = 3 has its own kernels
         self._sigma: Any = None  # n = 3: the warm start s/h^2 (s/h^2 is conserved)
         if n == 3:
             # floats when every body has the same lam (scalar arithmetic in the kernels)
@@ -478,6 +478,14 @@ def _preprocessing(order: int, lam_c: Any) -> tuple[Any, ...] | None:
             out += [x if k < keep else 0.0 * x for x in half[i : i + size]]
             i += size
     return tuple(out)
+
+
+def _columns(parts: Any, size: int) -> Array:
+    """Floats or arrays (each broadcasting to (size,)) as the columns of a (size, k) array."""
+    out = np.empty((size, len(parts)))
+    for i, x in enumerate(parts):
+        out[:, i] = x
+    return out
 
 
 def _check_modified(lam_k: Any, h: float, order: int) -> None:
@@ -656,13 +664,9 @@ def mv_flow(
             if use_numba and steps > 1:
                 k = 1
                 st = np.broadcast_to(np.asarray(s, dtype=float), (size,))
-                mv = np.stack(np.broadcast_arrays(*m), axis=-1).reshape(size, 3)
-                qv = np.stack(np.broadcast_arrays(*q), axis=-1).reshape(size, 9)
+                mv, qv = _columns(m, size), _columns(q, size)
                 tv = np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,))
-                cv = None
-                if coef is not None:
-                    cv = np.stack(np.broadcast_arrays(*coef, stepper.lam[:, 0]), -1)[:, :-1]
-                    cv = np.broadcast_to(cv, (size, len(coef)))
+                cv = None if coef is None else _columns(coef, size)
                 ms, qs, fail, extra = _compiled.run_mv3(
                     st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1, coef=cv
                 )
