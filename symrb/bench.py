@@ -848,11 +848,19 @@ def _cost_vs_n(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], Non
         tm = t[f"matmul n={n}"]
         if mv is not None:
             per = _marginal(t, f"flow K={{K}} n={n}", scale[n])
-            step = {"median": per, "how": "marginal: (t(K2) - t(K1)) / (K2 - K1)"}
+            step: dict[str, Any] = {
+                "median": per,
+                "how": "marginal: (t(K2) - t(K1)) / (K2 - K1)",
+            }
         else:
             step = t[f"step n={n}"]
         rows.append(
-            {"n": n, "step": step, "matmul": tm, "matmul_equivalents": step["median"] / tm["median"]}
+            {
+                "n": n,
+                "step": step,
+                "matmul": tm,
+                "matmul_equivalents": step["median"] / tm["median"],
+            }
         )
         if n == 3 and mv is not None and _backend() == "numba":
             per = _marginal(t, "numba K={K} n=3", 100 * scale[3])

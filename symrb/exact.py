@@ -68,6 +68,7 @@ any method grows like :math:`\log(1/(1-k^2))`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -177,6 +178,99 @@ def _working_frame(inertia: Array, m: Array) -> tuple[Array, Array, np.ndarray]:
     return R, a, perm[..., 2]
 
 
+#: One body and at most this many times take the scalar path (:func:`_one_body`).
+_SCALAR_MAX_TIMES = 8
+
+
+def _one_body(
+    Qa: Array, Ma: Array, L: Array, tt: Array
+) -> tuple[Array, Array, float, float, int] | None:
+    """The formulas of :func:`rigid_body_exact` for one body on Python floats (the array code
+    costs about 1 us per NumPy call on 3-vectors); None for a steady rotation (the array code
+    handles it).  Returns (Q (K, 3, 3), M (K, 3, 3), k2, nu, axis)."""
+    lam = [float(x) for x in L]
+    inertia = [lam[1] + lam[2], lam[0] + lam[2], lam[0] + lam[1]]
+    m0 = [float(Ma[2, 1]), float(Ma[0, 2]), float(Ma[1, 0])]
+    order = sorted(range(3), key=inertia.__getitem__)  # stable, as np.argsort(kind="stable")
+    b = [inertia[i] for i in order]
+    ms = [m0[i] for i in order]
+    d2 = ms[0] ** 2 * (b[1] - b[0]) / b[0] - ms[2] ** 2 * (b[2] - b[1]) / b[2]
+    largest = d2 < 0 or (d2 == 0 and b[2] - b[1] >= b[1] - b[0])
+    perm = order if largest else order[::-1]
+    sgn = 1.0 if (perm[1] - perm[0]) % 3 == 1 else -1.0
+    s1 = -1.0 if m0[perm[0]] < 0 else 1.0
+    s3 = -1.0 if m0[perm[2]] < 0 else 1.0
+    rs = (s1, s1 * s3 * sgn, s3)  # R[i, perm[i]] = rs[i]: the signed permutation
+    x1, x2, x3 = (rs[i] * m0[perm[i]] for i in range(3))
+    a1, a2, a3 = (inertia[i] for i in perm)
+    mu = math.sqrt(m0[0] ** 2 + m0[1] ** 2 + m0[2] ** 2)
+    d1 = x2**2 * (a2 - a1) / a2 + x3**2 * (a3 - a1) / a3
+    d3 = x1**2 * (a3 - a1) / a1 + x2**2 * (a3 - a2) / a2
+    if mu == 0 or a1 == a3 or (x1 == 0 and x3 == 0) or d1 == 0 or d3 == 0:
+        return None
+    sigma = 1.0 if a3 > a1 else -1.0
+    h21, h31, h32 = abs(a2 - a1), abs(a3 - a1), abs(a3 - a2)
+    d1, d3 = abs(d1), abs(d3)
+    c = (
+        math.sqrt(a1 * d3 / h31),
+        sigma * math.sqrt(a2 * d3 / h32),
+        math.sqrt(a3 * d1 / h31),
+    )
+    nu = math.sqrt(d1 * h32 / (a1 * a2 * a3))
+    k2 = min(1.0, h21 * d3 / (h32 * d1))
+    n = -a3 * h21 / (a1 * h32)
+    gamma = -sigma * mu * h31 * h21 / (a1**2 * h32 * nu)
+    y, x = sigma * x2 * math.sqrt(a1 / h31), x1 * math.sqrt(a2 / h32)
+    hh = math.hypot(x, y)
+    s0, c0 = y / hh, x / hh
+    dn0sq = 1.0 - k2 * s0**2
+    tau0 = s0 * float(elliprf(c0**2, dn0sq, 1.0))
+    Z0 = s0**3 * float(elliprj(c0**2, dn0sq, 1.0, 1.0 - n * s0**2)) / 3.0
+    K = min(float(ellipk(k2)), 1e300)
+    ZK = min(float(elliprj(0.0, 1.0 - k2, 1.0, 1.0 - n)), 1e300) / 3.0
+    R = np.zeros((3, 3))
+    for i in range(3):
+        R[i, perm[i]] = rs[i]
+    mp0 = [c[0] * c0, c[1] * s0, c[2] * math.sqrt(dn0sq)]
+    G = Qa @ R.T @ _frame(mp0, mu, 0.0).T
+    Ks = len(tt)
+    Q = np.empty((Ks, 3, 3))
+    M = np.zeros((Ks, 3, 3))
+    for i, t in enumerate(tt.tolist()):
+        tau = nu * t + tau0
+        j4 = round(tau / (4 * K))
+        r = tau - 4 * K * j4
+        sn, cn, dn, _ = (float(e) for e in ellipj(r, k2))
+        j = 2 * j4 + round(r / (2 * K))
+        sign = 1.0 - 2.0 * (j % 2)
+        Zt = 2 * j * ZK + sign * sn**3 * float(elliprj(cn**2, dn**2, 1.0, 1.0 - n * sn**2)) / 3
+        psi = mu * t / a1 + gamma * (Zt - Z0)
+        mt = [c[0] * cn, c[1] * sn, c[2] * dn]
+        Q[i] = G @ _frame(mt, mu, psi) @ R
+        w = [0.0, 0.0, 0.0]  # R^T m'(t)
+        for k in range(3):
+            w[perm[k]] = rs[k] * mt[k]
+        M[i, 2, 1], M[i, 0, 2], M[i, 1, 0] = w
+        M[i, 1, 2], M[i, 2, 0], M[i, 0, 1] = -w[0], -w[1], -w[2]
+    return Q, M, k2, nu, perm[2]
+
+
+def _frame(m: list[float], mu: float, psi: float) -> Array:
+    """:func:`_turned_frame` for one body on floats."""
+    rho = math.hypot(m[0], m[1])
+    v = (-m[1] / rho, m[0] / rho, 0.0)
+    f = m[2] / (mu * rho)
+    u = (m[0] * f, m[1] * f, -rho / mu)
+    cp, sp = math.cos(psi), math.sin(psi)
+    return np.array(
+        [
+            [cp * u[0] - sp * v[0], cp * u[1] - sp * v[1], cp * u[2] - sp * v[2]],
+            [sp * u[0] + cp * v[0], sp * u[1] + cp * v[1], sp * u[2] + cp * v[2]],
+            [m[0] / mu, m[1] / mu, m[2] / mu],
+        ]
+    )
+
+
 def rigid_body_exact(
     Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike, *, check: bool = True
 ) -> ExactSolution:
@@ -255,6 +349,12 @@ def rigid_body_exact(
         batch = np.broadcast_shapes(Qa.shape[:-2], Ma.shape[:-2], L.shape[:-1])
     except ValueError as exc:
         raise InputError(f"Q0, M0 and lam batch shapes do not broadcast: {exc}") from None
+    if batch == () and len(tt) <= _SCALAR_MAX_TIMES:
+        one = _one_body(Qa, Ma, L, tt)
+        if one is not None:
+            Q1, M1, k2_, nu_, ax = one
+            y1 = Trajectory(Q=Q1, M=M1, Omega=_Jinv_weights(L) * M1)
+            return ExactSolution(t=tt, y=y1, k2=np.array(k2_), nu=np.array(nu_), axis=np.array(ax))
     Qa = np.broadcast_to(Qa, batch + (3, 3))
     Ma = np.broadcast_to(Ma, batch + (3, 3))
     L = np.broadcast_to(L, batch + (3,))

@@ -183,13 +183,34 @@ def test_batch_equals_loop_and_broadcasts() -> None:
     assert sol.y.Q.shape == (3, 2, 3, 3, 3) and sol.k2.shape == (2, 3)
     for i in range(2):
         for j in range(3):
-            one = rigid_body_exact(Q0[i, j], M0[i, j], lam[j], t)
-            np.testing.assert_allclose(sol.y.Q[:, i, j], one.y.Q, atol=1e-15, rtol=0)
-            np.testing.assert_allclose(sol.y.M[:, i, j], one.y.M, atol=1e-15, rtol=0)
-            assert sol.axis[i, j] == one.axis
+            # a batch of one item takes the same (array) route as the batch
+            one = rigid_body_exact(Q0[i, j][None], M0[i, j][None], lam[j], t)
+            np.testing.assert_allclose(sol.y.Q[:, i, j], one.y.Q[:, 0], atol=1e-15, rtol=0)
+            np.testing.assert_allclose(sol.y.M[:, i, j], one.y.M[:, 0], atol=1e-15, rtol=0)
+            assert sol.axis[i, j] == one.axis[0]
     assert np.array_equal(Q0, Qc) and np.array_equal(M0, Mc) and np.array_equal(lam, lc)
     single = rigid_body_exact(np.eye(3), M0[0, 0], lam, t)  # Q0 and M0 broadcast against lam
     assert single.y.Q.shape == (3, 3, 3, 3)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_scalar_route_equals_array_route(seed: int) -> None:
+    """One body and a few times take the float route (_one_body); a batch of one item the
+    array route. Both evaluate the same formulas in a different order of operations, so they
+    agree to rounding amplified by the phases: |dM|/|M|, |dQ| <= 50 eps (1 + w |t|) with w the
+    elliptic rate nu plus the attitude's rate |m|/min I."""
+    rng = np.random.default_rng(seed)
+    Q0, M0, lam = _random_case(seed)
+    M0 = M0 * rng.choice([1e-3, 1.0, 20.0])
+    t = rng.uniform(-30, 30, int(rng.integers(1, 5)))
+    a = rigid_body_exact(Q0, M0, lam, t)
+    b = rigid_body_exact(Q0[None], M0[None], lam, t)
+    assert a.y.Q.shape == b.y.Q[:, 0].shape and int(a.axis) == int(b.axis[0])
+    rate = float(b.nu[0]) + np.abs(M0).max() * np.sqrt(2) / symrb.inertia_from_lam(lam).min()
+    bound = 50 * np.finfo(float).eps * (1 + rate * np.abs(t).max())
+    assert np.abs(a.y.Q - b.y.Q[:, 0]).max() <= bound
+    assert np.abs(a.y.M - b.y.M[:, 0]).max() <= bound * np.abs(M0).max()
+    np.testing.assert_allclose(float(a.k2), float(b.k2[0]), rtol=1e-13, atol=1e-300)
 
 
 def test_unchecked_equals_checked() -> None:
