@@ -340,6 +340,17 @@ def _optional(module: str) -> tuple[Any, str]:
         return None, f"symrb.{module} not importable ({type(exc).__name__}: {exc})"
 
 
+def _modules(notes: list[str] | None = None) -> dict[str, Any]:
+    """symrb's engine, compose and exact modules (None, with a note, for one that fails to
+    import: the benchmark then reports its methods as unavailable)."""
+    mods: dict[str, Any] = {}
+    for mod in ("engine", "compose", "exact"):
+        mods[mod], why = _optional(mod)
+        if why and notes is not None:
+            notes.append(why)
+    return mods
+
+
 def _find(mod: Any, names: Iterable[str]) -> Callable[..., Any] | None:
     for name in names:
         fn = getattr(mod, name, None) if mod is not None else None
@@ -499,7 +510,7 @@ def _work_precision(
             if make is None:
                 out["methods"][m] = {"available": False}
                 continue
-            for h in p["wp_h"][_STEP_ORDERS[m]]:
+            for h in p["wp_h"].get(_STEP_ORDERS[m], ()):
                 key = f"{m} h={h:g}"
                 configs[key] = make(lam, Q0, M0, T, h)
                 meta[key] = {"method": m, "h": T / max(1, round(T / h))}
@@ -1416,11 +1427,7 @@ def run(
         ),
         notes=notes,
     )
-    mods: dict[str, Any] = {}
-    for mod in ("engine", "compose", "exact"):
-        mods[mod], why = _optional(mod)
-        if why:
-            notes.append(why)
+    mods = _modules(notes)
     limiter: Any = None
     try:
         from threadpoolctl import threadpool_limits
@@ -1541,7 +1548,17 @@ def _figures(res: BenchResult, names: set[str] | None = None) -> dict[str, Any]:
     if thr and wanted("throughput"):
         fig, ax = plt.subplots(figsize=(6.5, 5))
         B = [r["batch"] for r in thr["rows"]]
-        ax.loglog(B, [r["step_body_steps_per_s"] for r in thr["rows"]], "o-", label="MV step")
+        ax.loglog(
+            B,
+            [r["step_body_steps_per_s"] for r in thr["rows"]],
+            "o-",
+            label="MVStepper.step (one call)",
+        )
+        for be, mk in (("numpy", "^-"), ("numba", "v-")):
+            key = f"flow_{be}_body_steps_per_s"
+            if all(key in r for r in thr["rows"]):
+                lab = f"mv_flow, {'NumPy path' if be == 'numpy' else 'compiled (numba)'}"
+                ax.loglog(B, [r[key] for r in thr["rows"]], mk, label=lab)
         ax.loglog(
             B, [r["matmul_products_per_s"] for r in thr["rows"]], "s-", label="batched 3x3 matmul"
         )
@@ -1555,7 +1572,12 @@ def _figures(res: BenchResult, names: set[str] | None = None) -> dict[str, Any]:
     if cost and wanted("cost_vs_n"):
         fig, ax = plt.subplots(figsize=(6.5, 5))
         ns = [r["n"] for r in cost["rows"]]
-        ax.loglog(ns, [r["matmul_equivalents"] for r in cost["rows"]], "o-", label="one MV step")
+        ax.loglog(
+            ns, [r["matmul_equivalents"] for r in cost["rows"]], "o-", label="one MV step (NumPy)"
+        )
+        comp = cost.get("compiled_n3")
+        if comp:
+            ax.loglog([3], [comp["matmul_equivalents"]], "v", ms=9, label="n = 3, compiled (numba)")
         ax.set_xlabel("n")
         ax.set_ylabel("CPU time in units of one n x n matmul")
         ax.set_title("per-step cost against n (single body)")

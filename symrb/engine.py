@@ -536,8 +536,9 @@ def mv_flow(
         The number of steps, >= 0.
     save_every : int, optional
         Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
-    method : {"auto", "newton", "fixed-point", "numpy", "numba"}, optional
-        The solver for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or for
+    method : str, optional
+        One of ``"auto"``, ``"newton"``, ``"fixed-point"``, ``"numpy"``, ``"numba"``: the solver
+        for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or for
         n = 3 the backend: ``"numpy"`` the NumPy path (the reference), ``"numba"`` the compiled
         loop of :mod:`symrb._compiled` (needs numba; the same kernels, results equal to rounding),
         ``"auto"`` the compiled loop when numba is importable and the run has at least

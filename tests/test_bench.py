@@ -42,6 +42,7 @@ TINY: dict[str, Any] = {
 
 GOAL_NAMES = [
     "n = 3 single MV step <= 3x one 3x3 matmul",
+    "n = 3 single MV step, compiled path (numba) <= 1 us",
     "n = 3, T = 10, error 1e-08",
     "n = 3, T = 100, error 1e-08",
     "n = 3, T = 100, error 1e-10",
@@ -152,6 +153,23 @@ def test_every_section_measured_something(tiny: bench.BenchResult) -> None:
     assert ev["float64"]["claims"] == ["D2", "S1"]
     assert ev["float64"]["total_seconds"] == pytest.approx(0.75)
     assert "every n" in ev["symbolic, general n"]["certifies"]
+
+
+def test_preprocessed_methods_reach_their_orders_and_skip_n_other_than_3() -> None:
+    """MV-pre4 and MV-pre8 (mv_flow(order=...)) in a work-precision sweep at n = 3 show their
+    orders against the exact solution; at n = 4 they are not applicable (no failure noted)."""
+    p = dict(bench._QUICK, rounds=1, min_time=0.0005, wp_h={4: (0.2, 0.1), 8: (0.4, 0.2)})
+    notes: list[str] = []
+    wp = bench._work_precision(
+        3, 4.0, p, ["MV-pre4", "MV-pre8"], bench._modules(), notes, lambda _m: None
+    )
+    assert wp["backend"] in ("numpy", "numba")
+    assert wp["reference"].startswith("symrb.exact") and wp["exact_vs_mv_pre10"] < 1e-13
+    for name, order in (("MV-pre4", 4), ("MV-pre8", 8)):
+        assert abs(wp["methods"][name]["order"] - order) < 0.3, wp["methods"][name]
+    wp4 = bench._work_precision(4, 1.0, p, ["MV-pre4"], bench._modules(), notes, lambda _m: None)
+    assert wp4["methods"]["MV-pre4"] == {"available": False}
+    assert not notes, notes
 
 
 def test_plots_are_png_and_svg(tiny: bench.BenchResult, tmp_path: Path) -> None:
