@@ -1898,6 +1898,7 @@ def sweep(
     local_cluster: int | None = None,
     client: Any = None,
     chunk_seconds: float = 0.05,
+    chunk_size: int | None = None,
     retries: int = 3,
     progress: bool = False,
 ) -> SweepResult:
@@ -1923,6 +1924,8 @@ def sweep(
     chunk_seconds : float, optional
         Points are grouped into tasks of at least this many estimated seconds (from the plan),
         as long as every worker still gets several tasks.
+    chunk_size : int, optional
+        The points per task, overriding ``chunk_seconds``.
     retries : int, optional
         How often Dask retries a failed task.
     progress : bool, optional
@@ -1945,7 +1948,7 @@ def sweep(
     """
     import pandas as pd
 
-    from ._progress import progress_bar
+    from ._progress import _Bar
 
     base = load_scene(scene) if isinstance(scene, str | os.PathLike) else parse_scene(scene)
     points = expand_grid(base, grid)
@@ -1955,13 +1958,13 @@ def sweep(
     if given > 1:
         raise InputError("give at most one of scheduler, local_cluster and client")
     if given == 0:
-        with progress_bar(len(points), "sweep", progress) as bar:
+        with _Bar(len(points), "sweep", bool(progress), unit="point") as bar:
             for i, (_pt, sc) in enumerate(points):
                 results[i] = run_scene(sc, cache=store if store is not None else False)
                 bar.step()
     else:
         _dask_sweep(points, results, store, scheduler, local_cluster, client, chunk_seconds,
-                    retries, progress)  # fmt: skip
+                    chunk_size, retries, progress)  # fmt: skip
     done = [r for r in results if r is not None]
     table = pd.DataFrame([_summary(pt, r) for (pt, _), r in zip(points, done, strict=True)])
     return SweepResult(table, done)
@@ -1975,6 +1978,7 @@ def _dask_sweep(
     local_cluster: int | None,
     client: Any,
     chunk_seconds: float,
+    chunk_size: int | None,
     retries: int,
     progress: bool,
 ) -> None:
@@ -1984,7 +1988,7 @@ def _dask_sweep(
         raise ImportError(
             "sweeps on Dask need dask.distributed: pip install 'dask[distributed]'"
         ) from None
-    from ._progress import progress_bar
+    from ._progress import _Bar
 
     with contextlib.ExitStack() as stack:
         if client is None:
@@ -2000,6 +2004,8 @@ def _dask_sweep(
         est = max(plan_scene(points[0][1]).cost["seconds"], 1e-6)
         size = max(1, math.ceil(chunk_seconds / est))
         size = min(size, max(1, len(points) // (4 * nworkers)))
+        if chunk_size is not None:
+            size = v.count(chunk_size, "chunk_size", 1)
         chunks = [list(range(i, min(i + size, len(points)))) for i in range(0, len(points), size)]
         root = str(store.root) if store is not None else None
         futures = {
@@ -2007,7 +2013,7 @@ def _dask_sweep(
                           pure=False): idx
             for idx in chunks
         }  # fmt: skip
-        with progress_bar(len(points), "sweep", progress) as bar:
+        with _Bar(len(points), "sweep", bool(progress), unit="point") as bar:
             for fut in as_completed(futures):
                 for i, r in zip(futures[fut], fut.result(), strict=True):
                     results[i] = r
