@@ -578,6 +578,10 @@ def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: st
                 line = lines[loc[:cut]]
                 break
         allowed = _allowed(model, loc, err) if model is not None else _allowed(None, loc, err)
+        if model is not None and loc[:1] == ("effects",):
+            allowed = list(model.EFFECTS)
+        if model is not None and loc == ("observables",):
+            allowed = list(model.OBSERVABLES)
         if loc == ("system",) or (not loc and err["type"].startswith("union_tag")):
             loc = ("system",)
             line = lines.get(("system",))
@@ -1508,7 +1512,10 @@ def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], s
     times, data = {}, {}
     for name, idx in plan.index.items():
         keep = [i for i in idx if i < t.shape[0]]  # a failed run stops early
-        y = {k: a[keep] for k, a in states.items()}
+        # all records: the integrator's arrays as they are (a copy can change the memory
+        # layout, and with it the last bit of a reduction such as einsum)
+        whole = keep == list(range(t.shape[0]))
+        y = states if whole else {k: a[keep] for k, a in states.items()}
         times[name] = t[keep]
         data[name] = np.asarray(_body_observable(name, y, x["lam"]))
     return times, data, failure
