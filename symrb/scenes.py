@@ -1538,6 +1538,18 @@ def _canonical(scene: Any) -> str:
     return json.dumps(scene.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
 
 
+_DIGESTS: dict[tuple[str, int, int], str] = {}
+
+
+def _file_digest(path: str) -> str:
+    """SHA-256 of a file, remembered while its modification time and size stay the same."""
+    st = os.stat(path)
+    key = (path, st.st_mtime_ns, st.st_size)
+    if key not in _DIGESTS:
+        _DIGESTS[key] = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    return _DIGESTS[key]
+
+
 def _code_digest(modules: Iterable[str]) -> str:
     h = hashlib.sha256()
     for name in sorted(modules):
@@ -1545,7 +1557,7 @@ def _code_digest(modules: Iterable[str]) -> str:
         path = getattr(mod, "__file__", None)
         h.update(name.encode())
         if path:
-            h.update(Path(path).read_bytes())
+            h.update(_file_digest(path).encode())
     return h.hexdigest()
 
 
@@ -1616,15 +1628,19 @@ class SceneResult:
         return d
 
     @classmethod
-    def load(cls, directory: str | os.PathLike[str]) -> SceneResult:
-        """Read a result written by :meth:`save`."""
+    def load(
+        cls, directory: str | os.PathLike[str], scene: Any = None, plan: Plan | None = None
+    ) -> SceneResult:
+        """Read a result written by :meth:`save` (``scene`` and ``plan``, when the caller has
+        them, are used instead of validating and planning the stored scene again)."""
         d = Path(directory)
         meta = json.loads((d / "scene.json").read_text())
-        scene = parse_scene(meta["scene"])
+        if scene is None:
+            scene = parse_scene(meta["scene"])
         with np.load(d / "arrays.npz") as z:
             data = {k[5:]: z[k] for k in z.files if k.startswith("data/")}
             times = {k[6:]: z[k] for k in z.files if k.startswith("times/")}
-        return cls(scene, plan_scene(scene), times, data, dict(meta["meta"]))
+        return cls(scene, plan or plan_scene(scene), times, data, dict(meta["meta"]))
 
     def plot(self, names: Sequence[str] | None = None) -> Any:
         """A matplotlib figure: each recorded observable (flattened per record) against time."""
@@ -1684,12 +1700,13 @@ class SceneStore:
     def path(self, key: str) -> Path:
         return self.root / key[:2] / key
 
-    def get(self, key: str) -> SceneResult | None:
+    def get(self, key: str, scene: Any = None, plan: Plan | None = None) -> SceneResult | None:
+        """The stored result of ``key``, or None (``scene``, ``plan``: see SceneResult.load)."""
         d = self.path(key)
         if not (d / "scene.json").is_file():
             return None
         try:
-            return SceneResult.load(d)
+            return SceneResult.load(d, scene, plan)
         except (OSError, ValueError, KeyError):  # a damaged entry is recomputed
             return None
 
@@ -1770,7 +1787,7 @@ def run_scene(
     store = _store(cache)
     key = scene_key(sc, plan)
     if store is not None:
-        hit = store.get(key)
+        hit = store.get(key, sc, plan)
         if hit is not None:
             hit.meta["from_cache"] = True
             return hit
