@@ -702,9 +702,9 @@ def load_scene(path_or_text: str | os.PathLike[str]) -> Scene:
     Traceback (most recent call last):
     ...
     symrb.scenes.SceneError: invalid scene:
-      integrator.kind (line 3): ...; allowed: gradient_descent
+      integrator.kind (line 3): Input should be 'gradient_descent'; allowed: gradient_descent
       horizon: Field required
-      observables: Field required
+      observables: Field required; allowed: states, K, beta, accuracy, loss, costates
     """
     if isinstance(path_or_text, os.PathLike) or "\n" not in str(path_or_text):
         path = Path(path_or_text)
