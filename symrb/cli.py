@@ -1,12 +1,13 @@
-"""The ``symrb`` command: ``claims``, ``show ID``, ``verify [IDS]``, ``derive [--check]`` and
-``bench``.
+"""The ``symrb`` command: ``claims``, ``show ID``, ``verify [IDS]``, ``derive [--check]``,
+``bench``, ``run SCENE`` and ``sweep SCENE``.
 
 The first four are development tools that run the SymPy derivations of a source checkout
 (:mod:`derivations`, not part of the wheel; see ``derivations.cli`` for what each does).  This
 launcher imports none of symrb's numerics for them, so they work while ``symrb/_generated`` is
 missing; ``symrb --version`` and ``symrb --help`` work without SymPy and without the derivations.
 ``symrb bench`` times the numerics (:mod:`symrb.bench`) and needs only NumPy and SciPy, so it is
-handled here, before the derivations are looked for.
+handled here, before the derivations are looked for; so are ``symrb run`` and ``symrb sweep``
+(:mod:`symrb.scene_cli`, scenes of :mod:`symrb.scenes`).
 
 Exit status: 0 everything as recorded; 1 a surprise (a computed outcome differs from the record,
 a kernel not evaluated by its claims, a stale generated file); 2 usage or environment (bad
@@ -29,6 +30,14 @@ numerics command (needs only NumPy and SciPy, no source checkout):
                    (symrb bench --help; exit status 1 only with --strict)
 """
 
+_SCENES_HELP = """\
+scene commands (need pydantic; sweeps need pandas, Dask only with --scheduler/--local-cluster):
+  run SCENE.toml [--explain] [--plot] [--out DIR] [--no-cache]
+                   plan and run a scene (cached); --explain prints the plan only
+  sweep SCENE.toml --grid KEY=V1,V2,... [--grid ...] [--scheduler ADDRESS | --local-cluster N]
+                   run a grid of scenes; one table (CSV) plus the arrays
+"""
+
 _NEED = (
     "symrb {cmd} runs the derivations of a source checkout of symrb and needs its 'derive' extra: "
     "git clone the repository, then pip install -e '.[derive]' in it"
@@ -47,6 +56,7 @@ commands (they need a source checkout of symrb with its 'derive' extra):
   derive [--check] regenerate (or only compare) symrb/_generated
 
 {bench}
+{scenes}
 {why}
 
 exit status: 0 everything as recorded, 1 a surprise (an outcome differs from the record, a stale
@@ -103,6 +113,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         if any(a not in ("-h", "--help") for a in args[:i]):
             return _exit2(f"usage: symrb bench [options]; got options before 'bench': {args[:i]}")
         return int(bench_main(args[i + 1 :], prog="symrb bench"))
+    if cmd in ("run", "sweep"):
+        i = args.index(cmd)
+        if any(a not in ("-h", "--help") for a in args[:i]):
+            return _exit2(f"usage: symrb {cmd} [options]; got options before {cmd!r}: {args[:i]}")
+        from symrb.scene_cli import main as scene_main
+
+        return int(scene_main(cmd, args[i + 1 :]))
     if cmd in COMMANDS:
         try:
             import sympy  # noqa: F401
@@ -112,11 +129,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if dcli is None:  # an installed wheel: no derivations to run
         need = _NEED.format(cmd=cmd if cmd in COMMANDS else "COMMAND")
         if cmd not in COMMANDS and any(a in ("-h", "--help") for a in args):
-            print(_USAGE.format(why=need + ".", bench=_BENCH_HELP))
+            print(_USAGE.format(why=need + ".", bench=_BENCH_HELP, scenes=_SCENES_HELP))
             return 0
         if cmd in COMMANDS:
             return _exit2(need + " (no derivations package next to symrb)")
-        return _exit2(_USAGE.format(why=need + ".", bench=_BENCH_HELP))
+        return _exit2(_USAGE.format(why=need + ".", bench=_BENCH_HELP, scenes=_SCENES_HELP))
     if not cmd and (not args or any(a in ("-h", "--help") for a in args)):
         return _with_bench_help(dcli, args)
     return int(dcli.main(args, prog="symrb"))
@@ -135,7 +152,7 @@ def _with_bench_help(dcli: ModuleType, args: list[str]) -> int:
         text = buf.getvalue()
         if text and "exit status:" in text:
             head, sep, tail = text.partition("exit status:")
-            text = head + _BENCH_HELP + "\n" + sep + tail
+            text = head + _BENCH_HELP + "\n" + _SCENES_HELP + "\n" + sep + tail
         stream.write(text)
     return code
 

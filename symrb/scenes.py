@@ -1,0 +1,2044 @@
+r"""Scenes: declared experiments that compute only what they ask for.
+
+A *scene* declares an experiment: the system, the effects switched on (an effect not named is
+not computed), the parameters, the integrator, the horizon, and the observables with the times
+at which to record them.  It is written in TOML (:func:`load_scene`) or built in Python
+(:func:`parse_scene`, or a model such as :class:`RigidBodyScene`), and validated by pydantic
+models; an error names the key, its line in the file and the allowed values
+(:class:`SceneError`, an :class:`~symrb.errors.InputError`).
+
+>>> from symrb.scenes import load_scene, plan_scene
+>>> scene = load_scene('''
+... system = "rigid_body"
+... [parameters]
+... n = 10
+... [integrator]
+... kind = "continuous"
+... [horizon]
+... T = 100.0
+... [observables]
+... energy = {points = 11}
+... ''')
+>>> plan = plan_scene(scene)
+>>> plan.propagated
+('M',)
+
+:func:`plan_scene` decides from the observables and the effects what state to propagate (no
+attitude when only momenta or energies are observed, no costate sweep without a terminal cost, no
+diagnostic that is not asked for), which public functions and generated kernels to call, and the
+times at which to save (as diffrax's ``SaveAt``: the union of the observables' times, each
+observable evaluated only at its own).  :meth:`Plan.explain` prints the plan with what is skipped
+and why, and an estimated cost.  :func:`run_scene` runs a scene and returns a
+:class:`SceneResult` (arrays, the scene, the plan, the versions), cached on disk by a SHA-256 of
+the canonical scene and of the source of the symrb modules it uses, so a rerun that changes
+nothing recomputes nothing.  :func:`sweep` runs a grid of scenes, in-process or on a Dask
+cluster (``dask.distributed``, imported only there), and returns one pandas table plus the
+results.
+
+The systems (``system = ...``) and what each offers:
+
+=====================  ==============================  =============================================
+system                 effects                         observables
+=====================  ==============================  =============================================
+rigid_body             attitude                        M, Q, Omega, energy, casimirs, manakov,
+                                                       lax_spectrum, orthogonality
+symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality, U
+mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
+double_bracket         (none)                          x, potential, pairing, casimirs
+orbit_extremal         terminal_cost, potential,       x, p, u
+                       samples, costates
+resnet                 terminal_cost, costates         loss, accuracy, states, K, beta, costates
+=====================  ==============================  =============================================
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import importlib
+import json
+import math
+import os
+import platform
+import re
+import shutil
+import tempfile
+import time
+import tomllib
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Annotated, Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from . import _validate as v
+from ._generated import rigid_body as _rb
+from ._validate import Array
+from .continuous import Flow
+from .errors import InputError
+
+__all__ = [
+    "SceneError",
+    "When",
+    "RigidBodyScene",
+    "SymmetricRigidBodyScene",
+    "McLachlanScovelScene",
+    "DoubleBracketScene",
+    "OrbitExtremalScene",
+    "ResNetScene",
+    "Scene",
+    "parse_scene",
+    "load_scene",
+    "scene_inputs",
+    "RigidBodyMomentum",
+    "Plan",
+    "plan_scene",
+    "SceneResult",
+    "SceneStore",
+    "run_scene",
+    "expand_grid",
+    "SweepResult",
+    "sweep",
+]
+
+
+class SceneError(InputError):
+    """A scene that does not validate; the message names each bad key, its line and what is
+    allowed.
+
+    Attributes
+    ----------
+    problems : list of dict
+        One entry per problem: ``key`` (dotted), ``line`` (1-based, or None when the scene does
+        not come from a file), ``message`` and ``allowed`` (a list, or None).
+
+    Examples
+    --------
+    >>> from symrb.scenes import SceneError, load_scene
+    >>> text = 'system = "rigid_body"\\n[integrator]\\nkind = "euler"\\n[horizon]\\nT = 1.0\\n'
+    >>> try:
+    ...     load_scene(text + '[observables]\\nM = "end"\\n')
+    ... except SceneError as exc:
+    ...     print(exc.problems[0]["key"], exc.problems[0]["line"], exc.problems[0]["allowed"])
+    integrator.kind 3 ['continuous', 'mv', 'discrete']
+    """
+
+    def __init__(self, problems: list[dict[str, Any]], source: str = "scene") -> None:
+        self.problems = problems
+        lines = []
+        for p in problems:
+            where = f" (line {p['line']})" if p.get("line") else ""
+            allowed = f"; allowed: {', '.join(map(str, p['allowed']))}" if p.get("allowed") else ""
+            lines.append(f"  {p['key'] or '(top level)'}{where}: {p['message']}{allowed}")
+        super().__init__(f"invalid {source}:\n" + "\n".join(lines))
+
+
+# ---------------------------------------------------------------------------------------------
+# the schema
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class When(_Model):
+    """When to record an observable: exactly one of ``end``, ``every``, ``times``, ``points``.
+
+    In TOML: ``"end"`` (the final state only), ``{every = k}`` (every k-th step of a fixed-step
+    integrator or training step), ``{times = [t1, t2, ...]}`` (chosen times in ``[0, T]``) or
+    ``{points = K}`` (K equally spaced times from 0 to T).
+
+    Examples
+    --------
+    >>> from symrb.scenes import When
+    >>> When.model_validate("end")
+    When(end=True, every=None, times=None, points=None)
+    >>> When.model_validate({"points": 3}).describe()
+    '3 equally spaced times in [0, T]'
+    """
+
+    end: bool = False
+    every: int | None = Field(default=None, ge=1)
+    times: tuple[float, ...] | None = None
+    points: int | None = Field(default=None, ge=2)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_string(cls, data: Any) -> Any:
+        if isinstance(data, str):
+            if data != "end":
+                raise ValueError(
+                    f"a string 'when' must be \"end\", got {data!r}; or a table "
+                    "{every = k}, {times = [...]}, {points = K}"
+                )
+            return {"end": True}
+        return data
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> When:
+        given = [k for k in ("every", "times", "points") if getattr(self, k) is not None]
+        given += ["end"] if self.end else []
+        if len(given) != 1:
+            raise ValueError(
+                f"give exactly one of end, every, times, points; got {given or 'none'}"
+            )
+        if self.times is not None and (
+            not self.times or any(b <= a for a, b in zip(self.times, self.times[1:], strict=False))
+        ):
+            raise ValueError(f"times must be a non-empty increasing list, got {list(self.times)}")
+        return self
+
+    def describe(self) -> str:
+        """The request in words."""
+        if self.end:
+            return "at the end"
+        if self.every is not None:
+            return f"every {self.every} steps"
+        if self.points is not None:
+            return f"{self.points} equally spaced times in [0, T]"
+        return f"at t = {list(self.times or ())}"
+
+
+class TimeHorizon(_Model):
+    """The final time ``T`` (> 0)."""
+
+    T: float = Field(gt=0)
+
+
+class TrainingHorizon(_Model):
+    """The number of gradient steps (>= 0)."""
+
+    steps: int = Field(ge=0)
+
+
+class Continuous(_Model):
+    """``symrb.integrate`` (``scipy.integrate.solve_ivp``) with ``method``, ``rtol``, ``atol``."""
+
+    kind: Literal["continuous"]
+    method: Literal["DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"] = "DOP853"
+    rtol: float = Field(default=1e-10, gt=0)
+    atol: float = Field(default=1e-12, ge=0)
+
+
+class MV(_Model):
+    """The Moser-Veselov engine ``symrb.mv_flow`` at step ``h``; ``order`` 4-10 (n = 3) the
+    preprocessed method."""
+
+    kind: Literal["mv"]
+    h: float = Field(gt=0)
+    order: Literal[2, 4, 6, 8, 10] = 2
+
+
+class Discrete(_Model):
+    """The symmetric representation of Section 2 (``symrb.discrete_rigid_body_flow`` or
+    ``symrb.symmetric_flow``) at step ``h``."""
+
+    kind: Literal["discrete"]
+    h: float = Field(gt=0)
+
+
+class DoubleBracketIVP(_Model):
+    """``symrb.double_bracket_flow`` (DOP853) with ``rtol``, ``atol``."""
+
+    kind: Literal["continuous"]
+    rtol: float = Field(default=1e-11, gt=0)
+    atol: float = Field(default=1e-12, ge=0)
+
+
+class BVP(_Model):
+    """``symrb.solve_orbit_bvp`` (``scipy.integrate.solve_bvp``)."""
+
+    kind: Literal["bvp"]
+    nodes: int = Field(default=41, ge=3)
+    tol: float = Field(default=1e-6, gt=0)
+    costate: Literal["corrected", "printed"] = "corrected"
+
+
+class GradientDescent(_Model):
+    """``symrb.train``: plain gradient descent with learning rate ``lr``."""
+
+    kind: Literal["gradient_descent"]
+    lr: float = Field(default=0.005, gt=0)
+    activation: Literal["tanh", "logistic"] = "tanh"
+    residual: bool = True
+
+
+Matrix = tuple[tuple[float, ...], ...]
+Vector = tuple[float, ...]
+
+
+class BodyParameters(_Model):
+    """A body: ``n``, the diagonal ``lam`` of Lambda (default: ``random_lam(n, seed=seed)``), the
+    initial momentum ``M0`` (a 3-vector for n = 3 or an n x n skew matrix; default:
+    ``random_so(n, seed=seed)`` scaled to the size ``momentum``, measured by the pairing norm
+    :math:`\\sqrt{\\langle M, M\\rangle}`), the attitude ``Q0`` and the number of ``samples``."""
+
+    n: int = Field(default=3, ge=2)
+    lam: Vector | None = None
+    seed: int = 0
+    M0: Vector | Matrix | None = None
+    momentum: float = Field(default=1.0, gt=0)
+    Q0: Literal["identity", "random"] = "identity"
+    samples: int = Field(default=1, ge=1)
+
+
+class OrbitParameters(_Model):
+    """An adjoint orbit of so(n): ``x0`` (3-vector or matrix; with samples, a list of them) and
+    the fixed element ``N``; default random from ``seed``."""
+
+    n: int = Field(default=3, ge=2)
+    seed: int = 0
+    x0: Vector | Matrix | tuple[Matrix, ...] | None = None
+    N: Vector | Matrix | None = None
+    samples: int = Field(default=1, ge=1)
+
+
+class NetworkParameters(_Model):
+    """The ResNet of Section 2, Remark 1 on ``symrb.toy_classification(samples, seed)``, with
+    ``layers`` layers of width 2, started from zero weights."""
+
+    layers: int = Field(default=4, ge=1)
+    samples: int = Field(default=200, ge=1)
+    seed: int = 0
+
+
+_ALL_EFFECTS = ("attitude", "samples", "terminal_cost", "potential", "costates")
+Effect = Literal["attitude", "samples", "terminal_cost", "potential", "costates"]
+
+
+class _SceneBase(_Model):
+    """Fields shared by every scene; subclasses fix ``system`` and the allowed values."""
+
+    #: the effects this system can switch on
+    EFFECTS: ClassVar[tuple[str, ...]] = ()
+    #: effects the system's only route needs
+    REQUIRED: ClassVar[tuple[str, ...]] = ()
+    #: observable -> the effect it needs (or None)
+    OBSERVABLES: ClassVar[dict[str, str | None]] = {}
+
+    title: str = ""
+    effects: tuple[Effect, ...] = ()
+
+    @field_validator("effects")
+    @classmethod
+    def _effects_allowed(cls, value: tuple[str, ...]) -> tuple[str, ...]:
+        bad = [e for e in value if e not in cls.EFFECTS]
+        if bad:
+            raise ValueError(
+                f"effects {bad} do not apply to this system; allowed: {list(cls.EFFECTS) or 'none'}"
+            )
+        missing = [e for e in cls.REQUIRED if e not in value]
+        if missing:
+            raise ValueError(f"this system needs the effects {missing} (its only route has them)")
+        if len(set(value)) != len(value):
+            raise ValueError(f"effects named twice: {list(value)}")
+        return tuple(sorted(value))
+
+    @field_validator("observables", check_fields=False)
+    @classmethod
+    def _observables_allowed(cls, value: dict[str, When]) -> dict[str, When]:
+        if not value:
+            raise ValueError(f"ask for at least one observable; allowed: {list(cls.OBSERVABLES)}")
+        return dict(sorted(value.items()))
+
+
+class RigidBodyScene(_SceneBase):
+    """The free rigid body (momentum only, or with the attitude: effect ``attitude``)."""
+
+    EFFECTS = ("attitude",)
+    OBSERVABLES = {
+        "M": None, "Omega": None, "energy": None, "casimirs": None, "manakov": None,
+        "lax_spectrum": None, "Q": "attitude", "orthogonality": "attitude",
+    }  # fmt: skip
+    system: Literal["rigid_body"]
+    parameters: BodyParameters = BodyParameters()
+    integrator: Annotated[Continuous | MV | Discrete, Field(discriminator="kind")]
+    horizon: TimeHorizon
+    observables: dict[
+        Literal[
+            "M", "Omega", "energy", "casimirs", "manakov", "lax_spectrum", "Q", "orthogonality"
+        ],
+        When,
+    ]
+
+
+class SymmetricRigidBodyScene(_SceneBase):
+    """The symmetric rigid body (Q, P) of Section 3.2; effect ``samples`` for the learning
+    version (m samples sharing the control)."""
+
+    EFFECTS = ("samples",)
+    OBSERVABLES = {
+        "Q": None, "P": None, "M": None, "H": None, "energy": None, "orthogonality": None,
+        "U": "samples",
+    }  # fmt: skip
+    system: Literal["symmetric_rigid_body"]
+    parameters: BodyParameters = BodyParameters()
+    integrator: Annotated[Continuous | Discrete, Field(discriminator="kind")]
+    horizon: TimeHorizon
+    observables: dict[Literal["Q", "P", "M", "H", "energy", "orthogonality", "U"], When]
+
+
+class McLachlanScovelScene(_SceneBase):
+    """The McLachlan-Scovel equations (Q, B) of Section 3.2, from B0 = Q0 M0."""
+
+    OBSERVABLES = {"Q": None, "B": None, "M": None, "energy": None, "orthogonality": None}
+    system: Literal["mclachlan_scovel"]
+    parameters: BodyParameters = BodyParameters()
+    integrator: Continuous
+    horizon: TimeHorizon
+    observables: dict[Literal["Q", "B", "M", "energy", "orthogonality"], When]
+
+
+class DoubleBracketScene(_SceneBase):
+    """The double bracket flow x' = [x, [x, N]] of Section 3.5."""
+
+    OBSERVABLES = {"x": None, "potential": None, "pairing": None, "casimirs": None}
+    system: Literal["double_bracket"]
+    parameters: OrbitParameters = OrbitParameters()
+    integrator: DoubleBracketIVP
+    horizon: TimeHorizon
+    observables: dict[Literal["x", "potential", "pairing", "casimirs"], When]
+
+
+class OrbitExtremalScene(_SceneBase):
+    """Extremals of the adjoint-orbit problem with Brockett's potential and the terminal cost
+    <x_T, N> (Section 3.5; ``symrb.solve_orbit_bvp``)."""
+
+    EFFECTS = ("terminal_cost", "potential", "samples", "costates")
+    REQUIRED = ("terminal_cost", "potential")
+    OBSERVABLES = {"x": None, "u": None, "p": "costates"}
+    system: Literal["orbit_extremal"]
+    parameters: OrbitParameters = OrbitParameters()
+    integrator: BVP
+    horizon: TimeHorizon
+    observables: dict[Literal["x", "u", "p"], When]
+
+
+class ResNetScene(_SceneBase):
+    """A ResNet trained by gradient descent through the costates (Section 2, Remarks 1-2)."""
+
+    EFFECTS = ("terminal_cost", "costates")
+    OBSERVABLES = {
+        "states": None, "K": None, "beta": None, "accuracy": None,
+        "loss": "terminal_cost", "costates": "costates",
+    }  # fmt: skip
+    system: Literal["resnet"]
+    parameters: NetworkParameters = NetworkParameters()
+    integrator: GradientDescent
+    horizon: TrainingHorizon
+    observables: dict[Literal["states", "K", "beta", "accuracy", "loss", "costates"], When]
+
+
+_SCENES: tuple[type[_SceneBase], ...] = (
+    RigidBodyScene,
+    SymmetricRigidBodyScene,
+    McLachlanScovelScene,
+    DoubleBracketScene,
+    OrbitExtremalScene,
+    ResNetScene,
+)
+_SYSTEMS = {c.model_fields["system"].annotation.__args__[0]: c for c in _SCENES}  # type: ignore[union-attr]
+Scene = (
+    RigidBodyScene
+    | SymmetricRigidBodyScene
+    | McLachlanScovelScene
+    | DoubleBracketScene
+    | OrbitExtremalScene
+    | ResNetScene
+)
+_ADAPTER: TypeAdapter[Any] = TypeAdapter(Annotated[Scene, Field(discriminator="system")])
+
+
+# ---------------------------------------------------------------------------------------------
+# errors: pydantic's loc -> key, TOML line, allowed values
+
+
+def _toml_lines(text: str) -> dict[tuple[str, ...], int]:
+    """The 1-based line of every key of a TOML text, by its path (tomllib keeps no positions).
+
+    Table headers ``[a.b]``, array-of-tables headers ``[[a]]`` (indexed), ``key = value`` lines
+    with dotted keys, and the keys of single-line inline tables are found.
+    """
+    out: dict[tuple[str, ...], int] = {}
+    table: tuple[str, ...] = ()
+    counts: dict[tuple[str, ...], int] = {}
+
+    def split(path: str) -> tuple[str, ...]:
+        return tuple(p.strip().strip("\"'") for p in path.split("."))
+
+    key_re = re.compile(
+        r"""^\s*((?:[A-Za-z0-9_\-]+|"[^"]*"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_\-]+|"[^"]*"|'[^']*'))*)\s*="""
+    )
+    for i, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        if line.startswith("[["):
+            path = split(line[2 : line.index("]]")])
+            idx = counts.get(path, 0)
+            counts[path] = idx + 1
+            table = path + (str(idx),)
+            out.setdefault(path, i)
+            out[table] = i
+            continue
+        if line.startswith("["):
+            table = split(line[1 : line.index("]")])
+            out[table] = i
+            continue
+        m = key_re.match(raw)
+        if m:
+            path = table + split(m.group(1))
+            out[path] = i
+            rest = raw[m.end() :]
+            if "{" in rest:
+                for inner in re.finditer(r"([A-Za-z0-9_\-]+)\s*=", rest):
+                    out.setdefault(path + (inner.group(1),), i)
+    return out
+
+
+def _allowed(model: Any, loc: Sequence[Any], err: Mapping[str, Any]) -> list[Any] | None:
+    """The allowed values (literal choices, or the keys of a model) at ``loc``."""
+    ctx = err.get("ctx") or {}
+    if "expected" in ctx:
+        return re.findall(r"'([^']*)'|(\d+)", str(ctx["expected"])) and [
+            a or int(b) for a, b in re.findall(r"'([^']*)'|(\d+)", str(ctx["expected"]))
+        ]
+    if "expected_tags" in ctx:
+        return re.findall(r"'([^']*)'", str(ctx["expected_tags"]))
+    if err.get("type") == "extra_forbidden":
+        parent = _model_at(model, loc[:-1])
+        if parent is not None:
+            return list(parent.model_fields)
+    if err.get("type") == "literal_error" and "expected" in ctx:
+        return None
+    return None
+
+
+def _model_at(model: Any, loc: Sequence[Any]) -> Any:
+    """The pydantic model class at ``loc`` below ``model`` (None if not a model)."""
+    import typing
+
+    cur: Any = model
+    for part in loc:
+        if not (isinstance(cur, type) and issubclass(cur, BaseModel)):
+            return None
+        field = cur.model_fields.get(str(part))
+        if field is None:
+            return None
+        ann = field.annotation
+        cands = [ann]
+        for _ in range(3):
+            nxt: list[Any] = []
+            for c in cands:
+                args = typing.get_args(c)
+                nxt.extend(args if args else [c])
+            cands = nxt
+        models = [c for c in cands if isinstance(c, type) and issubclass(c, BaseModel)]
+        cur = models[0] if len(models) == 1 else None
+    return cur
+
+
+_KIND_TAGS = ("continuous", "mv", "discrete", "bvp", "gradient_descent")
+
+
+def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
+    out = [str(x) for x in loc]
+    if out and system is not None and out[0] == system:
+        out = out[1:]
+    if len(out) > 1 and out[0] == "integrator" and out[1] in _KIND_TAGS:
+        out.pop(1)
+    if len(out) > 2 and out[0] == "observables" and out[2] in ("[key]",):
+        out = out[:2]
+    return tuple(out)
+
+
+def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: str) -> SceneError:
+    system = data.get("system") if isinstance(data, Mapping) else None
+    model = _SYSTEMS.get(system) if isinstance(system, str) else None
+    lines = _toml_lines(text) if text is not None else {}
+    problems = []
+    for err in exc.errors():
+        loc = _clean_loc(err["loc"], system if model is not None else None)
+        # a bad key of the observables table: pydantic reports (observables, name, [key])
+        if len(err["loc"]) and str(err["loc"][-1]) == "[key]":
+            loc = _clean_loc(err["loc"][:-1], system if model is not None else None)
+        line = None
+        for cut in range(len(loc), 0, -1):
+            if loc[:cut] in lines:
+                line = lines[loc[:cut]]
+                break
+        allowed = _allowed(model, loc, err) if model is not None else _allowed(None, loc, err)
+        if model is not None and loc[:1] == ("effects",):
+            allowed = list(model.EFFECTS)
+        if model is not None and loc == ("observables",):
+            allowed = list(model.OBSERVABLES)
+        if loc == ("system",) or (not loc and err["type"].startswith("union_tag")):
+            loc = ("system",)
+            line = lines.get(("system",))
+            allowed = list(_SYSTEMS)
+        msg = str(err["msg"]).removeprefix("Value error, ")
+        if err["type"] == "extra_forbidden":
+            msg = "unknown key"
+        if err["type"] in ("union_tag_invalid", "union_tag_not_found") and loc != ("system",):
+            tag = str((err.get("ctx") or {}).get("discriminator", "kind")).strip("'")
+            loc = loc + (tag,)
+            line = lines.get(loc, line)
+            got = (err.get("ctx") or {}).get("tag")
+            msg = f"unknown {tag} {got!r}" if got is not None else f"{tag} is required"
+        elif err["type"] in ("union_tag_invalid", "union_tag_not_found"):
+            got = (err.get("ctx") or {}).get("tag")
+            msg = f"unknown system {got!r}" if got is not None else "system is required"
+        problems.append({"key": ".".join(loc), "line": line, "message": msg, "allowed": allowed})
+    return SceneError(problems, source)
+
+
+def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
+                source: str = "scene") -> Scene:  # fmt: skip
+    """Validate a scene given as a mapping (the parsed TOML, or built in Python).
+
+    Parameters
+    ----------
+    data : mapping or scene model
+        The scene; ``data["system"]`` selects the model (:class:`RigidBodyScene`, ...).  A model
+        is returned as it is.
+    text : str, optional
+        The TOML text ``data`` was read from, so errors can name lines.
+    source : str, optional
+        What to call the scene in error messages (a file name).
+
+    Returns
+    -------
+    Scene
+        A frozen pydantic model with every default filled in.
+
+    Raises
+    ------
+    SceneError
+        Naming each bad key, its line (with ``text``) and the allowed values.
+
+    Examples
+    --------
+    >>> from symrb.scenes import parse_scene
+    >>> scene = parse_scene({"system": "double_bracket", "integrator": {"kind": "continuous"},
+    ...                      "horizon": {"T": 5.0}, "observables": {"pairing": {"points": 6}}})
+    >>> type(scene).__name__, scene.integrator.rtol
+    ('DoubleBracketScene', 1e-11)
+    >>> parse_scene({"system": "rigid_body", "integrator": {"kind": "continuous"},
+    ...              "horizon": {"T": 1.0}, "observables": {"Q": "end"}})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    symrb.scenes.SceneError: invalid scene:
+      observables.Q: needs the effect 'attitude', which is not switched on; allowed: ...
+    """
+    if isinstance(data, _SceneBase):
+        return data  # type: ignore[return-value]
+    if not isinstance(data, Mapping):
+        raise SceneError(
+            [{"key": "", "line": None, "message": f"a scene is a table, got {type(data).__name__}",
+              "allowed": None}], source)  # fmt: skip
+    try:
+        scene: Any = _ADAPTER.validate_python(dict(data))
+    except ValidationError as exc:
+        raise _from_pydantic(exc, data, text, source) from None
+    lines = _toml_lines(text) if text is not None else {}
+    problems = []
+    for name in scene.observables:
+        need = type(scene).OBSERVABLES.get(name)
+        if need is not None and need not in scene.effects:
+            problems.append({
+                "key": f"observables.{name}",
+                "line": lines.get(("observables", name)) or lines.get(("observables",)),
+                "message": f"needs the effect {need!r}, which is not switched on",
+                "allowed": [o for o, e in type(scene).OBSERVABLES.items()
+                            if e is None or e in scene.effects],
+            })  # fmt: skip
+    params = getattr(scene, "parameters", None)
+    if params is not None and getattr(params, "samples", 1) > 1 and "samples" not in scene.effects:
+        if isinstance(scene, RigidBodyScene | McLachlanScovelScene | DoubleBracketScene):
+            message = "this system has a single sample"
+        else:
+            message = "samples > 1 needs the effect 'samples'"
+        if not isinstance(scene, ResNetScene):
+            problems.append({
+                "key": "parameters.samples", "line": lines.get(("parameters", "samples")),
+                "message": f"{message}, got {params.samples}", "allowed": [1],
+            })  # fmt: skip
+    if problems:
+        raise SceneError(problems, source)
+    return scene  # type: ignore[no-any-return]
+
+
+def load_scene(path_or_text: str | os.PathLike[str]) -> Scene:
+    """Read a scene from a TOML file (or a TOML text) and validate it (:func:`parse_scene`).
+
+    Parameters
+    ----------
+    path_or_text : str or path-like
+        A path to a ``.toml`` file, or the TOML text itself (a string with a newline).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        Bad TOML (with the parser's line) or a scene that does not validate.
+
+    Examples
+    --------
+    >>> from symrb.scenes import load_scene
+    >>> load_scene('system = "resnet"\\n[integrator]\\nkind = "sgd"')  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    symrb.scenes.SceneError: invalid scene:
+      integrator.kind (line 3): Input should be 'gradient_descent'; allowed: gradient_descent
+      horizon: Field required
+      observables: Field required; allowed: states, K, beta, accuracy, loss, costates
+    """
+    if isinstance(path_or_text, os.PathLike) or "\n" not in str(path_or_text):
+        path = Path(path_or_text)
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise InputError(f"scene file {str(path)!r} cannot be read: {exc}") from None
+        source = path.name
+    else:
+        text, source = str(path_or_text), "scene"
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise SceneError(
+            [{"key": "", "line": int(m.group(1)) if m else None, "message": f"bad TOML: {exc}",
+              "allowed": None}], source) from None  # fmt: skip
+    return parse_scene(data, text=text, source=source)
+
+
+# ---------------------------------------------------------------------------------------------
+# initial data
+
+
+def _skew_from(value: Any, n: int, name: str) -> Array:
+    from .algebra import hat
+
+    a = np.asarray(value, dtype=float)
+    if a.shape == (3,) and n == 3:
+        return hat(a)
+    return v.skew(a, name, n)
+
+
+def scene_inputs(scene: Scene) -> dict[str, Any]:
+    """The arrays a scene starts from (what a hand-written run would pass).
+
+    Parameters
+    ----------
+    scene : Scene
+        A validated scene.
+
+    Returns
+    -------
+    dict
+        For the bodies ``lam``, ``Q0``, ``M0`` (and ``P0`` for the symmetric rigid body, ``B0``
+        for McLachlan-Scovel); for the orbits ``x0``, ``N``; for the ResNet ``x0``, ``targets``,
+        ``labels``, ``K0``, ``beta0``.
+
+    Examples
+    --------
+    >>> from symrb.scenes import parse_scene, scene_inputs
+    >>> scene = parse_scene({"system": "rigid_body", "parameters": {"n": 4, "seed": 1},
+    ...                      "integrator": {"kind": "continuous"}, "horizon": {"T": 1.0},
+    ...                      "observables": {"M": "end"}})
+    >>> x = scene_inputs(scene)
+    >>> x["lam"].shape, x["M0"].shape
+    ((4,), (4, 4))
+    """
+    from .algebra import pairing, random_lam, random_SO, random_so
+
+    p: Any = scene.parameters
+    if isinstance(scene, ResNetScene):
+        from .learning import toy_classification
+
+        x0, targets, labels = toy_classification(p.samples, seed=p.seed)
+        return {
+            "x0": x0, "targets": targets, "labels": labels,
+            "K0": np.zeros((p.layers, 2, 2)), "beta0": np.zeros((p.layers, 2)),
+        }  # fmt: skip
+    rng = np.random.default_rng(p.seed)
+    n = p.n
+    if isinstance(scene, DoubleBracketScene | OrbitExtremalScene):
+        N = _skew_from(p.N, n, "parameters.N") if p.N is not None else random_so(n, seed=rng)
+        m = p.samples
+        if p.x0 is None:
+            x0 = random_so(n, (m,) if m > 1 else (), seed=rng)
+        else:
+            x0 = np.asarray(p.x0, dtype=float)
+            x0 = _skew_from(x0, n, "parameters.x0") if x0.ndim < 3 else v.skew(x0, "x0", n)
+        return {"x0": x0, "N": N}
+    lam = np.asarray(p.lam, dtype=float) if p.lam is not None else random_lam(n, seed=rng)
+    lam = v.inertia(lam, "parameters.lam", positive=True)
+    if lam.shape != (n,):
+        raise SceneError([{"key": "parameters.lam", "line": None, "allowed": None,
+                           "message": f"must have n = {n} entries, got shape {lam.shape}"}])  # fmt: skip
+    m = p.samples
+    batch = (m,) if m > 1 else ()
+    if p.M0 is None:
+        M0 = random_so(n, batch, seed=rng)
+        M0 = M0 * (p.momentum / np.sqrt(pairing(M0, M0)))[..., None, None]
+    else:
+        M0 = _skew_from(p.M0, n, "parameters.M0")
+        M0 = np.broadcast_to(M0, batch + (n, n)).copy()
+    Q0 = random_SO(n, batch, seed=rng) if p.Q0 == "random" else np.broadcast_to(
+        np.eye(n), batch + (n, n)).copy()  # fmt: skip
+    out: dict[str, Any] = {"lam": lam, "Q0": Q0, "M0": M0}
+    if isinstance(scene, SymmetricRigidBodyScene):
+        from .continuous import P_from_M
+
+        out["P0"] = P_from_M(Q0, M0)
+    if isinstance(scene, McLachlanScovelScene):
+        out["B0"] = Q0 @ M0
+    return out
+
+
+class RigidBodyMomentum(Flow):
+    r"""The rigid body's momentum alone, :math:`\dot M = [M, \Omega]`, :math:`\Omega = J^{-1}M`.
+
+    The momentum equation does not involve the attitude, so a scene that observes only
+    momenta, energies or integrals propagates this flow: n(n - 1)/2... as stored, ``n^2`` numbers
+    instead of ``2 n^2`` and two matrix products a step instead of three.  The field is the
+    generated ``rigid_body_rhs`` (claim S2) evaluated with an empty attitude of shape (0, n),
+    whose product costs nothing.  State ``("M",)``; derived ``Omega``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> from symrb.scenes import RigidBodyMomentum
+    >>> lam, M0 = np.array([0.7, 1.1, 1.6]), symrb.hat([0.5, 1.0, 1.5])
+    >>> a = symrb.integrate(RigidBodyMomentum, (0, 5), {"M": M0}, lam=lam, t_eval=[5.0])
+    >>> b = symrb.integrate(symrb.RigidBody, (0, 5), {"Q": np.eye(3), "M": M0}, lam=lam,
+    ...                     t_eval=[5.0])
+    >>> bool(np.abs(a.y.M - b.y.M).max() < 1e-9)
+    True
+    """
+
+    name = "rigid body momentum"
+    state = ("M",)
+
+    def rhs(self, y, lam):
+        M = y["M"]
+        return (_rb.rigid_body_rhs(np.empty((0, M.shape[-1])), M, lam)[1],)
+
+    def check(self, y, lam):
+        v.skew(y["M"], "y0['M']")
+
+    def derived(self, y, lam):
+        from .algebra import _Jinv_weights
+
+        return {"Omega": _Jinv_weights(lam) * y["M"]}
+
+
+# ---------------------------------------------------------------------------------------------
+# the planner
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """What a scene computes, decided by :func:`plan_scene`.
+
+    Attributes
+    ----------
+    system : str
+        The scene's system.
+    route : str
+        The public function(s) called, in words.
+    propagated : tuple of str
+        The state variables integrated.
+    skipped : tuple of (str, str)
+        What is not computed, and why.
+    kernels : tuple of str
+        The generated kernels the run evaluates (``module.function``).
+    record : dict
+        Observable -> (when, in words; the number of records).
+    save : dict
+        The save request handed to the integrator: ``{"t_eval": [...]}`` (continuous),
+        ``{"steps": N, "save_every": s}`` (fixed step) or ``{"steps": N}`` (training).
+    index : dict
+        Observable -> indices of its records among the saved states.
+    cost : dict
+        ``flops`` and ``seconds`` (estimates) and ``formula`` (how they were estimated).
+    notes : tuple of str
+        Further remarks (e.g. what changes against a scene with more effects).
+    modules : tuple of str
+        The symrb modules the run uses (their source enters the cache key).
+    """
+
+    system: str
+    route: str
+    propagated: tuple[str, ...]
+    skipped: tuple[tuple[str, str], ...]
+    kernels: tuple[str, ...]
+    record: dict[str, tuple[str, int]]
+    save: dict[str, Any]
+    index: dict[str, tuple[int, ...]]
+    cost: dict[str, Any]
+    notes: tuple[str, ...]
+    modules: tuple[str, ...]
+
+    def explain(self) -> str:
+        """The plan in words (what ``symrb run --explain`` prints)."""
+        out = [f"system      {self.system}", f"route       {self.route}"]
+        out.append(f"propagated  {', '.join(self.propagated) or '(nothing)'}")
+        for what, why in self.skipped:
+            out.append(f"skipped     {what}: {why}")
+        out.append(f"kernels     {', '.join(self.kernels)}")
+        save = ", ".join(f"{k} = {_brief_list(val)}" for k, val in self.save.items())
+        out.append(f"save        {save}")
+        for name, (when, count) in self.record.items():
+            out.append(f"record      {name}: {when} ({count} record{'s' * (count != 1)})")
+        c = self.cost
+        out.append(
+            f"cost        ~{c['flops']:.2g} flops, ~{_fmt_seconds(c['seconds'])} (estimate: "
+            f"{c['formula']})"
+        )
+        out += [f"note        {n}" for n in self.notes]
+        return "\n".join(out)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dict of the plan."""
+        d = dataclasses.asdict(self)
+        d["save"] = {k: (list(map(float, val)) if isinstance(val, list | tuple | np.ndarray)
+                         else val) for k, val in self.save.items()}  # fmt: skip
+        return json.loads(json.dumps(d, default=_json_default))
+
+
+def _brief_list(val: Any) -> str:
+    if isinstance(val, list | tuple | np.ndarray):
+        vals = [float(x) for x in val]
+        if len(vals) > 6:
+            return f"[{vals[0]:g}, {vals[1]:g}, ..., {vals[-1]:g}] ({len(vals)} times)"
+        return "[" + ", ".join(f"{x:g}" for x in vals) + "]"
+    return str(val)
+
+
+def _fmt_seconds(s: float) -> str:
+    return f"{s * 1e3:.2g} ms" if s < 1 else f"{s:.2g} s"
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, np.integer):
+        return int(o)
+    if isinstance(o, np.floating):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, tuple):
+        return list(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def _problem(key: str, message: str, allowed: list[Any] | None = None) -> SceneError:
+    return SceneError([{"key": key, "line": None, "message": message, "allowed": allowed}])
+
+
+def _continuous_save(scene: Any) -> tuple[Array, dict[str, tuple[int, ...]]]:
+    """The union of the observables' times (t_eval) and each observable's indices into it."""
+    T = float(scene.horizon.T)
+    per: dict[str, Array] = {}
+    for name, when in scene.observables.items():
+        if when.every is not None:
+            raise _problem(
+                f"observables.{name}.every",
+                "'every' counts the steps of a fixed-step integrator; this integrator chooses "
+                "its own steps",
+                ["end", "times", "points"],
+            )
+        if when.end:
+            per[name] = np.array([T])
+        elif when.points is not None:
+            per[name] = np.linspace(0.0, T, when.points)
+        else:
+            ts = np.asarray(when.times, dtype=float)
+            if ts[0] < 0 or ts[-1] > T:
+                raise _problem(
+                    f"observables.{name}.times",
+                    f"times must lie in [0, T] = [0, {T:g}], got {list(map(float, ts))}",
+                )
+            per[name] = ts
+    t_eval = np.unique(np.concatenate(list(per.values())))
+    index = {k: tuple(int(i) for i in np.searchsorted(t_eval, ts)) for k, ts in per.items()}
+    return t_eval, index
+
+
+def _fixed_step_save(scene: Any, h: float) -> tuple[int, int, dict[str, tuple[int, ...]]]:
+    """(steps, save_every, indices into the saved states) for a fixed step h."""
+    T = float(scene.horizon.T)
+    steps = round(T / h)
+    if steps < 1 or abs(steps * h - T) > 1e-9 * max(T, 1.0):
+        raise _problem("horizon.T", f"T = {T:g} must be a whole number of steps h = {h:g}")
+    per: dict[str, Array] = {}
+    for name, when in scene.observables.items():
+        if when.end:
+            ks = np.array([steps])
+        elif when.every is not None:
+            ks = np.arange(0, steps + 1, when.every)
+        else:
+            ts = (np.linspace(0.0, T, when.points) if when.points is not None
+                  else np.asarray(when.times, dtype=float))  # fmt: skip
+            ks = np.rint(ts / h).astype(int)
+            bad = np.abs(ks * h - ts) > 1e-9 * max(T, 1.0)
+            if np.any(bad) or ks[0] < 0 or ks[-1] > steps:
+                key = "points" if when.points is not None else "times"
+                raise _problem(
+                    f"observables.{name}.{key}",
+                    f"with a fixed step h = {h:g} the times must be multiples of h in [0, T]; "
+                    f"got {list(map(float, ts[bad] if np.any(bad) else ts))}",
+                )
+        per[name] = ks
+    every = 0
+    for ks in per.values():
+        for k in ks:
+            every = math.gcd(every, int(k))
+    every = max(every, 1)
+    index = {name: tuple(int(k) // every for k in ks) for name, ks in per.items()}
+    return steps, every, index
+
+
+def _est_continuous(T: float, rtol: float, rate: float, flops_rhs: float) -> dict[str, Any]:
+    steps = max(1.0, 0.15 * T * max(rate, 1e-3) * rtol ** (-1.0 / 8.0))
+    nfev = 12.0 * steps
+    return {
+        "flops": nfev * flops_rhs,
+        "seconds": nfev * (6e-6 + flops_rhs / 1.5e9),
+        "formula": f"~{nfev:.3g} field evaluations (DOP853: 12 per step, ~0.15 T |Omega| "
+        "rtol^(-1/8) steps) of the flops of one field, plus 6 us of overhead each",
+    }
+
+
+_RB_MODULES = ("continuous", "rigid_body", "algebra", "_validate", "_generated.rigid_body",
+               "_results")  # fmt: skip
+
+
+def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
+    """Plan a scene: the state to propagate, the kernels, the save times and a cost estimate.
+
+    Rules: the attitude is propagated only with the effect ``attitude`` (and by the routes whose
+    map needs it); costates are swept only with a terminal cost; only the observables asked for
+    are evaluated, each at its own times, from the union of the times handed to the integrator
+    (``t_eval`` of ``solve_ivp``, or ``save_every`` of a fixed-step map: the gcd of the steps
+    asked for).
+
+    Parameters
+    ----------
+    scene : Scene or mapping
+        The scene (a mapping is validated first).
+
+    Returns
+    -------
+    Plan
+
+    Raises
+    ------
+    SceneError
+        Requests the integrator cannot meet (``every`` with an adaptive integrator, times that
+        are not multiples of a fixed step, a horizon that is not a whole number of steps).
+
+    Examples
+    --------
+    >>> from symrb.scenes import parse_scene, plan_scene
+    >>> base = {"system": "rigid_body", "parameters": {"n": 10},
+    ...         "integrator": {"kind": "mv", "h": 0.05}, "horizon": {"T": 100.0}}
+    >>> plan = plan_scene({**base, "observables": {"energy": {"every": 100}, "M": "end"}})
+    >>> plan.propagated, plan.save
+    (('M',), {'steps': 2000, 'save_every': 100})
+    >>> plan.index["M"]
+    (20,)
+    """
+    sc: Any = parse_scene(scene)
+    obs = sc.observables
+    asked = set(obs)
+    allowed = set(type(sc).OBSERVABLES)
+    skipped: list[tuple[str, str]] = []
+    notes: list[str] = []
+    state_names = {"Q", "M", "P", "B", "x", "p", "states", "K", "beta"}
+    not_asked = sorted(allowed - asked - state_names)
+    if not_asked:
+        skipped.append((", ".join(not_asked), "not asked for (no diagnostic is evaluated unless "
+                        "it is an observable)"))  # fmt: skip
+    diag_kernels = {
+        "energy": "rigid_body.kinetic_energy", "casimirs": "rigid_body.casimir_traces",
+        "manakov": "rigid_body.manakov_integrals", "H": "symmetric_rigid_body.gl_hamiltonian",
+        "potential": "adjoint_orbits.brockett_potential",
+    }  # fmt: skip
+    extra = tuple(diag_kernels[o] for o in sorted(asked) if o in diag_kernels)
+    if isinstance(sc, SymmetricRigidBodyScene) and "energy" in asked:
+        extra = tuple(k for k in extra if k != "rigid_body.kinetic_energy")
+        extra += ("rigid_body.kinetic_energy",)
+    p: Any = sc.parameters
+    integ: Any = sc.integrator
+    modules: tuple[str, ...] = _RB_MODULES
+    propagated: tuple[str, ...]
+    kernels: tuple[str, ...]
+    route: str
+    save: dict[str, Any]
+    cost: dict[str, Any]
+    index: dict[str, tuple[int, ...]]
+    if isinstance(sc, RigidBodyScene):
+        n = p.n
+        rate = p.momentum / 0.5 if p.M0 is None else 2.0
+        attitude = "attitude" in sc.effects
+        if not attitude:
+            skipped.append(("attitude Q", "effect 'attitude' not named: the momentum equation "
+                            "M' = [M, Omega] does not involve Q"))  # fmt: skip
+        if isinstance(integ, Continuous):
+            t_eval, index = _continuous_save(sc)
+            save = {"t_eval": [float(t) for t in t_eval]}
+            flow = "RigidBody" if attitude else "symrb.scenes.RigidBodyMomentum"
+            route = f"symrb.integrate({flow}, method={integ.method!r}, rtol={integ.rtol:g}, " \
+                    f"atol={integ.atol:g})"  # fmt: skip
+            propagated = ("Q", "M") if attitude else ("M",)
+            flops = (6.0 if attitude else 4.0) * n**3
+            cost = _est_continuous(sc.horizon.T, integ.rtol, rate, flops)
+            kernels = ("rigid_body.rigid_body_rhs",) + extra
+            if not attitude:
+                notes.append(
+                    "solve_ivp's error control sees only M here, so its steps (and M, to the "
+                    "tolerance) differ from a run that also carries Q"
+                )
+        else:
+            steps, every, index = _fixed_step_save(sc, integ.h)
+            save = {"steps": steps, "save_every": every}
+            if isinstance(integ, MV):
+                modules += ("engine", "discrete", "solvers", "_compiled",
+                            "_generated.discrete_rigid_body")  # fmt: skip
+                if integ.order != 2 and n != 3:
+                    raise _problem("integrator.order",
+                                   f"the preprocessed method (order {integ.order}) needs n = 3, "
+                                   f"got n = {n}", [2])  # fmt: skip
+                if attitude or n == 3:
+                    route = f"symrb.mv_flow(h={integ.h:g}, order={integ.order})"
+                    propagated = ("Q", "M")
+                    if not attitude:
+                        skipped.pop()
+                        notes.append("n = 3: the generated step mv3_cayley_step updates Q and "
+                                     "m together (fused), so Q is stepped but not recorded")  # fmt: skip
+                    kernels = ("discrete_rigid_body.mv3_cayley_step",) if n == 3 else ()
+                else:
+                    route = (f"symrb.MVStepper(lam).step with an empty attitude, h={integ.h:g}: "
+                             "M_{k+1} = U^T M_k U needs only U")  # fmt: skip
+                    propagated = ("M",)
+                    kernels = ()
+                if integ.order != 2:
+                    kernels += ("discrete_rigid_body.mv3_preprocessed_lam",)
+                per = 3e-6 if n == 3 else 8 * 2.0 * n**3 / 1.5e9 + 40e-6
+                flops = 60.0 if n == 3 else 16.0 * n**3
+                cost = {"flops": steps * flops, "seconds": steps * per,
+                        "formula": f"{steps} steps x ~{_fmt_seconds(per)} a step (n = 3: one "
+                        "fused kernel call; else ~4 solver sweeps of two n^3 products)"}  # fmt: skip
+            else:
+                modules += ("discrete", "solvers", "_generated.discrete_rigid_body",
+                            "_generated.symmetric_rigid_body", "_progress")  # fmt: skip
+                route = f"symrb.discrete_rigid_body_flow(h={integ.h:g})"
+                propagated = ("Q", "P")
+                if not attitude:
+                    skipped.pop()
+                    notes.append("the symmetric representation's state is (Q, P): Q is "
+                                 "propagated by the map itself, though not recorded")  # fmt: skip
+                kernels = ("symmetric_rigid_body.symmetric_momentum",)
+                per = 60e-6 + 30.0 * n**3 / 1.5e9
+                cost = {"flops": steps * 30.0 * n**3, "seconds": steps * per,
+                        "formula": f"{steps} steps x ~{_fmt_seconds(per)} (a Newton solve of "
+                        "J_D(U) = hM a step)"}  # fmt: skip
+            kernels += extra
+    elif isinstance(sc, SymmetricRigidBodyScene | McLachlanScovelScene):
+        n = p.n
+        m = p.samples
+        samples = "samples" in sc.effects
+        if isinstance(integ, Discrete):
+            steps, every, index = _fixed_step_save(sc, integ.h)
+            save = {"steps": steps, "save_every": every}
+            if samples:
+                raise _problem("integrator.kind", "the learning version (effect 'samples') has "
+                               "no discrete map here", ["continuous"])  # fmt: skip
+            route = f"symrb.symmetric_flow(h={integ.h:g})"
+            modules += ("discrete", "solvers", "_generated.discrete_rigid_body",
+                        "_generated.symmetric_rigid_body", "_progress")  # fmt: skip
+            kernels = ("symmetric_rigid_body.symmetric_momentum",)
+            per = 60e-6 + 30.0 * n**3 / 1.5e9
+            cost = {
+                "flops": steps * 30.0 * n**3,
+                "seconds": steps * per,
+                "formula": f"{steps} steps x ~{_fmt_seconds(per)}",
+            }
+        else:
+            t_eval, index = _continuous_save(sc)
+            save = {"t_eval": [float(t) for t in t_eval]}
+            if isinstance(sc, McLachlanScovelScene):
+                flow = "McLachlanScovel"
+                kernels = ("symmetric_rigid_body.mclachlan_scovel_rhs",)
+            elif samples:
+                flow = "MultiSampleSymmetricRigidBody"
+                kernels = ("symmetric_rigid_body.control_rhs",
+                           "symmetric_rigid_body.symmetric_momentum")  # fmt: skip
+            else:
+                flow = "SymmetricRigidBody"
+                kernels = ("symmetric_rigid_body.symmetric_rigid_body_rhs",)
+            route = f"symrb.integrate({flow}, method={integ.method!r}, rtol={integ.rtol:g})"
+            modules += ("_generated.symmetric_rigid_body",)
+            cost = _est_continuous(sc.horizon.T, integ.rtol, 2.0 * p.momentum,
+                                   10.0 * m * n**3)  # fmt: skip
+        propagated = ("Q", "B") if isinstance(sc, McLachlanScovelScene) else ("Q", "P")
+        if samples:
+            propagated = tuple(f"{s} ({m} samples)" for s in propagated)
+        if isinstance(sc, SymmetricRigidBodyScene) and not samples:
+            skipped.append(("samples", "effect 'samples' not named: one body"))
+        kernels += extra
+    elif isinstance(sc, DoubleBracketScene):
+        t_eval, index = _continuous_save(sc)
+        save = {"t_eval": [float(t) for t in t_eval]}
+        route = f"symrb.double_bracket_flow(rtol={integ.rtol:g}, atol={integ.atol:g})"
+        propagated = ("x",)
+        kernels = ("adjoint_orbits.double_bracket_rhs",) + extra
+        modules = ("orbits", "algebra", "_validate", "_generated.adjoint_orbits",
+                   "_generated.rigid_body")  # fmt: skip
+        cost = _est_continuous(sc.horizon.T, integ.rtol, 1.0, 8.0 * p.n**3)
+    elif isinstance(sc, OrbitExtremalScene):
+        t_eval, index = _continuous_save(sc)
+        save = {"t_eval": [float(t) for t in t_eval]}
+        m = p.samples
+        modules = ("orbits", "algebra", "_validate", "_generated.adjoint_orbits")
+        if m == 1 and integ.costate == "corrected":
+            route = ("symrb.double_bracket_flow (one sample: the extremal with p_T = -N is "
+                     "x' = [x, [x, N]] with p = -N constant, claim S15)")  # fmt: skip
+            propagated = ("x",)
+            skipped.append(("costate sweep (two-point boundary value problem)",
+                            "one sample: p = -N along the extremal, an initial value problem "
+                            "replaces the BVP"))  # fmt: skip
+            kernels = ("adjoint_orbits.double_bracket_rhs",)
+            cost = _est_continuous(sc.horizon.T, 1e-11, 1.0, 8.0 * p.n**3)
+        else:
+            route = (f"symrb.solve_orbit_bvp(nodes={integ.nodes}, tol={integ.tol:g}, "
+                     f"costate={integ.costate!r}), evaluated at the save times")  # fmt: skip
+            propagated = (f"x ({m} samples)", f"p ({m} samples)")
+            kernels = ("adjoint_orbits (the extremal field, inside solve_orbit_bvp)",)
+            T = sc.horizon.T
+            secs = 0.2 * m * max(1.0, math.log(T) / math.log(1.5) + 1)
+            cost = {"flops": secs * 1.5e9, "seconds": secs,
+                    "formula": "~0.2 s per sample per continuation stage (horizons grow by 1.5 "
+                    "from 1 to T)"}  # fmt: skip
+        if "samples" not in sc.effects:
+            skipped.append(("samples", "effect 'samples' not named: one sample"))
+        if "costates" not in sc.effects:
+            skipped.append(("recording p", "effect 'costates' not named"))
+    else:  # ResNet
+        steps = sc.horizon.steps
+        cost_on = "terminal_cost" in sc.effects
+        for name, when in obs.items():
+            if name != "loss" and not when.end:
+                raise _problem(f"observables.{name}", "only the final network is kept: record "
+                               f"{name} at the end", ["end"])  # fmt: skip
+            if name == "loss" and not (when.end or when.every is not None):
+                raise _problem(f"observables.{name}", "the loss is recorded per gradient step",
+                               ["end", "every"])  # fmt: skip
+        if steps > 0 and not cost_on:
+            raise _problem("horizon.steps", f"{steps} gradient steps need a loss to descend: "
+                           "switch on the effect 'terminal_cost' or set steps = 0", [0])  # fmt: skip
+        modules = ("learning", "_validate", "_progress", "_generated.discrete_control")
+        L, S = p.layers, p.samples
+        per = L * S * 4e-7 + L * 2e-5
+        if steps > 0:
+            route = (f"symrb.train(steps={steps}, lr={integ.lr:g}, "
+                     f"activation={integ.activation!r}): a forward pass and a costate sweep a "
+                     "step")  # fmt: skip
+            propagated = ("states x_k", "costates p_k", "weights K, beta")
+            cost = {"flops": 2 * steps * L * S * 40.0, "seconds": 2 * steps * per,
+                    "formula": f"{steps} x (forward + costate sweep) of {L} layers x {S} "
+                    "samples"}  # fmt: skip
+        else:
+            route = "symrb.resnet_forward (no training)"
+            propagated = ("states x_k",)
+            skipped.append(("costate sweep", "no training steps" if cost_on
+                            else "no terminal cost: nothing to back-propagate"))  # fmt: skip
+            cost = {
+                "flops": L * S * 40.0,
+                "seconds": per,
+                "formula": f"one forward pass of {L} layers x {S} samples",
+            }
+        if "costates" in sc.effects:
+            route += "; symrb.costate_sweep at the end"
+        kernels = (f"discrete_control.resnet_step_{integ.activation}"
+                   f"{'' if integ.residual else '_plain'}",)  # fmt: skip
+        if steps > 0 or "costates" in sc.effects:
+            kernels += (f"discrete_control.resnet_adjoint_{integ.activation}"
+                        f"{'' if integ.residual else '_plain'}",)  # fmt: skip
+        save = {"steps": steps}
+        index = {}
+        for name, when in obs.items():
+            if name == "loss" and when.every is not None:
+                index[name] = tuple(range(0, steps + 1, when.every))
+            else:
+                index[name] = (steps,)
+    record = {name: (obs[name].describe(), len(index[name])) for name in obs}
+    return Plan(
+        system=str(sc.system),
+        route=route,
+        propagated=propagated,
+        skipped=tuple(skipped),
+        kernels=kernels,
+        record=record,
+        save=save,
+        index=index,
+        cost=cost,
+        notes=tuple(notes),
+        modules=tuple(dict.fromkeys(("scenes",) + modules)),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# running
+
+
+def _orth_error(Q: Array) -> Array:
+    n = Q.shape[-1]
+    err: Array = np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(n)).max(axis=(-2, -1))
+    return err
+
+
+def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
+    from .algebra import J_inv
+    from .continuous import gl_hamiltonian, symmetric_momentum
+    from .rigid_body import casimir_traces, kinetic_energy, manakov_integrals
+
+    if name in y:
+        return y[name]
+    M = y["M"] if "M" in y else (
+        symmetric_momentum(y["Q"], y["P"]) if "P" in y else np.swapaxes(y["Q"], -1, -2) @ y["B"]
+    )  # fmt: skip
+    if name == "M":
+        return M
+    if name == "Omega":
+        return J_inv(M, lam)
+    if name == "energy":
+        return kinetic_energy(M, lam)
+    if name == "casimirs":
+        return casimir_traces(M)
+    if name == "manakov":
+        return manakov_integrals(M, lam)
+    if name == "lax_spectrum":
+        # the Lax matrix M + mu Lambda^2 at mu = i, times i: Hermitian, with a conserved spectrum
+        out: Array = np.asarray(np.linalg.eigvalsh(1j * M - np.diag(lam**2)), dtype=float)
+        return out
+    if name == "orthogonality":
+        return _orth_error(y["Q"])
+    if name == "H":
+        return gl_hamiltonian(y["Q"], y["P"], lam)
+    if name == "U":
+        from .continuous import multi_sample_control
+
+        return multi_sample_control(y["Q"], y["P"], lam)
+    raise KeyError(name)  # pragma: no cover - the schema lists the names
+
+
+def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, Array], str]:
+    """(times of the saved states, the saved states by name, a failure message or '')."""
+    from .continuous import (
+        McLachlanScovel,
+        MultiSampleSymmetricRigidBody,
+        RigidBody,
+        SymmetricRigidBody,
+        integrate,
+    )
+
+    integ = sc.integrator
+    lam = x["lam"]
+    keep: tuple[str, ...]
+    if isinstance(integ, Continuous):
+        kw = dict(lam=lam, method=integ.method, rtol=integ.rtol, atol=integ.atol,
+                  t_eval=plan.save["t_eval"])  # fmt: skip
+        T = (0.0, float(sc.horizon.T))
+        if isinstance(sc, RigidBodyScene):
+            if "Q" in plan.propagated:
+                sol = integrate(RigidBody, T, {"Q": x["Q0"], "M": x["M0"]}, **kw)
+            else:
+                sol = integrate(RigidBodyMomentum, T, {"M": x["M0"]}, **kw)
+        elif isinstance(sc, McLachlanScovelScene):
+            sol = integrate(McLachlanScovel, T, {"Q": x["Q0"], "B": x["B0"]}, **kw)
+        else:
+            flow = MultiSampleSymmetricRigidBody if "samples" in sc.effects else SymmetricRigidBody
+            sol = integrate(flow, T, {"Q": x["Q0"], "P": x["P0"]}, **kw)
+        states = {k: sol.y[k] for k in sol.flow.state}
+        return sol.t, states, "" if sol.success else sol.message
+    steps, every = plan.save["steps"], plan.save["save_every"]
+    if isinstance(integ, MV):
+        from .engine import mv_flow
+
+        if "Q" in plan.propagated:
+            dsol = mv_flow(x["Q0"], x["M0"], lam, integ.h, steps, save_every=every,
+                           order=integ.order)  # fmt: skip
+            keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
+            return dsol.t, {k: dsol.y[k] for k in keep}, "" if dsol.success else dsol.message
+        return _mv_momentum(x["M0"], lam, integ.h, steps, every)
+    if isinstance(sc, RigidBodyScene):
+        from .discrete import discrete_rigid_body_flow
+
+        dsol = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, steps, save_every=every)
+        keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
+    else:
+        from .discrete import symmetric_flow
+
+        dsol = symmetric_flow(x["Q0"], x["P0"], lam, integ.h, steps, save_every=every)
+        keep = ("Q", "P", "M")
+    return dsol.t, {k: dsol.y[k] for k in keep}, "" if dsol.success else dsol.message
+
+
+def _mv_momentum(
+    M0: Array, lam: Array, h: float, steps: int, every: int
+) -> tuple[Array, dict[str, Array], str]:
+    """The Moser-Veselov momentum map M -> U^T M U alone (general n): ``MVStepper.step`` with an
+    empty attitude (shape (0, n, n)), so the product Q U is skipped; the M it returns is the M
+    of ``mv_flow`` bit for bit (the same stepper, the same operations on M)."""
+    from .engine import MVStepper
+    from .errors import NotConvergedError, OutOfDomainError
+
+    L = v.inertia(lam, positive=True)
+    Mk = v.skew(M0, "M0", L.shape[-1])
+    Mk = 0.5 * (Mk - np.swapaxes(Mk, -1, -2))
+    stepper = MVStepper(L, Mk.shape[:-2])
+    empty = np.empty((0,) + Mk.shape[-2:])
+    ks, Ms = [0], [Mk.copy()]
+    failure = ""
+    for k in range(1, steps + 1):
+        try:
+            _, Mk = stepper.step(empty, Mk, h)
+        except (OutOfDomainError, NotConvergedError) as exc:
+            failure = f"step {k} of {steps} failed: {exc}"
+            break
+        if k % every == 0:
+            ks.append(k)
+            Ms.append(Mk)
+    return np.asarray(ks, dtype=float) * h, {"M": np.stack(Ms)}, failure
+
+
+def _run_orbit(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
+    from .algebra import commutator, pairing
+    from .orbits import brockett_potential, double_bracket_flow, solve_orbit_bvp
+    from .rigid_body import casimir_traces
+
+    t_eval = np.asarray(plan.save["t_eval"])
+    x0, N = x["x0"], x["N"]
+    out: dict[str, Any] = {}
+    failure = ""
+    if isinstance(sc, DoubleBracketScene):
+        xs = double_bracket_flow(x0, N, t_eval, rtol=sc.integrator.rtol, atol=sc.integrator.atol)
+        states = {"x": xs}
+        fns: dict[str, Callable[[Array], Array]] = {
+            "x": lambda a: a, "potential": lambda a: brockett_potential(a, N),
+            "pairing": lambda a: pairing(a, N), "casimirs": casimir_traces,
+        }  # fmt: skip
+        for name, idx in plan.index.items():
+            out[name] = fns[name](xs[list(idx)])
+        return {"t": t_eval, "data": out, "failure": failure, "states": states}
+    integ = sc.integrator
+    if plan.propagated == ("x",):
+        xs = double_bracket_flow(x0, N, t_eval)[:, None]
+        ps = np.broadcast_to(-N, xs.shape).copy()
+    else:
+        res = solve_orbit_bvp(x0, N, float(sc.horizon.T), costate=integ.costate,
+                              nodes=integ.nodes, tol=integ.tol)  # fmt: skip
+        if not res.success:
+            failure = f"solve_orbit_bvp: {res.message}"
+        xs, ps = res.at(t_eval)
+    us = np.sum(commutator(ps, xs), axis=1)
+    vals = {"x": xs, "p": ps, "u": us}
+    for name, idx in plan.index.items():
+        out[name] = vals[name][list(idx)]
+    return {"t": t_eval, "data": out, "failure": failure}
+
+
+def _run_resnet(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
+    from .learning import costate_sweep, resnet_forward, squared_error, train
+
+    integ = sc.integrator
+    act, res = integ.activation, integ.residual
+    steps = sc.horizon.steps
+    K, beta = x["K0"], x["beta0"]
+    losses = None
+    if steps > 0:
+        tr = train(x["x0"], x["targets"], K, beta, steps=steps, lr=integ.lr, activation=act,
+                   residual=res)  # fmt: skip
+        K, beta, losses = tr.K, tr.beta, tr.losses
+    states = resnet_forward(x["x0"], K, beta, act, res)
+    data: dict[str, Any] = {}
+    times: dict[str, Array] = {}
+    for name, idx in plan.index.items():
+        times[name] = np.asarray(idx, dtype=float)
+        if name == "loss":
+            data[name] = (losses[list(idx)] if losses is not None
+                          else np.array([squared_error(states[-1], x["targets"])]))  # fmt: skip
+        elif name == "states":
+            data[name] = states[None]
+        elif name == "K":
+            data[name] = K[None]
+        elif name == "beta":
+            data[name] = beta[None]
+        elif name == "accuracy":
+            data[name] = np.array([np.mean(np.sign(states[-1][:, 1]) == x["labels"])])
+        else:
+            data[name] = costate_sweep(states, K, beta, x["targets"], act, res)[None]
+    return {"times": times, "data": data, "failure": ""}
+
+
+def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
+    """Run a planned scene: (times per observable, data per observable, failure message)."""
+    x = scene_inputs(sc)
+    if isinstance(sc, ResNetScene):
+        r = _run_resnet(sc, plan, x)
+        return r["times"], r["data"], r["failure"]
+    if isinstance(sc, DoubleBracketScene | OrbitExtremalScene):
+        r = _run_orbit(sc, plan, x)
+        t = r["t"]
+        return ({k: t[list(i)] for k, i in plan.index.items()}, r["data"], r["failure"])
+    t, states, failure = _run_body(sc, plan, x)
+    times, data = {}, {}
+    for name, idx in plan.index.items():
+        keep = [i for i in idx if i < t.shape[0]]  # a failed run stops early
+        # all records: the integrator's arrays as they are (a copy can change the memory
+        # layout, and with it the last bit of a reduction such as einsum)
+        whole = keep == list(range(t.shape[0]))
+        y = states if whole else {k: a[keep] for k, a in states.items()}
+        times[name] = t[keep]
+        data[name] = np.asarray(_body_observable(name, y, x["lam"]))
+    return times, data, failure
+
+
+# ---------------------------------------------------------------------------------------------
+# results and the store
+
+
+def _versions() -> dict[str, str]:
+    import scipy
+
+    from . import __version__
+
+    return {"symrb": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
+            "python": platform.python_version()}  # fmt: skip
+
+
+def _canonical(scene: Any) -> str:
+    return json.dumps(scene.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+
+
+_DIGESTS: dict[tuple[str, int, int], str] = {}
+
+
+def _file_digest(path: str) -> str:
+    """SHA-256 of a file, remembered while its modification time and size stay the same."""
+    st = os.stat(path)
+    key = (path, st.st_mtime_ns, st.st_size)
+    if key not in _DIGESTS:
+        _DIGESTS[key] = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    return _DIGESTS[key]
+
+
+def _code_digest(modules: Iterable[str]) -> str:
+    h = hashlib.sha256()
+    for name in sorted(modules):
+        mod = importlib.import_module(f"symrb.{name}")
+        path = getattr(mod, "__file__", None)
+        h.update(name.encode())
+        if path:
+            h.update(_file_digest(path).encode())
+    return h.hexdigest()
+
+
+def scene_key(scene: Scene, plan: Plan | None = None) -> str:
+    """The cache key of a scene: SHA-256 of its canonical JSON, of the source of the symrb
+    modules it uses and of the NumPy/SciPy/Python versions."""
+    plan = plan or plan_scene(scene)
+    versions = _versions()
+    payload = {"scene": _canonical(scene), "code": _code_digest(plan.modules),
+               "versions": {k: versions[k] for k in ("numpy", "scipy", "python")}}  # fmt: skip
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
+
+@dataclasses.dataclass
+class SceneResult:
+    """The outcome of :func:`run_scene`.
+
+    Attributes
+    ----------
+    scene : Scene
+        The scene that was run.
+    plan : Plan
+        Its plan.
+    times : dict of ndarray
+        Observable -> the times (training steps for the ResNet) of its records.
+    data : dict of ndarray
+        Observable -> its records, the record axis first.
+    meta : dict
+        ``key`` (the cache key), ``versions``, ``seconds`` (compute time of the first run),
+        ``from_cache``, ``success`` and ``message``.
+
+    Examples
+    --------
+    >>> from symrb.scenes import parse_scene, run_scene
+    >>> scene = parse_scene({"system": "rigid_body", "integrator": {"kind": "continuous"},
+    ...                      "horizon": {"T": 10.0}, "observables": {"energy": {"points": 3}}})
+    >>> r = run_scene(scene, cache=False)
+    >>> r.times["energy"], r["energy"].shape
+    (array([ 0.,  5., 10.]), (3,))
+    """
+
+    scene: Any
+    plan: Plan
+    times: dict[str, Array]
+    data: dict[str, Array]
+    meta: dict[str, Any]
+
+    def __getitem__(self, name: str) -> Array:
+        try:
+            return self.data[name]
+        except KeyError:
+            raise KeyError(f"scene recorded {list(self.data)}, not {name!r}") from None
+
+    def metadata(self) -> dict[str, Any]:
+        """The JSON side of the result: the scene, the plan, the versions and ``meta``."""
+        return {"scene": self.scene.model_dump(mode="json"), "plan": self.plan.to_dict(),
+                "meta": self.meta}  # fmt: skip
+
+    def save(self, directory: str | os.PathLike[str]) -> Path:
+        """Write ``arrays.npz`` and ``scene.json`` into ``directory`` (created); returns it."""
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        arrays = {f"data/{k}": a for k, a in self.data.items()}
+        arrays.update({f"times/{k}": a for k, a in self.times.items()})
+        np.savez(d / "arrays.npz", **arrays)  # type: ignore[arg-type]
+        (d / "scene.json").write_text(json.dumps(self.metadata(), indent=1,
+                                                 default=_json_default) + "\n")  # fmt: skip
+        return d
+
+    @classmethod
+    def load(
+        cls, directory: str | os.PathLike[str], scene: Any = None, plan: Plan | None = None
+    ) -> SceneResult:
+        """Read a result written by :meth:`save` (``scene`` and ``plan``, when the caller has
+        them, are used instead of validating and planning the stored scene again)."""
+        d = Path(directory)
+        meta = json.loads((d / "scene.json").read_text())
+        if scene is None:
+            scene = parse_scene(meta["scene"])
+        with np.load(d / "arrays.npz") as z:
+            data = {k[5:]: z[k] for k in z.files if k.startswith("data/")}
+            times = {k[6:]: z[k] for k in z.files if k.startswith("times/")}
+        return cls(scene, plan or plan_scene(scene), times, data, dict(meta["meta"]))
+
+    def plot(self, names: Sequence[str] | None = None) -> Any:
+        """A matplotlib figure: each recorded observable (flattened per record) against time."""
+        import matplotlib.pyplot as plt
+
+        names = list(names or self.data)
+        fig, axes = plt.subplots(len(names), 1, figsize=(6.4, 2.2 * len(names)), squeeze=False,
+                                 sharex=False)  # fmt: skip
+        for ax, name in zip(axes[:, 0], names, strict=True):
+            t = self.times[name]
+            y = np.asarray(self.data[name]).reshape(len(t), -1)
+            if np.iscomplexobj(y):
+                y = y.imag
+            ax.plot(t, y[:, : min(y.shape[1], 12)], ".-" if len(t) < 30 else "-", lw=1)
+            ax.set_ylabel(name)
+        axes[-1, 0].set_xlabel("step" if isinstance(self.scene, ResNetScene) else "t")
+        fig.suptitle(self.scene.title or self.scene.system)
+        fig.tight_layout()
+        return fig
+
+
+def _default_cache() -> Path:
+    env = os.environ.get("SYMRB_CACHE_DIR")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "symrb" / "scenes"
+
+
+class SceneStore:
+    """A content-addressed store of scene results: ``<root>/<key[:2]>/<key>/`` holding
+    ``arrays.npz`` and ``scene.json`` (written to a temporary directory and renamed, so a
+    process killed mid-write leaves no partial entry), and ``log.jsonl`` with one line per
+    computation (key, process id, seconds).
+
+    Parameters
+    ----------
+    root : path-like, optional
+        The directory; default ``$SYMRB_CACHE_DIR`` or ``~/.cache/symrb/scenes``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from symrb.scenes import SceneStore, parse_scene, run_scene
+    >>> store = SceneStore(tempfile.mkdtemp())
+    >>> scene = parse_scene({"system": "double_bracket", "integrator": {"kind": "continuous"},
+    ...                      "horizon": {"T": 2.0}, "observables": {"pairing": "end"}})
+    >>> a = run_scene(scene, cache=store)
+    >>> b = run_scene(scene, cache=store)
+    >>> a.meta["from_cache"], b.meta["from_cache"], len(store.log())
+    (False, True, 1)
+    """
+
+    def __init__(self, root: str | os.PathLike[str] | None = None) -> None:
+        self.root = Path(root) if root is not None else _default_cache()
+
+    def path(self, key: str) -> Path:
+        return self.root / key[:2] / key
+
+    def get(self, key: str, scene: Any = None, plan: Plan | None = None) -> SceneResult | None:
+        """The stored result of ``key``, or None (``scene``, ``plan``: see SceneResult.load)."""
+        d = self.path(key)
+        if not (d / "scene.json").is_file():
+            return None
+        try:
+            return SceneResult.load(d, scene, plan)
+        except (OSError, ValueError, KeyError):  # a damaged entry is recomputed
+            return None
+
+    def put(self, key: str, result: SceneResult) -> None:
+        final = self.path(key)
+        final.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{key[:8]}-", dir=final.parent))
+        try:
+            result.save(tmp)
+            try:
+                os.replace(tmp, final)
+            except OSError:  # another process stored it first: theirs is as good
+                shutil.rmtree(tmp, ignore_errors=True)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        line = json.dumps({"key": key, "pid": os.getpid(), "seconds": result.meta["seconds"],
+                           "system": result.scene.system})  # fmt: skip
+        with open(self.root / "log.jsonl", "a") as f:
+            f.write(line + "\n")
+
+    def log(self) -> list[dict[str, Any]]:
+        """The computations recorded, oldest first."""
+        try:
+            text = (self.root / "log.jsonl").read_text()
+        except FileNotFoundError:
+            return []
+        return [json.loads(s) for s in text.splitlines() if s.strip()]
+
+
+def _store(cache: bool | str | os.PathLike[str] | SceneStore | None) -> SceneStore | None:
+    if cache is None or cache is False:
+        return None
+    if cache is True:
+        return SceneStore()
+    if isinstance(cache, SceneStore):
+        return cache
+    if isinstance(cache, str | os.PathLike):
+        return SceneStore(cache)
+    raise InputError(f"cache must be True, False, a directory or a SceneStore, got {cache!r}")
+
+
+def run_scene(
+    scene: Scene | Mapping[str, Any] | str | os.PathLike[str],
+    *,
+    cache: bool | str | os.PathLike[str] | SceneStore | None = True,
+) -> SceneResult:
+    """Plan and run a scene, or load its result from the cache.
+
+    Parameters
+    ----------
+    scene : Scene, mapping, or path
+        The scene (a path or TOML text is read with :func:`load_scene`).
+    cache : bool, path or SceneStore, optional
+        ``True`` (default): the store at ``$SYMRB_CACHE_DIR`` or ``~/.cache/symrb/scenes``;
+        a directory or a :class:`SceneStore`; ``False``: compute and store nothing.
+
+    Returns
+    -------
+    SceneResult
+        ``meta["from_cache"]`` tells whether anything was computed.  A run whose integrator
+        stopped early has ``meta["success"]`` False and is not stored.
+
+    Examples
+    --------
+    >>> from symrb.scenes import run_scene
+    >>> r = run_scene({"system": "resnet", "effects": ["terminal_cost"],
+    ...                "integrator": {"kind": "gradient_descent"}, "horizon": {"steps": 20},
+    ...                "observables": {"loss": {"every": 10}}}, cache=False)
+    >>> r.times["loss"], bool(r["loss"][-1] < r["loss"][0])
+    (array([ 0., 10., 20.]), True)
+    """
+    if isinstance(scene, str | os.PathLike):
+        sc: Any = load_scene(scene)
+    else:
+        sc = parse_scene(scene)
+    plan = plan_scene(sc)
+    store = _store(cache)
+    key = scene_key(sc, plan)
+    if store is not None:
+        hit = store.get(key, sc, plan)
+        if hit is not None:
+            hit.meta["from_cache"] = True
+            return hit
+    start = time.perf_counter()
+    times, data, failure = _execute(sc, plan)
+    seconds = time.perf_counter() - start
+    meta = {"key": key, "versions": _versions(), "seconds": seconds, "from_cache": False,
+            "success": not failure, "message": failure or "ok"}  # fmt: skip
+    result = SceneResult(sc, plan, times, data, meta)
+    if store is not None and not failure:
+        store.put(key, result)
+    return result
+
+
+# ---------------------------------------------------------------------------------------------
+# sweeps
+
+
+def _parse_value(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def expand_grid(
+    scene: Scene | Mapping[str, Any], grid: Mapping[str, Sequence[Any]] | Sequence[str]
+) -> list[tuple[dict[str, Any], Scene]]:
+    """The scenes of a grid: every combination of the values of the dotted keys.
+
+    Parameters
+    ----------
+    scene : Scene or mapping
+        The base scene.
+    grid : mapping or sequence of str
+        ``{"parameters.seed": [0, 1], ...}``, or strings ``"key=v1,v2,..."`` as on the command
+        line (values read as TOML values: ``1e-8``, ``"DOP853"``, ``true``; bare words as
+        strings).
+
+    Returns
+    -------
+    list of (dict, Scene)
+        Each grid point (key -> value) with its validated scene, in row-major order.
+
+    Raises
+    ------
+    SceneError
+        A grid point that makes an invalid scene (the key is named).
+
+    Examples
+    --------
+    >>> from symrb.scenes import expand_grid
+    >>> base = {"system": "rigid_body", "integrator": {"kind": "continuous"},
+    ...         "horizon": {"T": 1.0}, "observables": {"energy": "end"}}
+    >>> pts = expand_grid(base, ["parameters.seed=0,1", "integrator.rtol=1e-6,1e-8"])
+    >>> len(pts), pts[1][0]
+    (4, {'parameters.seed': 0, 'integrator.rtol': 1e-08})
+    """
+    import itertools
+
+    base = parse_scene(scene).model_dump(mode="json")
+    if not isinstance(grid, Mapping):
+        parsed: dict[str, list[Any]] = {}
+        for item in grid:
+            key, sep, vals = str(item).partition("=")
+            if not sep or not key.strip() or not vals.strip():
+                raise InputError(f"grid must be key=v1,v2,... got {item!r}")
+            parsed[key.strip()] = [_parse_value(s.strip()) for s in vals.split(",")]
+        grid = parsed
+    keys = list(grid)
+    out = []
+    for combo in itertools.product(*(list(grid[k]) for k in keys)):
+        data = json.loads(json.dumps(base))
+        for key, val in zip(keys, combo, strict=True):
+            parts = key.split(".")
+            node = data
+            for part in parts[:-1]:
+                if not isinstance(node.get(part), dict):
+                    node[part] = {}
+                node = node[part]
+            node[parts[-1]] = val
+        point = dict(zip(keys, combo, strict=True))
+        try:
+            out.append((point, parse_scene(data, source=f"grid point {point}")))
+        except SceneError as exc:
+            raise exc from None
+    return out
+
+
+@dataclasses.dataclass
+class SweepResult:
+    """The outcome of :func:`sweep`.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        One row per grid point: the grid values, ``key``, ``from_cache``, ``seconds``,
+        ``success`` and, for every observable with one number per record, its final value
+        (``<name>``) and its largest change from the first record (``<name>_drift``).
+    results : list of SceneResult
+        The results in the table's order (the arrays).
+    """
+
+    table: Any
+    results: list[SceneResult]
+
+
+def _summary(point: Mapping[str, Any], r: SceneResult) -> dict[str, Any]:
+    row: dict[str, Any] = dict(point)
+    row.update(key=r.meta["key"][:16], from_cache=r.meta["from_cache"],
+               seconds=r.meta["seconds"], success=r.meta["success"])  # fmt: skip
+    for name, a in r.data.items():
+        arr = np.asarray(a)
+        if arr.ndim == 1 and arr.size and not np.iscomplexobj(arr):
+            row[name] = float(arr[-1])
+            row[f"{name}_drift"] = float(np.max(np.abs(arr - arr[0])))
+    return row
+
+
+def _run_chunk(scenes: list[Any], cache_root: str | None) -> list[SceneResult]:
+    """Run a chunk of scenes in a worker (the store makes a retried chunk resume)."""
+    store: Any = SceneStore(cache_root) if cache_root is not None else False
+    return [run_scene(s, cache=store) for s in scenes]
+
+
+def sweep(
+    scene: Scene | Mapping[str, Any] | str | os.PathLike[str],
+    grid: Mapping[str, Sequence[Any]] | Sequence[str],
+    *,
+    cache: bool | str | os.PathLike[str] | SceneStore | None = True,
+    scheduler: str | None = None,
+    local_cluster: int | None = None,
+    client: Any = None,
+    chunk_seconds: float = 0.05,
+    chunk_size: int | None = None,
+    retries: int = 3,
+    progress: bool = False,
+) -> SweepResult:
+    """Run a scene over a grid of parameters, in-process or on Dask.
+
+    Parameters
+    ----------
+    scene : Scene, mapping or path
+        The base scene.
+    grid : mapping or sequence of str
+        The grid (see :func:`expand_grid`).
+    cache : bool, path or SceneStore, optional
+        As in :func:`run_scene`; on Dask the store must be a directory every worker can reach.
+        Finished points are stored as they finish, so a retried task (a killed worker) loads
+        them instead of recomputing.
+    scheduler : str, optional
+        The address of a ``dask.distributed`` scheduler (``tcp://host:port``).
+    local_cluster : int, optional
+        Start a ``LocalCluster`` of this many single-threaded worker processes on the loopback
+        interface (no dashboard) for this sweep.
+    client : dask.distributed.Client, optional
+        An existing client (instead of ``scheduler`` / ``local_cluster``).
+    chunk_seconds : float, optional
+        Points are grouped into tasks of at least this many estimated seconds (from the plan),
+        as long as every worker still gets several tasks.
+    chunk_size : int, optional
+        The points per task, overriding ``chunk_seconds``.
+    retries : int, optional
+        How often Dask retries a failed task.
+    progress : bool, optional
+        A tqdm progress bar over the points.
+
+    Returns
+    -------
+    SweepResult
+        The table (pandas) and the results, in grid order.  Results equal a serial run's bit
+        for bit: each point runs the same code on the same inputs.
+
+    Examples
+    --------
+    >>> from symrb.scenes import sweep
+    >>> base = {"system": "rigid_body", "integrator": {"kind": "continuous"},
+    ...         "horizon": {"T": 5.0}, "observables": {"energy": {"points": 3}}}
+    >>> out = sweep(base, {"parameters.momentum": [0.5, 1.0]}, cache=False)
+    >>> list(out.table["parameters.momentum"]), len(out.results)
+    ([0.5, 1.0], 2)
+    """
+    import pandas as pd
+
+    from ._progress import _Bar
+
+    base = load_scene(scene) if isinstance(scene, str | os.PathLike) else parse_scene(scene)
+    points = expand_grid(base, grid)
+    store = _store(cache)
+    results: list[SceneResult | None] = [None] * len(points)
+    given = sum(x is not None for x in (scheduler, local_cluster, client))
+    if given > 1:
+        raise InputError("give at most one of scheduler, local_cluster and client")
+    if given == 0:
+        with _Bar(len(points), "sweep", bool(progress), unit="point") as bar:
+            for i, (_pt, sc) in enumerate(points):
+                results[i] = run_scene(sc, cache=store if store is not None else False)
+                bar.step()
+    else:
+        _dask_sweep(points, results, store, scheduler, local_cluster, client, chunk_seconds,
+                    chunk_size, retries, progress)  # fmt: skip
+    done = [r for r in results if r is not None]
+    table = pd.DataFrame([_summary(pt, r) for (pt, _), r in zip(points, done, strict=True)])
+    return SweepResult(table, done)
+
+
+def _dask_sweep(
+    points: list[tuple[dict[str, Any], Any]],
+    results: list[SceneResult | None],
+    store: SceneStore | None,
+    scheduler: str | None,
+    local_cluster: int | None,
+    client: Any,
+    chunk_seconds: float,
+    chunk_size: int | None,
+    retries: int,
+    progress: bool,
+) -> None:
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            "sweeps on Dask need dask.distributed: pip install 'dask[distributed]'"
+        ) from None
+    from ._progress import _Bar
+
+    with contextlib.ExitStack() as stack:
+        if client is None:
+            if local_cluster is not None:
+                workers = v.count(local_cluster, "local_cluster", 1)
+                cluster = stack.enter_context(LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True,
+                    host="127.0.0.1", dashboard_address=None))  # fmt: skip
+                client = stack.enter_context(Client(cluster))
+            else:
+                client = stack.enter_context(Client(scheduler))
+        nworkers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})) or 1)
+        est = max(plan_scene(points[0][1]).cost["seconds"], 1e-6)
+        size = max(1, math.ceil(chunk_seconds / est))
+        size = min(size, max(1, len(points) // (4 * nworkers)))
+        if chunk_size is not None:
+            size = v.count(chunk_size, "chunk_size", 1)
+        chunks = [list(range(i, min(i + size, len(points)))) for i in range(0, len(points), size)]
+        root = str(store.root) if store is not None else None
+        futures = {
+            client.submit(_run_chunk, [points[i][1] for i in idx], root, retries=retries,
+                          pure=False): idx
+            for idx in chunks
+        }  # fmt: skip
+        with _Bar(len(points), "sweep", bool(progress), unit="point") as bar:
+            for fut in as_completed(futures):
+                for i, r in zip(futures[fut], fut.result(), strict=True):
+                    results[i] = r
+                    bar.step()
