@@ -36,7 +36,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
         "jd_residual", "symmetric_step", "symmetric_flow", "mv_algorithm1", "mv_algorithm2",
         "discrete_rigid_body_flow", "DiscreteFlowSolution",
     ),
-    "engine": ("MVStepper", "mv_flow"),
+    "engine": ("MVStepper", "mv_flow", "PREPROCESSED_ORDERS"),
     "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
     "exact": ("ExactSolution", "rigid_body_exact"),
     "learning": (
@@ -46,6 +46,12 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "orbits": (
         "orbit_extremal_rhs", "orbit_hamiltonian", "brockett_potential", "double_bracket_rhs",
         "double_bracket_flow", "OrbitBVPResult", "solve_orbit_bvp",
+    ),
+    "scenes": (
+        "SceneError", "When", "RigidBodyScene", "SymmetricRigidBodyScene",
+        "McLachlanScovelScene", "DoubleBracketScene", "OrbitExtremalScene", "ResNetScene", "Scene",
+        "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan", "plan_scene",
+        "SceneResult", "SceneStore", "run_scene", "expand_grid", "SweepResult", "sweep",
     ),
     "rigid_body": (
         "rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals",
@@ -85,6 +91,7 @@ if TYPE_CHECKING:  # static type checkers see the eager imports
         learning,
         orbits,
         rigid_body,
+        scenes,
         solvers,
     )
     from .algebra import *  # noqa: F403
@@ -97,4 +104,5 @@ if TYPE_CHECKING:  # static type checkers see the eager imports
     from .learning import *  # noqa: F403
     from .orbits import *  # noqa: F403
     from .rigid_body import *  # noqa: F403
+    from .scenes import *  # noqa: F403
     from .solvers import *  # noqa: F403

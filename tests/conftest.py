@@ -19,7 +19,3 @@ settings.load_profile("symrb")
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20240208)
-
-
-def pytest_configure(config: pytest.Config) -> None:
-    config.addinivalue_line("markers", "dask: starts a dask.distributed LocalCluster")
