@@ -255,6 +255,14 @@ def _cay(X: Array, eye: Array) -> Array:
     return U
 
 
+def _cay_increment(X: Array, eye: Array) -> Array:
+    """D = cay(X) - I = 2 (I - X)^{-1} X, computed as such (small, O(||X||)), so that an update
+    Q + QD rounds the O(h) increment rather than a product with an O(1) matrix (Brouwer's law:
+    the rounding errors of U = I + D then do not accumulate with a bias)."""
+    D: Array = 2.0 * np.asarray(np.linalg.solve(eye - X, X), dtype=np.float64)
+    return D
+
+
 def _cay_inverse(U: Array, eye: Array) -> Array:
     """X = (U - I)(U + I)^{-1}, made exactly skew."""
     X = np.swapaxes(np.linalg.solve(np.swapaxes(U + eye, -1, -2), np.swapaxes(U - eye, -1, -2)),
@@ -454,9 +462,13 @@ class MVStepper:
             Q1 = np.stack(out[5:], axis=-1).reshape(Qa.shape)
             return Q1, _hat_cols(list(out[2:5])).reshape(Ma.shape)
         X = self._X_n(h * Mf, h)
-        U = _cay(X, self._eye)
-        Ut = np.swapaxes(U, -1, -2)
-        return (Qf @ U).reshape(Qa.shape), (Ut @ Mf @ U).reshape(Ma.shape)
+        # with U = I + D: QU = Q + QD and, M being skew, U^T M U = M + MD - (MD)^T + D^T(MD):
+        # the O(1) state is added to once, to an O(h) increment (what keeps the rounding errors
+        # of a long run a random walk, growing like eps sqrt(N), rather than eps N)
+        D = _cay_increment(X, self._eye)
+        MD = Mf @ D
+        dM = MD - np.swapaxes(MD, -1, -2) + np.swapaxes(D, -1, -2) @ MD
+        return (Qf + Qf @ D).reshape(Qa.shape), (Mf + dM).reshape(Ma.shape)
 
 
 # ---------------------------------------------------------------------------------------------
