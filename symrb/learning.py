@@ -45,6 +45,8 @@ from numpy.typing import ArrayLike
 
 from . import _validate as v
 from ._generated import discrete_control as _gen
+from ._generated import discrete_rigid_body as _gdr
+from ._generated import symmetric_rigid_body as _gsr
 from ._progress import progress_bar
 from ._validate import Array
 from .errors import InputError
@@ -57,6 +59,10 @@ __all__ = [
     "train",
     "TrainResult",
     "toy_classification",
+    "so_network_forward",
+    "so_network_gradients",
+    "so_network_costates",
+    "so_extremal_residual",
 ]
 
 _ACTIVATIONS = ("tanh", "logistic")
@@ -458,3 +464,338 @@ def toy_classification(num: int = 200, seed: int | np.random.Generator | None = 
     c = np.where(x[:, 1] - 0.5 * np.sin(np.pi * x[:, 0]) >= 0, 1.0, -1.0)
     targets = np.stack([x[:, 0], c], axis=-1)
     return x, targets, c
+
+
+# =============================================================================================
+# The SO(n) network of the paper's learning theorem (claim D9)
+#
+# Samples Q^a_0 in SO(n) (a = 1..M), layers Q^a_{k+1} = Q^a_k U_k with shared controls U_k in
+# SO(n), loss L(U) = sum_a 1/2 ||Q^a_N - T^a||_F^2 + alpha sum_k tr(Lambda (I - U_k)).  Inside,
+# the samples are stacked by rows, (M, n, n) -> (M n, n): a layer, a costate step and the sum
+# over the samples in the gradient are then one matrix product each (the generated kernels of
+# claim D9 in symrb._generated.discrete_rigid_body).
+
+
+def _so_controls(U: ArrayLike) -> Array:
+    UU = v.orthogonal(U, "U")
+    if UU.ndim != 3 or UU.shape[0] < 1:
+        raise InputError(f"U must have shape (N, n, n) with N >= 1 layers, got {UU.shape}")
+    return UU
+
+
+def _so_samples(Q0: ArrayLike, n: int) -> Array:
+    Q = v.orthogonal(Q0, "Q0", n)
+    if Q.ndim != 3 or Q.shape[0] < 1:
+        raise InputError(f"Q0 must have shape (M, n, n) with M >= 1 samples, got {Q.shape}")
+    return Q
+
+
+def _so_targets(targets: ArrayLike, shape: tuple[int, ...]) -> Array:
+    T = v.as_float_array(targets, "targets")
+    if T.shape != shape:
+        raise InputError(f"targets must have shape (M, n, n) = {shape} like Q0, got {T.shape}")
+    return T
+
+
+def _so_lam(lam: ArrayLike, n: int) -> Array:
+    L = v.inertia(lam, "lam", positive=True)
+    if L.shape != (n,):
+        raise InputError(f"lam must have shape (n,) = ({n},) to match U, got {L.shape}")
+    return L
+
+
+def _so_alpha(alpha: object) -> float:
+    a = v.real_scalar(alpha, "alpha")
+    if a < 0:
+        raise InputError(f"alpha must be >= 0 (the weight of the running cost), got {alpha!r}")
+    return a
+
+
+def _so_forward(Qs0: Array, U: Array) -> Array:
+    """All layers on stacked samples: (N + 1, M n, n)."""
+    out = np.empty((U.shape[0] + 1, *Qs0.shape))
+    out[0] = Qs0
+    for k in range(U.shape[0]):
+        out[k + 1] = _gdr.so_network_layer(out[k], U[k])
+    return out
+
+
+def _so_loss(QN: Array, Ts: Array, U: Array, lam: Array, alpha: float) -> float:
+    run = float(np.sum(lam * (1.0 - np.diagonal(U, axis1=-2, axis2=-1)))) if alpha else 0.0
+    return 0.5 * float(np.sum((QN - Ts) ** 2)) + alpha * run
+
+
+def _so_backward(
+    Qs: Array, U: Array, lam: Array, Ts: Array, alpha: float, costates: bool = False
+) -> tuple[Array, Array | None]:
+    """The costate sweep on stacked samples: the skew gradients G (N, n, n) and, when asked, all
+    costates (N + 1, M n, n)."""
+    N = U.shape[0]
+    P = _gdr.so_network_endpoint(Qs[N], Ts)
+    Ps = None
+    if costates:
+        Ps = np.empty_like(Qs)
+        Ps[N] = P
+    G = np.empty_like(U)
+    lam_alpha = alpha * lam  # the kernel's Lambda is alpha Lambda
+    for k in range(N - 1, -1, -1):
+        G[k] = _gdr.so_network_gradient(P, Qs[k + 1], U[k], lam_alpha)
+        P = _gdr.so_network_costate(P, U[k])
+        if Ps is not None:
+            Ps[k] = P
+    return G, Ps
+
+
+class _SOProblem:
+    """A validated SO(n) network problem (samples stacked by rows), shared by the trainers."""
+
+    def __init__(
+        self, Q0: ArrayLike, targets: ArrayLike, lam: ArrayLike, alpha: object, n: int
+    ) -> None:
+        Q = _so_samples(Q0, n)
+        self.M, self.n = Q.shape[0], n
+        self.Qs0 = Q.reshape(self.M * n, n)
+        self.Ts = _so_targets(targets, Q.shape).reshape(self.M * n, n)
+        self.lam = _so_lam(lam, n)
+        self.alpha = _so_alpha(alpha)
+
+    def loss(self, U: Array) -> float:
+        QN = self.Qs0
+        for k in range(U.shape[0]):
+            QN = _gdr.so_network_layer(QN, U[k])
+        return _so_loss(QN, self.Ts, U, self.lam, self.alpha)
+
+    def gradients(self, U: Array) -> tuple[float, Array, Array]:
+        """(loss, G, stacked layers)."""
+        Qs = _so_forward(self.Qs0, U)
+        G, _ = _so_backward(Qs, U, self.lam, self.Ts, self.alpha)
+        return _so_loss(Qs[-1], self.Ts, U, self.lam, self.alpha), G, Qs
+
+
+def so_network_forward(Q0: ArrayLike, U: ArrayLike) -> Array:
+    r"""All layers :math:`Q^a_k` of the SO(n) network :math:`Q^a_{k+1} = Q^a_k U_k` (claim D9).
+
+    The controls :math:`U_k` are shared by the samples, the samples :math:`Q^a_0` are the
+    initial conditions.  Each layer is the generated kernel ``so_network_layer`` applied to the
+    samples stacked by rows (one matrix product per layer for all samples).
+
+    Parameters
+    ----------
+    Q0 : array_like, shape (M, n, n)
+        The samples :math:`Q^a_0`, in SO(n).
+    U : array_like, shape (N, n, n)
+        The controls (weights) :math:`U_0, \dots, U_{N-1}`, in SO(n).
+
+    Returns
+    -------
+    Q : ndarray, shape (N + 1, M, n, n)
+        ``Q[k, a]`` is :math:`Q^a_k`.
+
+    Raises
+    ------
+    InputError
+        A shape mismatch, or ``Q0`` or ``U`` not in SO(n) (to 1e-8).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.learning import so_network_forward
+    >>> import symrb
+    >>> Q0, U = symrb.random_SO(3, (5,), seed=0), symrb.random_SO(3, (4,), seed=1)
+    >>> Q = so_network_forward(Q0, U)
+    >>> Q.shape
+    (5, 5, 3, 3)
+    >>> bool(np.allclose(Q[-1], Q0 @ U[0] @ U[1] @ U[2] @ U[3]))
+    True
+    """
+    UU = _so_controls(U)
+    n = UU.shape[-1]
+    Q = _so_samples(Q0, n)
+    Qs = _so_forward(Q.reshape(-1, n), UU)
+    return Qs.reshape(UU.shape[0] + 1, Q.shape[0], n, n)
+
+
+def so_network_gradients(
+    Q0: ArrayLike,
+    U: ArrayLike,
+    lam: ArrayLike,
+    targets: ArrayLike,
+    alpha: float = 0.0,
+) -> tuple[float, Array]:
+    r"""Loss and skew gradients of the SO(n) network from the costates of the maximum principle.
+
+    The loss is
+
+    .. math::
+
+        L(U) = \sum_a \tfrac12\|Q^a_N - T^a\|_F^2 + \alpha\sum_k \operatorname{tr}(\Lambda(I - U_k)),
+
+    the paper's learning problem (claim D9) with its running cost :math:`\operatorname{tr}
+    (\Lambda U_k)` replaced by :math:`-\alpha\operatorname{tr}(\Lambda U_k)` plus a constant, so
+    that for :math:`\alpha > 0` the running cost is :math:`\ge 0` and vanishes at :math:`U_k = I`.
+    The costates are those of the proof before the sign flip (D9), :math:`P^a_N =
+    -\partial\phi/\partial Q^a_N = -(Q^a_N - T^a)` and :math:`P^a_k = P^a_{k+1}U_k^T` (minus the
+    back-propagated gradients, as for the ResNet), and
+
+    .. math::
+
+        G_k = \tfrac12(S_k - S_k^T) + \tfrac\alpha2(\Lambda U_k - U_k^T\Lambda),\qquad
+        S_k = \sum_a (P^a_{k+1})^T Q^a_{k+1},
+
+    which satisfies :math:`\frac{d}{dt}L(\dots, U_k e^{t\xi}, \dots)|_{t=0} =
+    \operatorname{tr}(G_k^T\xi)` for every skew :math:`\xi`.  Equivalently :math:`G_k =
+    \tfrac12 U_k^T(\alpha J_D(U_k) - \sum_a((Q^a_k)^TP^a_k - (P^a_k)^TQ^a_k))U_k`: it vanishes
+    exactly when the paper's equation for :math:`U_k` (Ukdef2) holds with :math:`\Lambda \to
+    \alpha\Lambda`.  The formulas are the generated kernels checked by claim D9 (exact rational
+    evidence against the directional derivative).
+
+    Parameters
+    ----------
+    Q0 : array_like, shape (M, n, n)
+        The samples :math:`Q^a_0`, in SO(n).
+    U : array_like, shape (N, n, n)
+        The controls, in SO(n).
+    lam : array_like, shape (n,)
+        The diagonal of :math:`\Lambda`, positive.
+    targets : array_like, shape (M, n, n)
+        The targets :math:`T^a` (in SO(n) for the paper's problem; any matrices work).
+    alpha : float, optional
+        The weight :math:`\alpha \ge 0` of the running cost.
+
+    Returns
+    -------
+    loss : float
+        :math:`L(U)`.
+    G : ndarray, shape (N, n, n)
+        The skew gradients :math:`G_k`.
+
+    Raises
+    ------
+    InputError
+        Shapes that do not match, ``Q0`` or ``U`` not in SO(n), ``lam`` not positive or
+        ``alpha < 0``.
+
+    Examples
+    --------
+    The gradient agrees with a central difference along :math:`U_0 e^{t\xi}`:
+
+    >>> import numpy as np
+    >>> import symrb
+    >>> from scipy.linalg import expm
+    >>> from symrb.learning import so_network_gradients
+    >>> Q0, T = symrb.random_SO(3, (4,), seed=0), symrb.random_SO(3, (4,), seed=1)
+    >>> U, lam = symrb.random_SO(3, (2,), seed=2), np.array([1.0, 2.0, 3.0])
+    >>> loss, G = so_network_gradients(Q0, U, lam, T, alpha=0.5)
+    >>> xi = symrb.hat([0.3, -0.2, 0.5])
+    >>> Up, Um = U.copy(), U.copy()
+    >>> Up[0], Um[0] = U[0] @ expm(1e-6 * xi), U[0] @ expm(-1e-6 * xi)
+    >>> fd = (so_network_gradients(Q0, Up, lam, T, alpha=0.5)[0]
+    ...       - so_network_gradients(Q0, Um, lam, T, alpha=0.5)[0]) / 2e-6
+    >>> print(round(fd, 6), round(float(np.sum(G[0] * xi)), 6))
+    -1.662582 -1.662582
+    """
+    UU = _so_controls(U)
+    prob = _SOProblem(Q0, targets, lam, alpha, UU.shape[-1])
+    loss, G, _ = prob.gradients(UU)
+    return loss, G
+
+
+def so_network_costates(Q0: ArrayLike, U: ArrayLike, targets: ArrayLike) -> tuple[Array, Array]:
+    r"""The layers and the costates of the SO(n) network (the forward and the backward sweep).
+
+    :math:`P^a_N = -(Q^a_N - T^a)`, :math:`P^a_k = P^a_{k+1}U_k^T` (claim D9, the costates of
+    the proof before the sign flip; the running cost does not enter them).
+
+    Parameters
+    ----------
+    Q0 : array_like, shape (M, n, n)
+        The samples, in SO(n).
+    U : array_like, shape (N, n, n)
+        The controls, in SO(n).
+    targets : array_like, shape (M, n, n)
+        The targets :math:`T^a`.
+
+    Returns
+    -------
+    Q : ndarray, shape (N + 1, M, n, n)
+        The layers :math:`Q^a_k`.
+    P : ndarray, shape (N + 1, M, n, n)
+        The costates :math:`P^a_k`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> from symrb.learning import so_network_costates
+    >>> Q0, T, U = symrb.random_SO(3, (2,), seed=0), symrb.random_SO(3, (2,), seed=1), symrb.random_SO(3, (3,), seed=2)
+    >>> Q, P = so_network_costates(Q0, U, T)
+    >>> bool(np.allclose(P[-1], T - Q[-1])), bool(np.allclose(P[0], P[1] @ U[0].T))
+    (True, True)
+    """
+    UU = _so_controls(U)
+    n = UU.shape[-1]
+    Q = _so_samples(Q0, n)
+    Ts = _so_targets(targets, Q.shape).reshape(-1, n)
+    Qs = _so_forward(Q.reshape(-1, n), UU)
+    _G, Ps = _so_backward(Qs, UU, np.ones(n), Ts, 0.0, costates=True)
+    assert Ps is not None
+    shape = (UU.shape[0] + 1, Q.shape[0], n, n)
+    return Qs.reshape(shape), Ps.reshape(shape)
+
+
+def so_extremal_residual(
+    Q0: ArrayLike, U: ArrayLike, lam: ArrayLike, targets: ArrayLike, alpha: float
+) -> Array:
+    r"""How far the controls are from the extremal equations of claim D9, layer by layer.
+
+    The paper's equation for :math:`U_k` (Ukdef2) for the loss of :func:`so_network_gradients`
+    reads :math:`\alpha J_D(U_k) = \sum_a((Q^a_k)^TP^a_k - (P^a_k)^TQ^a_k)` with the costates of
+    :func:`so_network_costates` (:math:`J_D(U) = U\Lambda - \Lambda U^T`); this returns
+    :math:`r_k = \|\alpha J_D(U_k) - \sum_a((Q^a_k)^TP^a_k - (P^a_k)^TQ^a_k)\|_F`, which equals
+    :math:`2\|G_k\|_F` (the gradient).  The momentum is the generated kernel
+    ``symmetric_momentum`` on the samples stacked by rows (which sums it over the samples).
+
+    Parameters
+    ----------
+    Q0 : array_like, shape (M, n, n)
+        The samples, in SO(n).
+    U : array_like, shape (N, n, n)
+        The controls, in SO(n).
+    lam : array_like, shape (n,)
+        The diagonal of :math:`\Lambda`, positive.
+    targets : array_like, shape (M, n, n)
+        The targets.
+    alpha : float
+        The weight of the running cost, >= 0.
+
+    Returns
+    -------
+    r : ndarray, shape (N,)
+        The residuals :math:`r_k`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> from symrb.learning import so_extremal_residual, so_network_gradients
+    >>> Q0, T, U = symrb.random_SO(3, (2,), seed=0), symrb.random_SO(3, (2,), seed=1), symrb.random_SO(3, (3,), seed=2)
+    >>> lam = np.array([1.0, 2.0, 3.0])
+    >>> r = so_extremal_residual(Q0, U, lam, T, alpha=0.5)
+    >>> G = so_network_gradients(Q0, U, lam, T, alpha=0.5)[1]
+    >>> bool(np.allclose(r, 2 * np.linalg.norm(G, axis=(1, 2))))
+    True
+    """
+    UU = _so_controls(U)
+    prob = _SOProblem(Q0, targets, lam, alpha, UU.shape[-1])
+    return _so_extremal(prob, UU)
+
+
+def _so_extremal(prob: _SOProblem, U: Array) -> Array:
+    Qs = _so_forward(prob.Qs0, U)
+    _G, Ps = _so_backward(Qs, U, prob.lam, prob.Ts, prob.alpha, costates=True)
+    assert Ps is not None
+    out = np.empty(U.shape[0])
+    for k in range(U.shape[0]):
+        R = _gsr.symmetric_momentum(Qs[k], Ps[k])
+        out[k] = np.linalg.norm(prob.alpha * _gdr.jd(U[k], prob.lam) - R)
+    return out
