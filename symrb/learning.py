@@ -63,6 +63,12 @@ __all__ = [
     "so_network_gradients",
     "so_network_costates",
     "so_extremal_residual",
+    "so_procrustes",
+    "so_rotation_task",
+    "SOTrainResult",
+    "train_so_gradient",
+    "train_so_msa",
+    "train_so_shooting",
 ]
 
 _ACTIVATIONS = ("tanh", "logistic")
@@ -799,3 +805,562 @@ def _so_extremal(prob: _SOProblem, U: Array) -> Array:
         R = _gsr.symmetric_momentum(Qs[k], Ps[k])
         out[k] = np.linalg.norm(prob.alpha * _gdr.jd(U[k], prob.lam) - R)
     return out
+
+
+# ---------------------------------------------------------------------------------------------
+# training the SO(n) network three ways
+
+
+@dataclass(frozen=True)
+class SOTrainResult:
+    """Outcome of :func:`train_so_gradient`, :func:`train_so_msa` and :func:`train_so_shooting`.
+
+    Attributes
+    ----------
+    U : ndarray, shape (N, n, n)
+        The final controls, in SO(n).
+    losses : ndarray, shape (iterations + 1,)
+        The loss before each iteration and at the end.
+    residuals : ndarray, shape (iterations + 1,)
+        The first-order optimality residual :math:`\\max_k\\|G_k\\|_F` (the Riemannian gradient,
+        :func:`so_network_gradients`) at the same points.
+    iterations : int
+        The number of iterations done.
+    residual : float
+        The final first-order residual, ``residuals[-1]``.
+    converged : bool
+        Whether the method's stopping test was met.
+    method : str
+        ``"gradient"``, ``"msa"`` or ``"shooting"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.learning import so_rotation_task, train_so_gradient
+    >>> Q0, T = so_rotation_task(3, samples=8, seed=0)
+    >>> res = train_so_gradient(Q0, T, np.tile(np.eye(3), (2, 1, 1)), [1.0, 2.0, 3.0], alpha=0.1,
+    ...                         steps=20, lr=0.05)
+    >>> res.losses.shape, res.iterations, res.method
+    ((21,), 20, 'gradient')
+    """
+
+    U: Array
+    losses: Array
+    residuals: Array
+    iterations: int
+    residual: float
+    converged: bool
+    method: str
+
+
+def _grad_norm(G: Array) -> float:
+    return float(np.max(np.linalg.norm(G, axis=(-2, -1))))
+
+
+def _retract(U: Array, step: Array, retraction: str) -> Array:
+    """U_k R(step_k) with R the Cayley map (I - A/2)^-1 (I + A/2) or the exponential."""
+    if retraction == "exp":
+        from scipy.linalg import expm
+
+        return np.asarray(U @ expm(step))
+    eye = np.eye(U.shape[-1])
+    return np.asarray(U @ np.linalg.solve(eye - 0.5 * step, eye + 0.5 * step))
+
+
+def _so_start(U0: ArrayLike, Q0: ArrayLike, targets: ArrayLike, lam: ArrayLike, alpha: object):
+    UU = _so_controls(U0).copy()
+    return UU, _SOProblem(Q0, targets, lam, alpha, UU.shape[-1])
+
+
+def _positive(x: object, name: str) -> float:
+    val = v.real_scalar(x, name)
+    if not val > 0:
+        raise InputError(f"{name} must be > 0, got {x!r}")
+    return val
+
+
+def train_so_gradient(
+    Q0: ArrayLike,
+    targets: ArrayLike,
+    U0: ArrayLike,
+    lam: ArrayLike,
+    alpha: float = 0.0,
+    steps: int = 500,
+    lr: float = 0.1,
+    retraction: str = "cayley",
+    line_search: bool = False,
+    momentum: float = 0.0,
+    tol: float = 1e-10,
+    progress: bool = False,
+) -> SOTrainResult:
+    r"""Riemannian gradient descent on :math:`SO(n)^N` for the loss of :func:`so_network_gradients`.
+
+    Each step runs the forward and the costate sweep, then :math:`U_k \leftarrow U_k R(-t\,d_k)`
+    with :math:`R` the Cayley map :math:`(I - A/2)^{-1}(I + A/2)` or the exponential, the
+    direction :math:`d_k = G_k` (or with heavy-ball momentum :math:`d \leftarrow G + \mu d`, in
+    the body frame), and :math:`t` = ``lr`` or, with ``line_search``, the Armijo step
+    (backtracking from twice the last accepted step until the loss drops by at least
+    :math:`10^{-4}\,t\,\langle G, d\rangle`).  Stops when :math:`\max_k\|G_k\|_F \le` ``tol``.
+
+    Parameters
+    ----------
+    Q0 : array_like, shape (M, n, n)
+        The samples, in SO(n).
+    targets : array_like, shape (M, n, n)
+        The targets :math:`T^a`.
+    U0 : array_like, shape (N, n, n)
+        The initial controls, in SO(n) (copied, never modified).
+    lam : array_like, shape (n,)
+        The diagonal of :math:`\Lambda`, positive.
+    alpha : float, optional
+        The weight of the running cost, >= 0.
+    steps : int, optional
+        The most iterations.
+    lr : float, optional
+        The step (the first trial step with ``line_search``), > 0.
+    retraction : {"cayley", "exp"}, optional
+        The retraction.
+    line_search : bool, optional
+        Armijo backtracking instead of a fixed step.
+    momentum : float, optional
+        The heavy-ball coefficient :math:`0 \le \mu < 1`.
+    tol : float, optional
+        The stopping tolerance on the first-order residual.
+    progress : bool, optional
+        Show a progress bar (tqdm).
+
+    Returns
+    -------
+    SOTrainResult
+
+    Raises
+    ------
+    InputError
+        Bad arguments, or a loss that became non-finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.learning import so_rotation_task, train_so_gradient
+    >>> Q0, T = so_rotation_task(3, samples=8, seed=0)
+    >>> U0 = np.tile(np.eye(3), (3, 1, 1))
+    >>> res = train_so_gradient(Q0, T, U0, [1.0, 2.0, 3.0], alpha=1.0, steps=500,
+    ...                         line_search=True, tol=1e-9)
+    >>> bool(res.converged), bool(res.losses[-1] < res.losses[0])
+    (True, True)
+    """
+    U, prob = _so_start(U0, Q0, targets, lam, alpha)
+    steps = v.count(steps, "steps")
+    lr = _positive(lr, "lr")
+    tol = _positive(tol, "tol")
+    mu = v.real_scalar(momentum, "momentum")
+    if not 0 <= mu < 1:
+        raise InputError(f"momentum must be in [0, 1), got {momentum!r}")
+    if retraction not in ("cayley", "exp"):
+        raise InputError(f"retraction must be 'cayley' or 'exp', got {retraction!r}")
+    if not isinstance(line_search, bool | np.bool_):
+        raise InputError(f"line_search must be True or False, got {line_search!r}")
+    losses, residuals = [], []
+    d = np.zeros_like(U)
+    t = lr
+    converged = False
+    it = 0
+    with progress_bar(steps, "SO(n) gradient descent", progress) as bar:
+        loss, G, _ = prob.gradients(U)
+        while True:
+            if not np.isfinite(loss):
+                raise InputError(f"loss became non-finite at iteration {it} (lr = {lr} too large?)")
+            losses.append(loss)
+            residuals.append(_grad_norm(G))
+            if residuals[-1] <= tol:
+                converged = True
+                break
+            if it == steps:
+                break
+            d = G + mu * d
+            slope = float(np.sum(G * d))
+            if slope <= 0:  # momentum turned uphill: restart it
+                d, slope = G.copy(), float(np.sum(G * G))
+            if line_search:
+                t = min(2 * t, 1e3 * lr)
+                while True:
+                    trial = _retract(U, -t * d, retraction)
+                    new = prob.loss(trial)
+                    if new <= loss - 1e-4 * t * slope or t < 1e-14:
+                        break
+                    t *= 0.5
+                U = trial
+            else:
+                U = _retract(U, -lr * d, retraction)
+            loss, G, _ = prob.gradients(U)
+            it += 1
+            bar.step()
+    return SOTrainResult(
+        U=U,
+        losses=np.array(losses),
+        residuals=np.array(residuals),
+        iterations=it,
+        residual=residuals[-1],
+        converged=converged,
+        method="gradient",
+    )
+
+
+def so_procrustes(A: ArrayLike) -> Array:
+    r"""The rotation maximising :math:`\operatorname{tr}(AU)` over :math:`U \in SO(n)`.
+
+    With the singular value decomposition :math:`A = XSY^T` (``scipy.linalg.svd``), the maximiser
+    is :math:`U = Y D X^T`, :math:`D = \operatorname{diag}(1, \dots, 1, \det(YX^T))` (the special
+    orthogonal Procrustes problem; the determinant fix flips the direction of the smallest
+    singular value when :math:`YX^T` is a reflection).  Unique when the smallest singular value
+    is simple and, for :math:`\det(YX^T) = -1`, positive.
+
+    Parameters
+    ----------
+    A : array_like, shape (..., n, n)
+        The matrices.
+
+    Returns
+    -------
+    U : ndarray, shape (..., n, n)
+        The maximisers, in SO(n).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.learning import so_procrustes
+    >>> A = np.diag([3.0, -2.0, -1.0])  # the best rotation turns the last two axes
+    >>> print(so_procrustes(A).round(12) + 0.0)
+    [[ 1.  0.  0.]
+     [ 0. -1.  0.]
+     [ 0.  0. -1.]]
+    """
+    from scipy.linalg import svd
+
+    a = v.square(A, "A")
+    flat = a.reshape(-1, a.shape[-1], a.shape[-1])
+    out = np.empty_like(flat)
+    for i, Ai in enumerate(flat):
+        X, _s, Yt = svd(Ai)
+        D = np.ones(a.shape[-1])
+        D[-1] = np.sign(np.linalg.det(Yt.T @ X.T))
+        out[i] = (Yt.T * D) @ X.T
+    return out.reshape(a.shape)
+
+
+def train_so_msa(
+    Q0: ArrayLike,
+    targets: ArrayLike,
+    U0: ArrayLike,
+    lam: ArrayLike,
+    alpha: float = 0.0,
+    steps: int = 200,
+    rho: float = 2.0,
+    tol: float = 1e-10,
+    progress: bool = False,
+) -> SOTrainResult:
+    r"""The extended method of successive approximations (Li, Chen, Tai and E 2018) on SO(n).
+
+    Each iteration runs the forward and the costate sweep with the current controls, then sets
+    every :math:`U_k` to the maximiser over :math:`SO(n)` of the augmented Hamiltonian
+
+    .. math::
+
+        \tilde H_k(U) = \sum_a\Bigl(\langle P^a_{k+1}, Q^a_kU\rangle
+        - \tfrac\rho2\|Q^a_{k+1} - Q^a_kU\|_F^2 - \tfrac\rho2\|P^a_k - P^a_{k+1}U^T\|_F^2\Bigr)
+        - \alpha\operatorname{tr}(\Lambda(I - U)),
+
+    which for orthogonal :math:`Q^a_k` and :math:`U` is :math:`\operatorname{tr}(A_kU)` plus a
+    constant with
+
+    .. math::
+
+        A_k = \sum_a\bigl((P^a_{k+1})^TQ^a_k + \rho((Q^a_{k+1})^TQ^a_k + (P^a_{k+1})^TP^a_k)
+        \bigr) + \alpha\Lambda,
+
+    so the layer-wise maximisation is the special orthogonal Procrustes problem, solved exactly
+    by :func:`so_procrustes`.  :math:`\rho = 0` is the basic MSA (which may oscillate); the
+    :math:`\rho` terms keep the step close to the current controls.  Stops when
+    :math:`\max_k\|G_k\|_F \le` ``tol``.
+
+    Parameters
+    ----------
+    Q0 : array_like, shape (M, n, n)
+        The samples, in SO(n).
+    targets : array_like, shape (M, n, n)
+        The targets.
+    U0 : array_like, shape (N, n, n)
+        The initial controls, in SO(n).
+    lam : array_like, shape (n,)
+        The diagonal of :math:`\Lambda`, positive.
+    alpha : float, optional
+        The weight of the running cost, >= 0.
+    steps : int, optional
+        The most iterations.
+    rho : float, optional
+        The penalty :math:`\rho \ge 0` of the extended MSA.
+    tol : float, optional
+        The stopping tolerance on the first-order residual.
+    progress : bool, optional
+        Show a progress bar (tqdm).
+
+    Returns
+    -------
+    SOTrainResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.learning import so_rotation_task, train_so_msa
+    >>> Q0, T = so_rotation_task(3, samples=8, seed=0)
+    >>> res = train_so_msa(Q0, T, np.tile(np.eye(3), (3, 1, 1)), [1.0, 2.0, 3.0], alpha=1.0,
+    ...                    steps=500, tol=1e-9)
+    >>> bool(res.converged), bool(res.losses[-1] < res.losses[0])
+    (True, True)
+    """
+    U, prob = _so_start(U0, Q0, targets, lam, alpha)
+    steps = v.count(steps, "steps")
+    rho = v.real_scalar(rho, "rho")
+    if rho < 0:
+        raise InputError(f"rho must be >= 0, got {rho!r}")
+    tol = _positive(tol, "tol")
+    losses, residuals = [], []
+    converged = False
+    it = 0
+    aL = prob.alpha * np.diag(prob.lam)
+    with progress_bar(steps, "SO(n) extended MSA", progress) as bar:
+        while True:
+            Qs = _so_forward(prob.Qs0, U)
+            G, Ps = _so_backward(Qs, U, prob.lam, prob.Ts, prob.alpha, costates=True)
+            assert Ps is not None
+            loss = _so_loss(Qs[-1], prob.Ts, U, prob.lam, prob.alpha)
+            if not np.isfinite(loss):
+                raise InputError(f"loss became non-finite at iteration {it}")
+            losses.append(loss)
+            residuals.append(_grad_norm(G))
+            if residuals[-1] <= tol:
+                converged = True
+                break
+            if it == steps:
+                break
+            A = np.empty_like(U)
+            for k in range(U.shape[0]):
+                A[k] = Ps[k + 1].T @ Qs[k] + aL
+                if rho:
+                    A[k] += rho * (Qs[k + 1].T @ Qs[k] + Ps[k + 1].T @ Ps[k])
+            U = so_procrustes(A)
+            it += 1
+            bar.step()
+    return SOTrainResult(
+        U=U,
+        losses=np.array(losses),
+        residuals=np.array(residuals),
+        iterations=it,
+        residual=residuals[-1],
+        converged=converged,
+        method="msa",
+    )
+
+
+def _skew_from_upper(x: Array, n: int) -> Array:
+    iu = np.triu_indices(n, 1)
+    S = np.zeros((n, n))
+    S[iu] = x
+    return S - S.T
+
+
+def train_so_shooting(
+    Q0: ArrayLike,
+    targets: ArrayLike,
+    lam: ArrayLike,
+    alpha: float,
+    layers: int,
+    M0: ArrayLike | None = None,
+    tol: float = 1e-12,
+    maxfev: int = 400,
+    progress: bool = False,
+) -> SOTrainResult:
+    r"""The extremal equations of claim D9 as a two-point boundary value problem, by shooting.
+
+    The extremals of the loss of :func:`so_network_gradients` (:math:`\alpha > 0`) satisfy the
+    discrete system
+
+    .. math::
+
+        Q^a_{k+1} = Q^a_kU_k,\quad P^a_{k+1} = P^a_kU_k,\quad
+        \alpha J_D(U_k) = M_k := \sum_a\bigl((Q^a_k)^TP^a_k - (P^a_k)^TQ^a_k\bigr),
+
+    with :math:`Q^a_0` given and :math:`P^a_N = -(Q^a_N - T^a)`.  The momentum is transported,
+    :math:`M_{k+1} = U_k^TM_kU_k` (claim D8), so the controls are a discrete rigid body
+    (Moser-Veselov) trajectory of inertia :math:`\alpha\Lambda` and are fixed by the single
+    unknown :math:`M_0 \in \mathfrak{so}(n)`: :math:`U_k` solves :math:`J_D(U_k) = M_k/\alpha`
+    on the branch through the identity (:func:`symrb.solve_moser_veselov`).  Shooting solves
+    :math:`F(M_0) = \sum_a((Q^a_0)^TP^a_0 - (P^a_0)^TQ^a_0) - M_0 = 0` (the costates from the
+    backward sweep of the controls of :math:`M_0`) with ``scipy.optimize.root`` (Powell's hybrid
+    method) from ``M0`` (default 0, all :math:`U_k = I`).
+
+    Parameters
+    ----------
+    Q0 : array_like, shape (M, n, n)
+        The samples, in SO(n).
+    targets : array_like, shape (M, n, n)
+        The targets.
+    lam : array_like, shape (n,)
+        The diagonal of :math:`\Lambda`, positive.
+    alpha : float
+        The weight of the running cost, > 0.
+    layers : int
+        The number of layers :math:`N \ge 1`.
+    M0 : array_like, shape (n, n), optional
+        The initial guess of :math:`M_0` (skew).
+    tol : float, optional
+        The relative tolerance of the root finder on :math:`M_0` (``xtol``).
+    maxfev : int, optional
+        The most evaluations of :math:`F`.
+    progress : bool, optional
+        Show a progress bar (tqdm) over the evaluations.
+
+    Returns
+    -------
+    SOTrainResult
+        ``losses`` and ``residuals`` at every evaluation of :math:`F`; ``iterations`` is the
+        number of evaluations.
+
+    Raises
+    ------
+    InputError
+        Bad arguments.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.learning import so_rotation_task, train_so_shooting
+    >>> Q0, T = so_rotation_task(3, samples=8, seed=0)
+    >>> res = train_so_shooting(Q0, T, [1.0, 2.0, 3.0], alpha=1.0, layers=3)
+    >>> bool(res.converged), bool(res.residual < 1e-9)
+    (True, True)
+    """
+    from scipy.optimize import root
+
+    from .errors import OutOfDomainError
+    from .solvers import solve_moser_veselov
+
+    N = v.count(layers, "layers", 1)
+    Q = v.orthogonal(Q0, "Q0")
+    if Q.ndim != 3:
+        raise InputError(f"Q0 must have shape (M, n, n), got {Q.shape}")
+    n = Q.shape[-1]
+    prob = _SOProblem(Q, targets, lam, alpha, n)
+    if not prob.alpha > 0:
+        raise InputError(f"alpha must be > 0 for shooting (J_D is inverted), got {alpha!r}")
+    tol = _positive(tol, "tol")
+    maxfev = v.count(maxfev, "maxfev", 1)
+    iu = np.triu_indices(n, 1)
+    x0 = np.zeros(len(iu[0]))
+    if M0 is not None:
+        x0 = v.skew(M0, "M0", n)[iu].copy()
+    lam_a = prob.alpha * prob.lam
+    losses: list[float] = []
+    residuals: list[float] = []
+    last: dict[str, Array] = {}
+
+    def controls(x: Array) -> Array:
+        M = _skew_from_upper(x, n)
+        U = np.empty((N, n, n))
+        guess: Array | None = None
+        for k in range(N):
+            U[k] = np.asarray(solve_moser_veselov(M, lam_a, U0=guess))
+            guess = U[k]
+            M = U[k].T @ M @ U[k]
+        return U
+
+    with progress_bar(maxfev, "SO(n) shooting", progress) as bar:
+
+        def F(x: Array) -> Array:
+            try:
+                U = controls(x)
+            except OutOfDomainError:  # beyond the fold of J_D: push the root finder back
+                return -10.0 * (1.0 + np.abs(x)) * np.sign(x + (x == 0))
+            Qs = _so_forward(prob.Qs0, U)
+            G, Ps = _so_backward(Qs, U, prob.lam, prob.Ts, prob.alpha, costates=True)
+            assert Ps is not None
+            losses.append(_so_loss(Qs[-1], prob.Ts, U, prob.lam, prob.alpha))
+            residuals.append(_grad_norm(G))
+            last["U"] = U
+            bar.step()
+            R = _gsr.symmetric_momentum(Qs[0], Ps[0])
+            return np.asarray(R[iu] - x)
+
+        sol = root(F, x0, method="hybr", options={"xtol": tol, "maxfev": maxfev})
+        F(sol.x)  # the reported controls are those of the returned M_0
+    return SOTrainResult(
+        U=last["U"],
+        losses=np.array(losses),
+        residuals=np.array(residuals),
+        iterations=len(losses) - 1,
+        residual=residuals[-1],
+        converged=bool(sol.success),
+        method="shooting",
+    )
+
+
+def so_rotation_task(
+    n: int = 3,
+    samples: int = 32,
+    angle: float = 0.6,
+    noise: float = 0.05,
+    seed: int | np.random.Generator | None = 0,
+) -> tuple[Array, Array]:
+    r"""A task for the SO(n) network: learn one rotation from noisy examples.
+
+    Samples :math:`Q^a_0` Haar-random in SO(n); targets :math:`T^a = Q^a_0 R E^a` with one fixed
+    rotation :math:`R = e^{\theta\hat\omega}` (angle ``angle``, a random axis-like skew unit
+    :math:`\hat\omega`) and small random rotations :math:`E^a = e^{\epsilon\eta^a}` (noise).
+    For small angles and a positive running cost the loss has one minimiser near the controls
+    whose product is :math:`R`.
+
+    Parameters
+    ----------
+    n : int, optional
+        The matrix size, >= 2.
+    samples : int, optional
+        The number M of samples, >= 1.
+    angle : float, optional
+        The rotation angle :math:`\theta` of :math:`R`.
+    noise : float, optional
+        The size :math:`\epsilon \ge 0` of the perturbations.
+    seed : int, numpy.random.Generator or None, optional
+        The random source.
+
+    Returns
+    -------
+    Q0 : ndarray, shape (samples, n, n)
+        The samples.
+    targets : ndarray, shape (samples, n, n)
+        The targets, in SO(n).
+
+    Examples
+    --------
+    >>> from symrb.learning import so_rotation_task
+    >>> Q0, T = so_rotation_task(4, samples=10, seed=1)
+    >>> Q0.shape, T.shape
+    ((10, 4, 4), (10, 4, 4))
+    """
+    from scipy.linalg import expm
+
+    from .algebra import as_generator, random_SO
+
+    n = v.count(n, "n", 2)
+    samples = v.count(samples, "samples", 1)
+    angle = v.real_scalar(angle, "angle")
+    noise = v.real_scalar(noise, "noise")
+    if noise < 0:
+        raise InputError(f"noise must be >= 0, got {noise!r}")
+    rng = as_generator(seed)
+    Q0 = random_SO(n, (samples,), seed=rng)
+    w = rng.standard_normal((n, n))
+    w = w - w.T
+    R = expm(angle * w / np.linalg.norm(w, 2))
+    eta = rng.standard_normal((samples, n, n))
+    E = expm(noise * (eta - np.swapaxes(eta, 1, 2)) / 2)
+    return Q0, Q0 @ R @ E

@@ -229,3 +229,169 @@ def test_resnet_gradients_equal_torch_autograd(seed, n, N, M, act, res):
     assert loss == pytest.approx(float(tloss.detach()), rel=1e-12)
     for mine, theirs in ((dK, Kt.grad.numpy()), (db, bt.grad.numpy())):
         assert np.abs(mine - theirs).max() <= 1e-10 * max(np.abs(theirs).max(), 1e-300)
+
+
+# ---------------------------------------------------------------------------------------------
+# training three ways
+
+
+def _task():
+    Q0, T = learning.so_rotation_task(3, samples=8, seed=0)
+    return Q0, T, np.array([1.0, 2.0, 3.0]), 1.0, np.tile(np.eye(3), (3, 1, 1))
+
+
+@pytest.fixture(scope="module")
+def trained():
+    Q0, T, lam, alpha, U0 = _task()
+    return {
+        "gradient": learning.train_so_gradient(
+            Q0, T, U0, lam, alpha=alpha, steps=2000, line_search=True, tol=1e-10
+        ),
+        "momentum": learning.train_so_gradient(
+            Q0,
+            T,
+            U0,
+            lam,
+            alpha=alpha,
+            steps=2000,
+            lr=0.05,
+            momentum=0.8,
+            retraction="exp",
+            tol=1e-10,
+        ),
+        "msa": learning.train_so_msa(Q0, T, U0, lam, alpha=alpha, steps=2000, tol=1e-10),
+        "shooting": learning.train_so_shooting(Q0, T, lam, alpha, 3, tol=1e-13),
+    }
+
+
+@pytest.mark.parametrize("method", ["gradient", "momentum", "msa", "shooting"])
+def test_each_method_converges_and_lowers_the_loss(trained, method):
+    res = trained[method]
+    assert res.converged
+    assert res.losses[-1] < 0.1 * res.losses[0]
+    assert res.losses.shape == res.residuals.shape == (res.iterations + 1,)
+    assert res.residual == res.residuals[-1] <= 1e-9
+    np.testing.assert_allclose(
+        np.swapaxes(res.U, 1, 2) @ res.U, np.tile(np.eye(3), (3, 1, 1)), atol=1e-12
+    )
+
+
+def test_descent_methods_decrease_monotonically(trained):
+    for method in ("gradient", "msa"):
+        losses = trained[method].losses
+        assert np.all(np.diff(losses) <= 1e-12 * losses[0]), method
+
+
+def test_three_methods_agree_at_convergence(trained):
+    ref = trained["shooting"]
+    for method in ("gradient", "momentum", "msa"):
+        res = trained[method]
+        assert res.losses[-1] == pytest.approx(ref.losses[-1], rel=1e-12)
+        np.testing.assert_allclose(res.U, ref.U, atol=1e-8)
+
+
+@pytest.mark.parametrize("method", ["gradient", "msa", "shooting"])
+def test_extremal_equations_hold_at_convergence(trained, method):
+    """alpha J_D(U_k) = sum_a ((Q^a_k)^T P^a_k - (P^a_k)^T Q^a_k), P^a_N = -(Q^a_N - T^a), at
+    every layer, to the solver's tolerance (the residual is twice the gradient norm)."""
+    Q0, T, lam, alpha, _ = _task()
+    res = trained[method]
+    r = learning.so_extremal_residual(Q0, res.U, lam, T, alpha)
+    assert r.max() <= 2 * res.residual + 1e-14  # two routes to the same quantity
+    assert r.max() <= 2e-9
+    # a check that can fail: the start (U = I) is far from extremal
+    assert learning.so_extremal_residual(Q0, _task()[4], lam, T, alpha).min() > 1e-2
+
+
+def test_msa_without_penalty_does_not_converge_here():
+    """rho = 0 (the basic MSA) oscillates on this task: the penalty is what makes it converge."""
+    Q0, T, lam, alpha, U0 = _task()
+    res = learning.train_so_msa(Q0, T, U0, lam, alpha=alpha, rho=0.0, steps=200)
+    assert not res.converged
+    assert res.losses[-1] > 10 * learning.train_so_msa(Q0, T, U0, lam, alpha=alpha).losses[-1]
+
+
+def test_procrustes_against_grid_so2():
+    rng = np.random.default_rng(0)
+    theta = np.linspace(0, 2 * np.pi, 200001)
+    grid = np.stack([np.cos(theta), -np.sin(theta), np.sin(theta), np.cos(theta)], -1)
+    grid = grid.reshape(-1, 2, 2)
+    for _ in range(20):
+        A = rng.standard_normal((2, 2))
+        U = learning.so_procrustes(A)
+        best = np.einsum("ij,gji->g", A, grid).max()
+        val = np.trace(A @ U)
+        assert np.linalg.det(U) == pytest.approx(1.0)
+        assert best <= val + 1e-12
+        assert val - best <= 1e-9 * np.abs(A).max()
+
+
+def test_procrustes_against_dense_sample_so3():
+    rng = np.random.default_rng(1)
+    q = rng.standard_normal((400000, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    R = np.stack(
+        [
+            1 - 2 * (y * y + z * z),
+            2 * (x * y - z * w),
+            2 * (x * z + y * w),
+            2 * (x * y + z * w),
+            1 - 2 * (x * x + z * z),
+            2 * (y * z - x * w),
+            2 * (x * z - y * w),
+            2 * (y * z + x * w),
+            1 - 2 * (x * x + y * y),
+        ],
+        -1,
+    ).reshape(-1, 3, 3)
+    for _ in range(5):
+        A = rng.standard_normal((3, 3))
+        if np.linalg.det(A) > 0 and rng.random() < 0.5:
+            A[:, 0] *= -1  # reflections too: the determinant fix must act
+        U = learning.so_procrustes(A)
+        vals = np.einsum("ij,gji->g", A, R)
+        val = np.trace(A @ U)
+        assert np.linalg.det(U) == pytest.approx(1.0)
+        assert vals.max() <= val + 1e-12
+        assert val - vals.max() <= 2e-3 * np.abs(A).sum()  # the sample's resolution
+        # the best sample lies next to the maximiser
+        assert np.linalg.norm(R[np.argmax(vals)] - U) < 0.15
+
+
+def test_procrustes_batched_and_not_mutating():
+    A = np.random.default_rng(2).standard_normal((4, 2, 3, 3))
+    A0 = A.copy()
+    U = learning.so_procrustes(A)
+    assert U.shape == A.shape
+    np.testing.assert_array_equal(A, A0)
+    np.testing.assert_allclose(U[1, 1], learning.so_procrustes(A[1, 1]), atol=0)
+
+
+def test_training_progress_bars(capsys):
+    pytest.importorskip("tqdm")
+    Q0, T, lam, alpha, U0 = _task()
+    learning.train_so_gradient(Q0, T, U0, lam, alpha=alpha, steps=3, progress=True)
+    learning.train_so_msa(Q0, T, U0, lam, alpha=alpha, steps=3, progress=True)
+    learning.train_so_shooting(Q0, T, lam, alpha, 3, maxfev=5, progress=True)
+    err = capsys.readouterr().err
+    for desc in ("gradient descent", "extended MSA", "shooting"):
+        assert desc in err
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda a: learning.train_so_gradient(*a, lr=0.0), "lr must be > 0"),
+        (lambda a: learning.train_so_gradient(*a, momentum=1.0), "momentum must be in"),
+        (lambda a: learning.train_so_gradient(*a, retraction="qr"), "retraction must be"),
+        (lambda a: learning.train_so_gradient(*a, steps=-1), "steps must be an integer"),
+        (lambda a: learning.train_so_msa(*a, rho=-1.0), "rho must be >= 0"),
+        (lambda a: learning.train_so_shooting(a[0], a[1], a[3], 0.0, 3), "alpha must be > 0"),
+        (lambda a: learning.train_so_shooting(a[0], a[1], a[3], 1.0, 0), "layers must be"),
+    ],
+)
+def test_training_validation(call, match):
+    Q0, T, lam, _alpha, U0 = _task()
+    with pytest.raises(InputError, match=match):
+        call((Q0, T, U0, lam))
