@@ -41,7 +41,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from . import _validate as v
 from ._generated import discrete_control as _gen
@@ -69,6 +69,10 @@ __all__ = [
     "train_so_gradient",
     "train_so_msa",
     "train_so_shooting",
+    "DigitsTask",
+    "digits_task",
+    "resnet_predict",
+    "train_msa",
 ]
 
 _ACTIVATIONS = ("tanh", "logistic")
@@ -1364,3 +1368,277 @@ def so_rotation_task(
     eta = rng.standard_normal((samples, n, n))
     E = expm(noise * (eta - np.swapaxes(eta, 1, 2)) / 2)
     return Q0, Q0 @ R @ E
+
+
+# ---------------------------------------------------------------------------------------------
+# the residual network of Remark 1 on real data: scikit-learn's handwritten digits
+
+
+@dataclass(frozen=True)
+class DigitsTask:
+    """The digits classification task of :func:`digits_task`.
+
+    Attributes
+    ----------
+    x_train, x_test : ndarray, shape (M, n)
+        Initial states: ``features`` principal components, then ``classes`` zeros.
+    y_train : ndarray, shape (M, n)
+        Targets: the same components, then the one-hot code of the class.
+    labels_train, labels_test : ndarray of int, shape (M,)
+        The digits 0-9.
+    classes : int
+        The number of classes (the last ``classes`` entries of a state are read out).
+
+    Examples
+    --------
+    >>> from symrb.learning import digits_task
+    >>> task = digits_task(features=8)  # doctest: +SKIP
+    >>> task.x_train.shape[1], task.classes  # doctest: +SKIP
+    (18, 10)
+    """
+
+    x_train: Array
+    y_train: Array
+    labels_train: NDArray[np.int64]
+    x_test: Array
+    labels_test: NDArray[np.int64]
+    classes: int
+
+
+def digits_task(
+    features: int = 16, test_fraction: float = 0.3, seed: int | np.random.Generator | None = 0
+) -> DigitsTask:
+    r"""scikit-learn's handwritten digits (1797 8x8 images shipped with the package, no download)
+    as a task for the residual network.
+
+    The pixels are centred and projected on their first ``features`` principal components (of
+    the training set, scaled to unit variance on average); a state is those components followed
+    by ten zeros, its target the same components followed by the one-hot code of the digit, so
+    the network has to write the class into the last ten entries while keeping the rest.  The
+    predicted class is the largest of the last ten entries of :math:`x_N`
+    (:func:`resnet_predict`).
+
+    Parameters
+    ----------
+    features : int, optional
+        The number of principal components, 1 to 64.
+    test_fraction : float, optional
+        The share of the images held out for testing, in (0, 1).
+    seed : int, numpy.random.Generator or None, optional
+        The random source of the split.
+
+    Returns
+    -------
+    DigitsTask
+
+    Raises
+    ------
+    ImportError
+        scikit-learn is not installed (``pip install scikit-learn``).
+
+    Examples
+    --------
+    >>> from symrb.learning import digits_task
+    >>> task = digits_task(features=8)  # doctest: +SKIP
+    >>> task.x_train.shape, task.x_test.shape  # doctest: +SKIP
+    ((1258, 18), (539, 18))
+    """
+    try:
+        from sklearn.datasets import load_digits
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            "digits_task needs the optional package scikit-learn: pip install scikit-learn"
+        ) from None
+    from .algebra import as_generator
+
+    features = v.count(features, "features", 1)
+    if features > 64:
+        raise InputError(f"features must be at most 64 (8x8 pixels), got {features}")
+    frac = v.real_scalar(test_fraction, "test_fraction")
+    if not 0 < frac < 1:
+        raise InputError(f"test_fraction must be in (0, 1), got {test_fraction!r}")
+    data = load_digits()
+    X, labels = np.asarray(data.data, dtype=float), np.asarray(data.target, dtype=np.int64)
+    order = as_generator(seed).permutation(len(labels))
+    n_test = int(round(frac * len(labels)))
+    test, train = order[:n_test], order[n_test:]
+    mean = X[train].mean(axis=0)
+    _u, s, vt = np.linalg.svd(X[train] - mean, full_matrices=False)
+    scale = float(np.sqrt(np.mean(s[:features] ** 2) / len(train)))
+    classes = 10
+
+    def states(idx: NDArray[np.int64]) -> Array:
+        comps = (X[idx] - mean) @ vt[:features].T / scale
+        return np.concatenate([comps, np.zeros((len(idx), classes))], axis=1)
+
+    x_train = states(train)
+    y_train = x_train.copy()
+    y_train[np.arange(len(train)), features + labels[train]] = 1.0
+    return DigitsTask(
+        x_train=x_train,
+        y_train=y_train,
+        labels_train=labels[train],
+        x_test=states(test),
+        labels_test=labels[test],
+        classes=classes,
+    )
+
+
+def resnet_predict(
+    x0: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    classes: int,
+    activation: str = "tanh",
+    residual: bool = True,
+) -> NDArray[np.int64]:
+    r"""Class predictions of the network: the index of the largest of the last ``classes``
+    entries of :math:`x_N` (:func:`resnet_forward`).
+
+    Parameters
+    ----------
+    x0 : array_like, shape (..., n)
+        Initial states.
+    K : array_like, shape (N, n, n)
+        Layer weights.
+    beta : array_like, shape (N, n)
+        Layer biases.
+    classes : int
+        The number of classes, 1 to n.
+    activation : {"tanh", "logistic"}, optional
+        The activation.
+    residual : bool, optional
+        Residual or plain layers.
+
+    Returns
+    -------
+    ndarray of int, shape (...)
+        The predicted classes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.learning import resnet_predict
+    >>> x0 = np.array([[0.0, 2.0, 1.0], [0.0, -1.0, 3.0]])
+    >>> resnet_predict(x0, np.zeros((1, 3, 3)), np.zeros((1, 3)), classes=2)
+    array([0, 1])
+    """
+    states = resnet_forward(x0, K, beta, activation, residual)
+    c = v.count(classes, "classes", 1)
+    if c > states.shape[-1]:
+        raise InputError(f"classes must be at most n = {states.shape[-1]}, got {classes!r}")
+    return np.asarray(np.argmax(states[-1][..., -c:], axis=-1), dtype=np.int64)
+
+
+def train_msa(
+    x0: ArrayLike,
+    targets: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    steps: int = 100,
+    rho: float = 1.0,
+    inner_steps: int = 3,
+    inner_lr: float = 0.01,
+    activation: str = "tanh",
+    residual: bool = True,
+    progress: bool = False,
+) -> TrainResult:
+    r"""The extended method of successive approximations for the residual network (Li, Chen, Tai
+    and E 2018), with the layer-wise maximisation by a few gradient steps.
+
+    Each iteration runs the forward and the costate sweep (:func:`costate_sweep`) with the
+    current controls, then for every layer takes ``inner_steps`` gradient-ascent steps of size
+    ``inner_lr`` on
+
+    .. math::
+
+        \tilde H_k(u) = \sum_a\Bigl(\langle p^a_{k+1}, f(x^a_k, u)\rangle
+        - \tfrac\rho2|x^a_{k+1} - f(x^a_k, u)|^2\Bigr)
+
+    from the current :math:`u_k`, with the states and costates of the sweeps held fixed.  Its
+    gradient is :math:`\sum_a\partial_uH(\tilde p^a, x^a_k, u)` with :math:`\tilde p^a =
+    p^a_{k+1} + \rho(x^a_{k+1} - f(x^a_k, u))`, the generated adjoint kernel of claim D6 with a
+    modified costate; the first inner step is a gradient-descent step on the loss.  Of the two
+    penalties of the extended MSA only the state one is used here (the costate penalty
+    :math:`\tfrac\rho2|p^a_k - \partial_xH|^2` needs second derivatives of the layer).
+
+    Parameters
+    ----------
+    x0 : array_like, shape (..., n)
+        Initial states, one per sample.
+    targets : array_like, shape (..., n)
+        The targets :math:`y^a`.
+    K : array_like, shape (N, n, n)
+        Initial layer weights (copied, never modified).
+    beta : array_like, shape (N, n)
+        Initial layer biases.
+    steps : int, optional
+        The number of MSA iterations, >= 0.
+    rho : float, optional
+        The penalty :math:`\rho \ge 0`.
+    inner_steps : int, optional
+        Gradient-ascent steps per layer and iteration, >= 1.
+    inner_lr : float, optional
+        Their step size, > 0.
+    activation : {"tanh", "logistic"}, optional
+        The activation.
+    residual : bool, optional
+        Residual or plain layers.
+    progress : bool, optional
+        Show a progress bar (tqdm).
+
+    Returns
+    -------
+    TrainResult
+        The final weights and the losses (``steps + 1`` entries).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> from symrb.learning import train_msa
+    >>> x0, y, _ = symrb.toy_classification(200, seed=0)
+    >>> K, beta = np.zeros((4, 2, 2)), np.zeros((4, 2))
+    >>> result = train_msa(x0, y, K, beta, steps=20, inner_lr=0.001)
+    >>> bool(result.losses[-1] < result.losses[0])
+    True
+    """
+    steps = v.count(steps, "steps")
+    inner = v.count(inner_steps, "inner_steps", 1)
+    lr = _positive(inner_lr, "inner_lr")
+    rho = v.real_scalar(rho, "rho")
+    if rho < 0:
+        raise InputError(f"rho must be >= 0, got {rho!r}")
+    step_k, adjoint = _kernels(activation, residual)
+    KK, bb = _weights(K, beta)
+    KK, bb = KK.copy(), bb.copy()
+    losses = np.empty(steps + 1)
+    x = _states_like(x0, "x0", KK.shape[1])
+    sample_axes = tuple(range(x.ndim - 1))
+    with progress_bar(steps, "ResNet extended MSA", progress) as bar:
+        for i in range(steps + 1):
+            states = resnet_forward(x, KK, bb, activation, residual)
+            st, _K, _b, y = _check_sweep_inputs(states, KK, bb, targets)
+            if i == 0:
+                y0 = y
+            loss = squared_error(st[-1], y0)
+            if not np.isfinite(loss):
+                raise InputError(f"loss became non-finite at iteration {i} (inner_lr too large?)")
+            losses[i] = loss
+            if i == steps:
+                break
+            p = _sweep(st, KK, bb, y0, activation, residual)[0]
+            for k in range(KK.shape[0]):
+                Kk, bk = KK[k].copy(), bb[k].copy()
+                xk = st[k][..., None]
+                for _ in range(inner):
+                    f = step_k(Kk, bk[:, None], xk)
+                    pt = p[k + 1][..., None] + rho * (st[k + 1][..., None] - f)
+                    _pp, dK, db = adjoint(Kk, bk[:, None], xk, pt)
+                    Kk = Kk + lr * (np.sum(dK, axis=sample_axes) if sample_axes else dK)
+                    bk = bk + lr * (
+                        np.sum(db[..., 0], axis=sample_axes) if sample_axes else db[..., 0]
+                    )
+                KK[k], bb[k] = Kk, bk
+            bar.step()
+    return TrainResult(K=KK, beta=bb, losses=losses)
