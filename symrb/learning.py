@@ -575,11 +575,30 @@ class _SOProblem:
             QN = _gdr.so_network_layer(QN, U[k])
         return _so_loss(QN, self.Ts, U, self.lam, self.alpha)
 
-    def gradients(self, U: Array) -> tuple[float, Array, Array]:
-        """(loss, G, stacked layers)."""
-        Qs = _so_forward(self.Qs0, U)
-        G, _ = _so_backward(Qs, U, self.lam, self.Ts, self.alpha)
-        return _so_loss(Qs[-1], self.Ts, U, self.lam, self.alpha), G, Qs
+    def gradients(self, U: Array) -> tuple[float, Array]:
+        """(loss, G) with the least memory: of the layers only Q_1..Q_N are kept (the gradient
+        needs Q_{k+1}, not Q_0), Q_N is dropped once used, the loss comes from the endpoint
+        costate (||P_N||^2 = ||Q_N - T||^2), and at most two costates are alive at a time."""
+        N = U.shape[0]
+        layers = np.empty((N - 1, *self.Qs0.shape))
+        Q = self.Qs0
+        for k in range(N - 1):
+            layers[k] = _gdr.so_network_layer(Q, U[k])
+            Q = layers[k]
+        last: Array | None = _gdr.so_network_layer(Q, U[N - 1])
+        P = _gdr.so_network_endpoint(last, self.Ts)
+        loss = 0.5 * float(np.vdot(P, P))
+        if self.alpha:
+            loss += self.alpha * float(np.sum(self.lam * (1.0 - np.diagonal(U, 0, -2, -1))))
+        G = np.empty_like(U)
+        lam_alpha = self.alpha * self.lam
+        for k in range(N - 1, -1, -1):
+            Q_next = layers[k] if k < N - 1 else last
+            G[k] = _gdr.so_network_gradient(P, Q_next, U[k], lam_alpha)
+            last = Q_next = None  # Q_N is not needed any more
+            if k:
+                P = _gdr.so_network_costate(P, U[k])
+        return loss, G
 
 
 def so_network_forward(Q0: ArrayLike, U: ArrayLike) -> Array:
@@ -706,7 +725,7 @@ def so_network_gradients(
     """
     UU = _so_controls(U)
     prob = _SOProblem(Q0, targets, lam, alpha, UU.shape[-1])
-    loss, G, _ = prob.gradients(UU)
+    loss, G = prob.gradients(UU)
     return loss, G
 
 
@@ -970,7 +989,7 @@ def train_so_gradient(
     converged = False
     it = 0
     with progress_bar(steps, "SO(n) gradient descent", progress) as bar:
-        loss, G, _ = prob.gradients(U)
+        loss, G = prob.gradients(U)
         while True:
             if not np.isfinite(loss):
                 raise InputError(f"loss became non-finite at iteration {it} (lr = {lr} too large?)")
@@ -996,7 +1015,7 @@ def train_so_gradient(
                 U = trial
             else:
                 U = _retract(U, -lr * d, retraction)
-            loss, G, _ = prob.gradients(U)
+            loss, G = prob.gradients(U)
             it += 1
             bar.step()
     return SOTrainResult(
