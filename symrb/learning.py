@@ -678,6 +678,11 @@ def so_network_gradients(
     \alpha\Lambda`.  The formulas are the generated kernels checked by claim D9 (exact rational
     evidence against the directional derivative).
 
+    On :math:`SO(n)`, :math:`\tfrac12\|Q - T\|_F^2 = n - \operatorname{tr}(T^TQ)`, so the data
+    term is also the alignment loss :math:`-\sum_a\operatorname{tr}((T^a)^TQ^a_N)` up to a
+    constant; to classify orientations, take for :math:`T^a` the prototype rotation of the class
+    of sample :math:`a`.
+
     Parameters
     ----------
     Q0 : array_like, shape (M, n, n)
@@ -955,6 +960,7 @@ def train_so_gradient(
     Returns
     -------
     SOTrainResult
+        The final controls, the losses and residuals before each step, the iterations.
 
     Raises
     ------
@@ -1130,6 +1136,7 @@ def train_so_msa(
     Returns
     -------
     SOTrainResult
+        The final controls, the losses and residuals before each iteration, the iterations.
 
     Examples
     --------
@@ -1449,6 +1456,7 @@ def digits_task(
     Returns
     -------
     DigitsTask
+        The training and test states, the training targets and the labels.
 
     Raises
     ------
