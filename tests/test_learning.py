@@ -236,3 +236,63 @@ def test_loss_is_translation_consistent(seed, kind):
     assert new < loss
     # first-order prediction of the decrease
     assert (loss - new) == pytest.approx(eps * norm2, rel=1e-2)
+
+
+# ---------------------------------------------------------------------------------------------
+# extended MSA for the residual network; scikit-learn's digits
+
+
+def test_msa_first_inner_step_is_a_gradient_step():
+    """One inner step from the current weights: the state penalty has zero gradient there, so the
+    update is u - lr dPhi/du (the costates are minus the gradients)."""
+    x0, y, _ = learning.toy_classification(60, seed=1)
+    rng = np.random.default_rng(0)
+    K, b = 0.3 * rng.standard_normal((3, 2, 2)), 0.3 * rng.standard_normal((3, 2))
+    msa = learning.train_msa(x0, y, K, b, steps=1, rho=5.0, inner_steps=1, inner_lr=1e-3)
+    gd = learning.train(x0, y, K, b, steps=1, lr=1e-3)
+    np.testing.assert_allclose(msa.K, gd.K, atol=1e-14)
+    np.testing.assert_allclose(msa.beta, gd.beta, atol=1e-14)
+
+
+def test_msa_lowers_the_loss_and_penalty_acts():
+    x0, y, _ = learning.toy_classification(200, seed=0)
+    K, b = np.zeros((4, 2, 2)), np.zeros((4, 2))
+    res = learning.train_msa(x0, y, K, b, steps=30, inner_lr=0.001, inner_steps=3)
+    assert res.losses[-1] < 0.9 * res.losses[0]
+    other = learning.train_msa(x0, y, K, b, steps=30, rho=0.0, inner_lr=0.001, inner_steps=3)
+    assert not np.allclose(res.K, other.K)  # rho enters the update
+    np.testing.assert_array_equal(K, 0.0)  # inputs not mutated
+
+
+def test_msa_validation():
+    x0, y, _ = learning.toy_classification(10, seed=0)
+    K, b = np.zeros((2, 2, 2)), np.zeros((2, 2))
+    with pytest.raises(InputError, match="rho must be >= 0"):
+        learning.train_msa(x0, y, K, b, rho=-1.0)
+    with pytest.raises(InputError, match="inner_steps must be an integer >= 1"):
+        learning.train_msa(x0, y, K, b, inner_steps=0)
+    with pytest.raises(InputError, match="inner_lr must be > 0"):
+        learning.train_msa(x0, y, K, b, inner_lr=0.0)
+
+
+def test_resnet_predict_reads_the_last_entries():
+    x0 = np.array([[5.0, 0.0, 1.0, 2.0], [5.0, 0.0, 3.0, -1.0]])
+    K, b = np.zeros((1, 4, 4)), np.zeros((1, 4))
+    np.testing.assert_array_equal(learning.resnet_predict(x0, K, b, classes=2), [1, 0])
+    with pytest.raises(InputError, match="classes must be at most"):
+        learning.resnet_predict(x0, K, b, classes=5)
+
+
+def test_digits_gradient_descent_learns():
+    pytest.importorskip("sklearn")
+    task = learning.digits_task(features=12, seed=0)
+    assert task.x_train.shape[1] == 22 and task.classes == 10
+    assert len(task.labels_train) + len(task.labels_test) == 1797
+    np.testing.assert_array_equal(task.x_train[:, 12:], 0.0)
+    np.testing.assert_array_equal(task.y_train[:, 12:].sum(axis=1), 1.0)
+    n = task.x_train.shape[1]
+    K, b = np.zeros((3, n, n)), np.zeros((3, n))
+    res = learning.train(task.x_train, task.y_train, K, b, steps=100, lr=5e-4)
+    acc = np.mean(learning.resnet_predict(task.x_test, res.K, res.beta, 10) == task.labels_test)
+    assert res.losses[-1] < 0.7 * res.losses[0]
+    assert acc > 0.8  # chance is 0.1

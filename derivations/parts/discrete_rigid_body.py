@@ -831,6 +831,90 @@ ENDPOINT_M8 = D9.formula("endpoint_m8", eq(PaN, _dphi))
 ENDPOINT_UNFLIPPED = D9.formula("endpoint_unflipped", eq(PaN, -_dphi))
 
 
+# ---------------------------------------------------------------------------------------------
+# D9 kernels: the SO(n) network of symrb.learning (forward layer, endpoint, costate, gradient)
+#
+# symrb.learning minimises L(U) = sum_a phi(Q^a_N) + alpha sum_k tr(Lambda (I - U_k)) with
+# phi(Q) = 1/2 ||Q - T||_F^2: the displayed cost with Lambda replaced by -alpha Lambda, plus the
+# constant alpha N tr(Lambda).  Its costates carry the sign of the proof before the flip
+# (endpoint_unflipped, P^a_N = -dphi/dQ^a_N), so that P^a_k is minus the back-propagated gradient
+# as in symrb's ResNet (D5, D6).  Samples are stacked by rows: the (M n) x n matrix [Q^1; ...;
+# Q^M] times U is every sample's layer at once, and [P^1; ...; P^M]^T [Q^1; ...; Q^M] is
+# sum_a (P^a)^T Q^a, so one matrix product sums over the samples.
+
+_SQ, _SP, _ST, _SU = matrix("Q"), matrix("P_next"), matrix("T"), matrix("U")
+_SQ1 = matrix("Q_next")
+_ARG_STACK = "(..., n, n)"  # or (..., m n, n): m samples stacked by rows
+SO_LAYER = Kernel(
+    name="so_network_layer",
+    target="discrete_rigid_body",
+    args=[
+        Arg("Q", _ARG_STACK, "the samples Q^a_k (n x n each), stacked by rows"),
+        Arg("U", "(..., n, n)", "the control U_k, in SO(n)"),
+    ],
+    outputs={"Q_next": _SQ * _SU},
+    doc="One layer of the SO(n) network (paper, Section 2.1, learning version): Q^a_{k+1} = "
+    "Q^a_k U_k,\nfor every sample at once when the samples are stacked by rows.",
+    claims=("D9",),
+)
+SO_ENDPOINT = Kernel(
+    name="so_network_endpoint",
+    target="discrete_rigid_body",
+    args=[
+        Arg("Q", _ARG_STACK, "the final layer Q^a_N, samples stacked by rows"),
+        Arg("T", _ARG_STACK, "the targets T^a, stacked the same way"),
+    ],
+    outputs={"P": -(_SQ - _ST)},
+    doc="Endpoint costate of the SO(n) network for phi(Q) = 1/2 ||Q - T||_F^2:\n"
+    "P^a_N = -dphi/dQ^a_N = -(Q^a_N - T^a) (claim D9, the sign before the flip).",
+    claims=("D9",),
+)
+SO_COSTATE = Kernel(
+    name="so_network_costate",
+    target="discrete_rigid_body",
+    args=[
+        Arg("P_next", _ARG_STACK, "the costates P^a_{k+1}, samples stacked by rows"),
+        Arg("U", "(..., n, n)", "the control U_k, in SO(n)"),
+    ],
+    outputs={"P": _SP * _SU.T},
+    doc="Costate step of the SO(n) network: P^a_k = dH/dQ^a_k = P^a_{k+1} U_k^T\n"
+    "(the back-propagation of the layer Q U).",
+    claims=("D9",),
+)
+_SO_S = _SP.T * _SQ1  # sum_a (P^a_{k+1})^T Q^a_{k+1} on stacked samples
+# S - S^T unevaluated (SymPy would expand S^T to Q^T P): one matrix product for the sum
+_SO_G = sp.MatAdd(
+    sp.MatMul(
+        sp.Rational(1, 2),
+        sp.MatAdd(_SO_S, sp.MatMul(-1, sp.Transpose(_SO_S), evaluate=False), evaluate=False),
+        evaluate=False,
+    ),
+    (Lam * _SU - _SU.T * Lam) / 2,
+    evaluate=False,
+)
+SO_GRADIENT = Kernel(
+    name="so_network_gradient",
+    target="discrete_rigid_body",
+    args=[
+        Arg("P_next", _ARG_STACK, "the costates P^a_{k+1}, samples stacked by rows"),
+        Arg("Q_next", _ARG_STACK, "the layer Q^a_{k+1}, stacked the same way"),
+        Arg("U", "(..., n, n)", "the control U_k, in SO(n)"),
+        Arg(
+            "lam",
+            "(..., n)",
+            "alpha times the diagonal of Lambda (running cost alpha tr(Lambda (I - U)))",
+        ),
+    ],
+    outputs={"G": _SO_G},
+    doc="Skew gradient of the SO(n) network's loss in the control U_k (claim D9).\n\n"
+    "With S = sum_a (P^a_{k+1})^T Q^a_{k+1} and lam the diagonal of alpha Lambda:\n"
+    "G_k = (S - S^T)/2 + (Lambda U_k - U_k^T Lambda)/2, so that d/dt L(..., U_k exp(t xi), ...) at t = 0 is tr(G_k^T xi) for every "
+    "skew xi.\nEqual to U_k^T (J_D(U_k) - sum_a ((Q^a_k)^T P^a_k - (P^a_k)^T Q^a_k)) "
+    "U_k / 2: it vanishes\nexactly when Ukdef2 holds (for the inertia alpha Lambda).",
+    claims=("D9",),
+)
+
+
 def _d9_setup() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     from scipy.linalg import expm
 
@@ -914,6 +998,132 @@ def d9_unflipped_endpoint() -> float:
 def d9_unflipped_endpoint_printed() -> float:
     """Before the sign change with m8's P_N = +dphi/dQ_N (displayed): it does not match."""
     return _d9_mismatch(D9_COST, ENDPOINT_M8, FINAL_UNFLIPPED)
+
+
+def _so_exact_network() -> tuple[Any, ...]:
+    """A rational SO(3) network: N = 3 controls, M = 2 samples, rational targets and lam."""
+    controls = [_cayley_rational(e, 7) for e in ([1, 2, -1], [-3, 1, 2], [2, -2, 1])]
+    starts = [_cayley_rational(e, 5) for e in ([1, -1, 3], [2, 0, -1])]
+    targets = [_cayley_rational(e, 4) for e in ([0, 1, 1], [-1, 2, 0])]
+    lam = [sp.Rational(7, 10), sp.Rational(11, 10), sp.Rational(8, 5)]
+    return controls, starts, targets, lam, sp.Rational(3, 7)
+
+
+def _so_loss_direct(
+    controls: list[Any], starts: list[Any], targets: list[Any], lam: Any, alpha: Any
+) -> Any:
+    """The loss sum_a 1/2 ||Q^a_N - T^a||_F^2 + alpha sum_k tr(Lambda (I - U_k)), written out
+    with explicit matrices (not through any kernel)."""
+    L = sp.diag(*lam)
+    total = sp.Integer(0)
+    for Q, T in zip(starts, targets, strict=True):
+        for Ux in controls:
+            Q = Q * Ux
+        total += sum((e**2 for e in (Q - T)), sp.Integer(0)) / 2
+    for Ux in controls:
+        total += alpha * (L * (sp.eye(L.rows) - Ux)).trace()
+    return total
+
+
+def _so_emitted_gradients(
+    controls: list[Any], starts: list[Any], targets: list[Any], lam: Any, alpha: Any
+) -> list[Any]:
+    """G_k from the emitted kernels: forward layer, endpoint, costate sweep and gradient, on the
+    samples stacked by rows (explicit rational matrices)."""
+    Qs = [sp.Matrix.vstack(*starts)]
+    for Ux in controls:
+        Qs.append(explicit(SO_LAYER["Q_next"], {"Q": Qs[-1], "U": Ux}))
+    P = explicit(SO_ENDPOINT["P"], {"Q": Qs[-1], "T": sp.Matrix.vstack(*targets)})
+    grads: list[Any] = [None] * len(controls)
+    for k in range(len(controls) - 1, -1, -1):
+        env = {"P_next": P, "Q_next": Qs[k + 1], "U": controls[k]}
+        grads[k] = explicit(SO_GRADIENT["G"], env, [alpha * x for x in lam])
+        P = explicit(SO_COSTATE["P"], {"P_next": P, "U": controls[k]})
+    return grads
+
+
+@D9.check(Level.EXACT_RATIONAL, form="corrected")
+def d9_so_network_gradient_exact() -> sp.Expr:
+    """The emitted SO(n) network kernels (layer, endpoint P_N = -dphi/dQ_N, costate P_k =
+    P_{k+1} U_k^T and skew gradient) against the directional derivative of an independently
+    written loss sum_a 1/2||Q^a_N - T^a||^2 + alpha sum_k tr(Lambda(I - U_k)) along U_k exp(t xi)
+    (which has the tangent U_k xi of U_k (I + t xi) at t = 0): sum over k and a basis xi of so(3)
+    of |d/dt L - tr(G_k^T xi)|, exact rationals (n = 3, N = 3, M = 2 samples)."""
+    controls, starts, targets, lam, alpha = _so_exact_network()
+    grads = _so_emitted_gradients(controls, starts, targets, lam, alpha)
+    t = sp.Symbol("t")
+    total = sp.Integer(0)
+    for k in range(len(controls)):
+        for i, j in itertools.combinations(range(3), 2):
+            xi = sp.zeros(3, 3)
+            xi[i, j], xi[j, i] = 1, -1
+            moved = list(controls)
+            moved[k] = controls[k] * (sp.eye(3) + t * xi)
+            d = sp.diff(_so_loss_direct(moved, starts, targets, lam, alpha), t).subs(t, 0)
+            total += sp.Abs(sp.nsimplify(d - (grads[k].T * xi).trace()))
+    skew_defect = sum((sp.Abs(e) for G in grads for e in G + G.T), sp.Integer(0))
+    return total + skew_defect
+
+
+@D9.check(Level.SYMBOLIC_GENERAL_N)
+def d9_so_network_gradient_is_ukdef2() -> sp.Expr:
+    """The emitted costate step is the displayed costate equation solved for P_k (P_{k+1} =
+    P_k U_k with U_k orthogonal), and with it the emitted gradient equals U_k^T (alpha J_D(U_k) -
+    (Q_k^T P_k - P_k^T Q_k)) U_k / 2 (the emitted J_D; both with the inertia alpha Lambda), so it
+    vanishes exactly when Ukdef2 holds (one sample; the sum over samples is linear; noncommutative
+    symbols, every n)."""
+    w = Words(symmetric=["Lambda"], orthogonal=["U"])
+    q, p, u = w("Q"), w("P"), w("U")
+    # costate: the displayed P^a_{k+1} = P^a_k U_k, then the emitted step must give back P_k
+    back = w.of(SO_COSTATE["P"]).xreplace({w("P_next"): p * u, w.T(w("P_next")): w.T(u) * w.T(p)})
+    r = w.is_zero(back - p)
+    step = {
+        w("P_next"): p * u,
+        w.T(w("P_next")): w.T(u) * w.T(p),
+        w("Q_next"): q * u,
+        w.T(w("Q_next")): w.T(u) * w.T(q),
+    }
+    grad = w.of(SO_GRADIENT["G"]).xreplace(step)
+    momentum = w.T(q) * p - w.T(p) * q
+    target = w.T(u) * (w.of(JD["JD"]) - momentum) * u / 2
+    return r + w.is_zero(grad - sp.expand(target))
+
+
+@D9.check(Level.FLOAT64, tol=1e-7, form="corrected")
+def d9_symrb_so_network_gradients() -> float:
+    """symrb.learning.so_network_gradients against central differences (step 1e-5) of an
+    independently written NumPy loss along U_k expm(t xi), n = 4, N = 3, M = 5, alpha = 0.3, for
+    every k and a basis of so(4): largest |difference| over the largest |G|."""
+    from scipy.linalg import expm
+
+    from symrb.learning import so_network_gradients
+
+    rng = np.random.default_rng(12)
+    n_, N_, M_ = 4, 3, 5
+    lam = np.array([0.6, 0.9, 1.3, 1.7])
+    controls = np.array([expm(ref.random_skew(n_, rng, 0.4)) for _ in range(N_)])
+    starts = np.array([ref.random_rotation(n_, rng) for _ in range(M_)])
+    targets = np.array([ref.random_rotation(n_, rng) for _ in range(M_)])
+
+    def loss(Us: np.ndarray) -> float:
+        Q = starts.copy()
+        for Ux in Us:
+            Q = np.einsum("aij,jk->aik", Q, Ux)
+        run = sum(float(np.trace(np.diag(lam) @ (np.eye(n_) - Ux))) for Ux in Us)
+        return 0.5 * float(np.sum((Q - targets) ** 2)) + 0.3 * run
+
+    _loss, G = so_network_gradients(starts, controls, lam, targets, alpha=0.3)
+    worst, h = 0.0, 1e-5
+    for k in range(N_):
+        for i, j in itertools.combinations(range(n_), 2):
+            xi = np.zeros((n_, n_))
+            xi[i, j], xi[j, i] = 1.0, -1.0
+            up, um = controls.copy(), controls.copy()
+            up[k] = controls[k] @ expm(h * xi)
+            um[k] = controls[k] @ expm(-h * xi)
+            fd = (loss(up) - loss(um)) / (2 * h)
+            worst = max(worst, abs(fd - float(np.sum(G[k] * xi))))
+    return worst / float(np.max(np.abs(G)))
 
 
 # =============================================================================================

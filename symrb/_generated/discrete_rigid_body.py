@@ -13,6 +13,10 @@ __all__ = [
     "jd",
     "mv_momentum",
     "mv_transport",
+    "so_network_layer",
+    "so_network_endpoint",
+    "so_network_costate",
+    "so_network_gradient",
     "mv3_cayley_s_newton",
     "mv3_cayley_step",
     "mv3_preprocessing_coefficients",
@@ -98,6 +102,124 @@ def mv_transport(Omega, M):
     Omega = numpy.asarray(Omega, dtype=float)
     M = numpy.asarray(M, dtype=float)
     return (Omega @ M) @ numpy.swapaxes(Omega, -1, -2)
+
+
+def so_network_layer(Q, U):
+    r"""One layer of the SO(n) network (paper, Section 2.1, learning version): Q^a_{k+1} = Q^a_k U_k, for every sample at once when the samples are stacked by rows.
+
+    Parameters
+    ----------
+    Q : array, shape (..., n, n)
+        the samples Q^a_k (n x n each), stacked by rows
+    U : array, shape (..., n, n)
+        the control U_k, in SO(n)
+
+    Returns
+    -------
+    Q_next : array
+
+    Notes
+    -----
+    Checked by claim D9 (``symrb verify D9``);
+    expressions from ``derivations.parts.discrete_rigid_body``.
+
+    Total ops per batch item: 1 matrix product (n^3).
+    """
+    Q = numpy.asarray(Q, dtype=float)
+    U = numpy.asarray(U, dtype=float)
+    return Q @ U
+
+
+def so_network_endpoint(Q, T):
+    r"""Endpoint costate of the SO(n) network for phi(Q) = 1/2 ||Q - T||_F^2: P^a_N = -dphi/dQ^a_N = -(Q^a_N - T^a) (claim D9, the sign before the flip).
+
+    Parameters
+    ----------
+    Q : array, shape (..., n, n)
+        the final layer Q^a_N, samples stacked by rows
+    T : array, shape (..., n, n)
+        the targets T^a, stacked the same way
+
+    Returns
+    -------
+    P : array
+
+    Notes
+    -----
+    Checked by claim D9 (``symrb verify D9``);
+    expressions from ``derivations.parts.discrete_rigid_body``.
+
+    Total ops per batch item: 1 elementwise (n^2).
+    """
+    Q = numpy.asarray(Q, dtype=float)
+    T = numpy.asarray(T, dtype=float)
+    return T - Q
+
+
+def so_network_costate(P_next, U):
+    r"""Costate step of the SO(n) network: P^a_k = dH/dQ^a_k = P^a_{k+1} U_k^T (the back-propagation of the layer Q U).
+
+    Parameters
+    ----------
+    P_next : array, shape (..., n, n)
+        the costates P^a_{k+1}, samples stacked by rows
+    U : array, shape (..., n, n)
+        the control U_k, in SO(n)
+
+    Returns
+    -------
+    P : array
+
+    Notes
+    -----
+    Checked by claim D9 (``symrb verify D9``);
+    expressions from ``derivations.parts.discrete_rigid_body``.
+
+    Total ops per batch item: 1 matrix product (n^3).
+    """
+    P_next = numpy.asarray(P_next, dtype=float)
+    U = numpy.asarray(U, dtype=float)
+    return P_next @ numpy.swapaxes(U, -1, -2)
+
+
+def so_network_gradient(P_next, Q_next, U, lam):
+    r"""Skew gradient of the SO(n) network's loss in the control U_k (claim D9).
+
+    With S = sum_a (P^a_{k+1})^T Q^a_{k+1} and lam the diagonal of alpha Lambda:
+    G_k = (S - S^T)/2 + (Lambda U_k - U_k^T Lambda)/2, so that d/dt L(..., U_k exp(t xi), ...) at t = 0 is tr(G_k^T xi) for every skew xi.
+    Equal to U_k^T (J_D(U_k) - sum_a ((Q^a_k)^T P^a_k - (P^a_k)^T Q^a_k)) U_k / 2: it vanishes
+    exactly when Ukdef2 holds (for the inertia alpha Lambda).
+
+    Parameters
+    ----------
+    P_next : array, shape (..., n, n)
+        the costates P^a_{k+1}, samples stacked by rows
+    Q_next : array, shape (..., n, n)
+        the layer Q^a_{k+1}, stacked the same way
+    U : array, shape (..., n, n)
+        the control U_k, in SO(n)
+    lam : array, shape (..., n)
+        alpha times the diagonal of Lambda (running cost alpha tr(Lambda (I - U)))
+
+    Returns
+    -------
+    G : array
+
+    Notes
+    -----
+    Checked by claim D9 (``symrb verify D9``);
+    expressions from ``derivations.parts.discrete_rigid_body``.
+
+    Total ops per batch item: 1 matrix product (n^3), 8 elementwise (n^2).
+    """
+    P_next = numpy.asarray(P_next, dtype=float)
+    Q_next = numpy.asarray(Q_next, dtype=float)
+    U = numpy.asarray(U, dtype=float)
+    lam = numpy.asarray(lam, dtype=float)
+    t0 = numpy.swapaxes(P_next, -1, -2) @ Q_next
+    return (
+        (0.5 * (lam[..., :, None] * U)) - (0.5 * (numpy.swapaxes(U, -1, -2) * lam[..., None, :]))
+    ) + (0.5 * (t0 - numpy.swapaxes(t0, -1, -2)))
 
 
 def mv3_cayley_s_newton(s, h, m1, m2, m3, l1, l2, l3):
