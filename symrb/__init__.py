@@ -41,7 +41,10 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "exact": ("ExactSolution", "rigid_body_exact"),
     "learning": (
         "resnet_forward", "squared_error", "costate_sweep", "loss_gradients", "train",
-        "TrainResult", "toy_classification",
+        "TrainResult", "toy_classification", "so_network_forward", "so_network_gradients",
+        "so_network_costates", "so_extremal_residual", "so_procrustes", "so_rotation_task",
+        "SOTrainResult", "train_so_gradient", "train_so_msa", "train_so_shooting", "DigitsTask",
+        "digits_task", "resnet_predict", "train_msa",
     ),
     "orbits": (
         "orbit_extremal_rhs", "orbit_hamiltonian", "brockett_potential", "double_bracket_rhs",

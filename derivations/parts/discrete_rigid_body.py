@@ -1678,7 +1678,7 @@ MV3_PREPROCESSED_LAM = Kernel(
     + _MARGS
     + _LARGS
     + [
-        Arg(str(sym), "()", f"preprocessing constant {sym} (mv3_preprocessing_coefficients)")
+        Arg(str(sym), _SCALAR3, f"preprocessing constant {sym} (mv3_preprocessing_coefficients)")
         for row in _HV_CS + _HV_DS
         for sym in row
     ],  # fmt: skip
