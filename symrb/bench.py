@@ -914,7 +914,7 @@ def _evidence(path: str | os.PathLike[str]) -> dict[str, Any]:
             "max_seconds": float(max(s)),
             "certifies": _CERTIFIES.get(lv, "see symrb show ID"),
         }
-    return {"source": str(path), "levels": out, "timer": "as recorded by symrb verify"}
+    return {"source": Path(path).name, "levels": out, "timer": "as recorded by symrb verify"}
 
 
 # ---------------------------------------------------------------------------------------------
