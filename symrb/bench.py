@@ -739,6 +739,11 @@ def _flow_thunk(
     return lambda: mv(Q, M, lam, h, K, save_every=K, method=method)
 
 
+def _throughput_scale(backend: str, batch: int) -> int:
+    """The factor on _MARGINAL_K for a batch: the runs take well above the one-off cost."""
+    return max(1, math.ceil((5e4 if backend == "numba" else 5e2) / batch))
+
+
 def _marginal(t: Mapping[str, Any], pattern: str, scale: int = 1) -> float:
     """(median time at the larger K - at the smaller K) / (difference in steps)."""
     k1, k2 = (k * scale for k in _MARGINAL_K)
@@ -770,8 +775,12 @@ def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
         for B in p["batches"]:
             lam, Q, M = _batch_problem(3, B, p["seed"])
             for be in backends:
+                # enough steps that the difference of the two runs is far above the one-off
+                # cost and its noise: about 2e3 body-steps a step of K for NumPy, 2e5 compiled
+                scale = _throughput_scale(be, B)
                 for K in _MARGINAL_K:
-                    fns[f"flow {be} K={K} B={B}"] = _flow_thunk(mv, Q, M, lam, h, K, be)
+                    k = K * scale
+                    fns[f"flow {be} K={k} B={B}"] = _flow_thunk(mv, Q, M, lam, h, k, be)
     log(f"throughput: batches {list(p['batches'])}")
     t = time_interleaved(fns, rounds=p["rounds"], min_time=p["min_time"])
     rows = []
@@ -787,7 +796,7 @@ def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
         }
         if mv is not None:
             for be in backends:
-                per = _marginal(t, f"flow {be} K={{K}} B={B}")
+                per = _marginal(t, f"flow {be} K={{K}} B={B}", _throughput_scale(be, B))
                 row[f"flow_{be}_per_step"] = per
                 row[f"flow_{be}_body_steps_per_s"] = B / per
                 row[f"flow_{be}_over_matmul"] = per / tm["median"]
