@@ -276,7 +276,42 @@ def gl_hamiltonian(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     return _gen.gl_hamiltonian(a, b, L)
 
 
-def P_from_M(Q: ArrayLike, M: ArrayLike) -> Array:
+@dataclass(frozen=True)
+class PFromMInfo:
+    r"""What :func:`P_from_M` did, per item of the batch (arrays of the batch shape).
+
+    Attributes
+    ----------
+    residual : ndarray
+        :math:`\|Q^TP - P^TQ - M\|_F`.
+    orthogonality : ndarray
+        :math:`\|P^TP - I\|_F`.
+    delta : ndarray
+        :math:`1 - \|M\|_{op}/2`, the relative distance to the branch point.
+    condition : ndarray
+        :math:`\kappa = 1/\sqrt{1 - (\|M\|_{op}/2)^2}`, the largest derivative of the
+        rotation angles :math:`\arcsin(b/2)` in the eigen-rates :math:`b` of M (about
+        :math:`1/\sqrt{2\delta}` near 2).  Accuracy stated and tested: residual and
+        orthogonality below :math:`10\,n\,\varepsilon`; the forward error of P below
+        :math:`10\,n\,\varepsilon\,\kappa`.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> P, info = symrb.P_from_M(np.eye(3), symrb.hat([0.0, 0.0, 1.0]), return_info=True)
+    >>> print(round(float(info.condition), 4), float(info.delta))  # 1 / cos(pi / 6)
+    1.1547 0.5
+    """
+
+    residual: Array
+    orthogonality: Array
+    delta: Array
+    condition: Array
+
+
+def P_from_M(
+    Q: ArrayLike, M: ArrayLike, *, return_info: bool = False
+) -> Array | tuple[Array, PFromMInfo]:
     r"""Solve :math:`M = Q^TP - P^TQ` for :math:`P\in SO(n)`: :math:`P = Q\exp(\sinh^{-1}(M/2))`
     (claim S10).
 
@@ -296,10 +331,15 @@ def P_from_M(Q: ArrayLike, M: ArrayLike) -> Array:
     M : array_like, shape (..., n, n)
         Skew-symmetric body momenta with :math:`\|M\|_{op} < 2`.
 
+    return_info : bool, optional
+        Also return a :class:`PFromMInfo` (residuals and the condition number).
+
     Returns
     -------
     P : ndarray, shape (..., n, n)
         Costates in SO(n) with :math:`Q^TP - P^TQ = M`.
+    info : PFromMInfo
+        Only with ``return_info=True``.
 
     Raises
     ------
@@ -340,8 +380,17 @@ def P_from_M(Q: ArrayLike, M: ArrayLike) -> Array:
             f"M, above 2 none exists); got ||M||_op = {worst!r} at batch index {where}"
         )
     flat = Ma.reshape((-1,) + Ma.shape[-2:])
-    A = np.stack([_exp_asinh_half(m) for m in flat]).reshape(Ma.shape)
-    return Qa @ A
+    A = np.stack([_exp_asinh_half(m) for m in flat]) if flat.shape[0] else np.empty(flat.shape)
+    P = Qa @ A.reshape(Ma.shape)
+    if not return_info:
+        return P
+    eye = np.eye(Ma.shape[-1])
+    Pt = np.swapaxes(P, -1, -2)
+    res = np.linalg.norm(np.swapaxes(Qa, -1, -2) @ P - Pt @ Qa - Ma, axis=(-2, -1))
+    orth = np.linalg.norm(Pt @ P - eye, axis=(-2, -1))
+    half = norms / 2.0
+    cond = 1.0 / np.sqrt((1.0 - half) * (1.0 + half))
+    return P, PFromMInfo(residual=res, orthogonality=orth, delta=1.0 - half, condition=cond)
 
 
 def _exp_asinh_half(M: Array) -> Array:
