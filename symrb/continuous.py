@@ -169,7 +169,8 @@ def _samples(Q: ArrayLike, P: ArrayLike, lam: ArrayLike):
     a, b = _pair(Q, P, "Q", "P", L.shape[-1])
     if a.ndim < 3 or b.ndim < 3:
         raise InputError(
-            f"Q and P must have shape (..., m, n, n) with a sample axis m; got {a.shape}, {b.shape}"
+            f"Q and P must have shape (..., m, n, n) with a sample axis m; got {a.shape}, {b.shape}; "
+            "pass the samples stacked along axis -3"
         )
     return a, b, L
 
@@ -377,7 +378,8 @@ def P_from_M(
         where = tuple(int(i) for i in idx)
         raise OutOfDomainError(
             f"P_from_M needs ||M||_op < 2 (at 2 the solution P in SO(n) is not differentiable in "
-            f"M, above 2 none exists); got ||M||_op = {worst!r} at batch index {where}"
+            f"M, above 2 none exists); got ||M||_op = {worst!r} at batch index {where}; scale M "
+            f"by less than {2.0 / worst:.10g}"
         )
     flat = Ma.reshape((-1,) + Ma.shape[-2:])
     A = np.stack([_exp_asinh_half(m) for m in flat]) if flat.shape[0] else np.empty(flat.shape)
@@ -648,7 +650,8 @@ def _as_flow(flow: Any) -> Flow:
     if isinstance(flow, Flow):
         return flow
     raise InputError(
-        f"flow must be a Flow (e.g. symrb.SymmetricRigidBody), got {type(flow).__name__}"
+        f"flow must be a Flow (e.g. symrb.SymmetricRigidBody), got {type(flow).__name__} "
+        f"{flow!r}; pass a subclass of symrb.Flow or an instance"
     )
 
 
@@ -718,33 +721,43 @@ def integrate(
         if missing or extra:
             raise InputError(
                 f"y0 for {fl.name} needs exactly the variables {fl.state}; "
-                f"missing {missing}, unexpected {extra}"
+                f"missing {missing}, unexpected {extra}; pass exactly those names"
             )
         items = [y0[k] for k in fl.state]
     else:
         items = list(y0)
         if len(items) != len(fl.state):
             raise InputError(
-                f"y0 for {fl.name} must have {len(fl.state)} arrays {fl.state}, got {len(items)}"
+                f"y0 for {fl.name} must have {len(fl.state)} arrays {fl.state}, got {len(items)}; "
+                "pass one array per state variable"
             )
     arrays = [v.square(a, f"y0[{k!r}]", nn) for a, k in zip(items, fl.state, strict=True)]
     if fl.sample_axes and any(a.ndim < 3 for a in arrays):
-        raise InputError(f"y0 for {fl.name} needs a sample axis: shape (..., m, n, n)")
+        raise InputError(
+            f"y0 for {fl.name} needs a sample axis: shape (..., m, n, n); pass the samples "
+            "stacked along axis -3"
+        )
     try:
         arrays = list(np.broadcast_arrays(*arrays))
         Lb = L[(Ellipsis,) + (None,) * fl.sample_axes + (slice(None),)] if fl.sample_axes else L
         np.broadcast_shapes(Lb.shape[:-1] + (nn, nn), arrays[0].shape)
     except ValueError as exc:
-        raise InputError(f"y0 and lam batch shapes do not broadcast: {exc}") from None
+        raise InputError(
+            f"y0 and lam batch shapes do not broadcast: {exc}; pass arrays whose leading axes "
+            "broadcast"
+        ) from None
     shape = arrays[0].shape
     state0 = {k: np.array(a, dtype=float) for k, a in zip(fl.state, arrays, strict=True)}
     fl.check(state0, L)
 
     ts = v.as_float_array(t_span, "t_span")
     if ts.shape != (2,):
-        raise InputError(f"t_span must be (t0, t1), got shape {ts.shape}")
+        raise InputError(f"t_span must be (t0, t1), got shape {ts.shape}; pass two times")
     if not (v.real_scalar(rtol, "rtol") > 0 and v.real_scalar(atol, "atol") >= 0):
-        raise InputError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
+        raise InputError(
+            f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}; pass values in those "
+            "ranges"
+        )
     te = None if t_eval is None else v.as_float_array(t_eval, "t_eval")
     size = int(np.prod(shape))
 

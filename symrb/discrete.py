@@ -89,8 +89,9 @@ class DiscreteFlowSolution:
     residual : ndarray, shape (number of solves,)
         :math:`\|U\Lambda - \Lambda U^T - M\|_F` of each solve (the largest over a batch).
     tol : ndarray, shape (number of solves,)
-        The tolerance each residual met, :math:`10\,\varepsilon\,\|M\|_F` (the smallest over a
-        batch): every entry of ``residual`` is at most its ``tol``.
+        The tolerance each residual met (the default of :func:`symrb.solve_moser_veselov`: ten
+        times the rounding error of evaluating the residual): every entry of ``residual`` is at
+        most its ``tol``.
     condition : ndarray, shape (number of solves,)
         The solver's condition estimate :math:`\kappa` of each solve (see
         :class:`symrb.MVSolveInfo`; the largest over a batch), with ``diagnostics=True``;
@@ -184,7 +185,7 @@ def _check_steps(steps: int, save_every: int) -> tuple[int, int]:
 def _check_h(h: float) -> float:
     value = v.real_scalar(h, "h")
     if not value > 0:
-        raise InputError(f"h must be a finite number > 0, got {h!r}")
+        raise InputError(f"h must be a finite number > 0, got {h!r}; pass a float > 0")
     return value
 
 
@@ -225,14 +226,16 @@ class _Stepper:
                 # one Newton-Schulz step back to SO(n), so rounding errors in U^T U - I do not
                 # compound from step to step
                 guess = guess @ (1.5 * np.eye(guess.shape[-1]) - 0.5 * (guess.T @ guess))
-            got = _warm_single(guess, Mf[0], self.lam[0], float(tol[0]), _MAXITER)
+            got = _warm_single(guess, Mf[0], self.lam[0], float(tol[0]), _MAXITER, True)
             if got is not None:
                 self.U_prev = self.U
                 self.U = got[0][None]
                 self.last_iterations = got[1]
-                self._record(self.U, np.array([got[2]]), tol)
+                self._record(self.U, np.array([got[2]]), np.array([got[3]]))
                 return got[0].reshape(M.shape)
-        U, it, res, _margin, _start = _solve_batch(Mf, self.lam, tol, _MAXITER, self.U)
+        U, it, res, _margin, _start, tol = _solve_batch(
+            Mf, self.lam, tol, _MAXITER, self.U, floor=True
+        )
         self.U_prev, self.U = self.U, U
         self.last_iterations = int(it.sum())
         self._record(U, res, tol)
@@ -266,7 +269,10 @@ def _prepare(
         shapes = ", ".join(
             f"{name} {a.shape}" for (_x, name, _k), a in zip(mats, arrays, strict=True)
         )
-        raise InputError(f"the batch axes do not broadcast: lam {L.shape}, {shapes}") from None
+        raise InputError(
+            f"the batch axes do not broadcast: lam {L.shape}, {shapes}; pass arrays whose "
+            "leading axes broadcast (numpy rules)"
+        ) from None
     arrays = [np.broadcast_to(a, batch + (nn, nn)).copy() for a in arrays]
     return L, arrays, batch
 

@@ -133,11 +133,24 @@ def _sylvester_sym(X: Array, C: Array) -> Array:
         # row-major vec: vec(X^T T) = (X^T kron I) vec T, vec(T X) = (I kron X^T) vec T
         K = np.einsum("bki,jl->bijkl", X, eye) + np.einsum("ik,blj->bijkl", eye, X)
         K = K.reshape(b, nn * nn, nn * nn)
-        T = np.linalg.solve(K, C.reshape(b, nn * nn, 1)).reshape(b, nn, nn)
+        try:
+            T = np.linalg.solve(K, C.reshape(b, nn * nn, 1)).reshape(b, nn, nn)
+        except np.linalg.LinAlgError:
+            # a singular system (exactly at or past the fold): NaN for those items, which the
+            # Newton loop treats as a failed step, instead of an exception for the whole batch
+            T = np.full_like(C, np.nan)
+            for i in range(b):
+                try:
+                    T[i] = np.linalg.solve(K[i], C[i].reshape(-1)).reshape(nn, nn)
+                except np.linalg.LinAlgError:
+                    pass
     else:
         T = np.empty_like(C)
         for i in range(b):
-            T[i] = sla.solve_sylvester(X[i].T, X[i], C[i])
+            try:
+                T[i] = sla.solve_sylvester(X[i].T, X[i], C[i])
+            except (np.linalg.LinAlgError, ValueError):
+                T[i] = np.nan
     return 0.5 * (T + np.swapaxes(T, -1, -2))
 
 
@@ -223,12 +236,26 @@ def _riccati_guess(M: Array, lam: Array) -> tuple[Array, NDArray[np.bool_]]:
     return U, failed
 
 
-def _newton(
-    U: Array, M: Array, lam: Array, tol: Array, maxiter: int
-) -> tuple[Array, NDArray[np.int64], Array, NDArray[np.bool_]]:
-    """Newton iterations on every item until ||J_D(U) - M||_F <= tol (per item).
+def _rounding_tol(U: Array, lam: Array) -> Array:
+    """10 eps ||offdiag(|U| Lam + Lam |U|^T)||_F: the rounding floor of evaluating J_D(U).
 
-    Returns (U, iterations, residual, converged).
+    The off-diagonal entries of J_D(U) are differences U_ij lam_j - lam_i U_ji; each is computed
+    with an error of about eps (|U_ij| lam_j + lam_i |U_ji|), which exceeds eps ||M|| when the
+    terms cancel (a wide spread of lam far from U = I).  The diagonal is exactly zero.
+    """
+    A = np.abs(U) * lam[:, None, :]
+    S = A + lam[:, :, None] * np.abs(np.swapaxes(U, -1, -2))
+    S = S - S * np.eye(U.shape[-1])
+    return 10.0 * _EPS * _fro(S)
+
+
+def _newton(
+    U: Array, M: Array, lam: Array, tol: Array, maxiter: int, floor: bool = False
+) -> tuple[Array, NDArray[np.int64], Array, NDArray[np.bool_], Array]:
+    """Newton iterations on every item until ||J_D(U) - M||_F <= tol (per item); with
+    ``floor``, tol is raised to the rounding floor :func:`_rounding_tol` of the current U.
+
+    Returns (U, iterations, residual, converged, the tolerance used).
     """
     U = U.copy()
     b = U.shape[0]
@@ -236,6 +263,8 @@ def _newton(
     slow = np.zeros(b, dtype=np.int64)
     R = M - _jd(U, lam)
     res = _fro(R)
+    base = tol
+    tol = np.maximum(base, _rounding_tol(U, lam)) if floor else base
     active = res > tol
     for _ in range(maxiter):
         if not active.any():
@@ -256,16 +285,19 @@ def _newton(
         # an item stops when it meets tol, when a step is not finite, or after four steps in a
         # row that did not halve the residual (rounding floor or divergence)
         slow = np.where(ok & (rnew > 0.5 * old), slow + 1, 0)
+        if floor:
+            tol = np.maximum(base, _rounding_tol(U, lam))
         active = ok & (res > tol) & (slow < 4)
-    return U, iters, res, res <= tol
+    return U, iters, res, res <= tol, tol
 
 
 def _warm_single(
-    U: Array, M: Array, lam: Array, tol: float, maxiter: int
-) -> tuple[Array, int, float] | None:
+    U: Array, M: Array, lam: Array, tol: float, maxiter: int, floor: bool = False
+) -> tuple[Array, int, float, float] | None:
     """Newton from a nearby U for one (n, n) matrix, with 2-D arrays (lower call overhead for time
     steppers).  Returns (U, iterations, residual) when it converges on the branch, else None (the
-    caller then falls back to the batched solver with its Riccati start)."""
+    caller then falls back to the batched solver with its Riccati start); with ``floor`` the
+    tolerance is raised to the rounding floor (:func:`_rounding_tol`), returned last."""
     nn = lam.shape[0]
     eye = np.eye(nn)
     lam_row, lam_col = lam[None, :], lam[:, None]
@@ -273,19 +305,25 @@ def _warm_single(
     r = float(np.sqrt(np.vdot(R, R)))
     it = 0
     slow = 0
+    base = tol
+    if floor:
+        tol = max(base, float(_rounding_tol(U[None], lam[None])[0]))
     while r > tol:
         if it >= maxiter or slow >= 4:
             return None
         X = U * lam_row
         C = 0.5 * (R @ X - X.T @ R)
-        if nn <= _KRON_MAX_N:
-            Xt = X.T
-            K = (Xt[:, None, :, None] * eye[None, :, None, :]) + (
-                eye[:, None, :, None] * Xt[None, :, None, :]
-            )
-            T = np.linalg.solve(K.reshape(nn * nn, nn * nn), C.reshape(-1)).reshape(nn, nn)
-        else:
-            T = sla.solve_sylvester(X.T, X, C)
+        try:
+            if nn <= _KRON_MAX_N:
+                Xt = X.T
+                K = (Xt[:, None, :, None] * eye[None, :, None, :]) + (
+                    eye[:, None, :, None] * Xt[None, :, None, :]
+                )
+                T = np.linalg.solve(K.reshape(nn * nn, nn * nn), C.reshape(-1)).reshape(nn, nn)
+            else:
+                T = sla.solve_sylvester(X.T, X, C)
+        except (np.linalg.LinAlgError, ValueError):  # singular: at the fold
+            return None
         xi = U.T @ (0.5 * R + 0.5 * (T + T.T)) / lam_row
         xi = 0.5 * (xi - xi.T)
         Unew = U + U @ np.linalg.solve(eye - 0.5 * xi, xi)
@@ -296,6 +334,8 @@ def _warm_single(
             return None
         slow = slow + 1 if rnew > 0.5 * r else 0
         U, R, r = Unew, Rnew, rnew
+        if floor:
+            tol = max(base, float(_rounding_tol(U[None], lam[None])[0]))
     # branch certificate: a positive definite symmetric part of X = U Lam puts every eigenvalue of
     # X in the right half-plane (Cholesky is cheap); otherwise look at the eigenvalues
     X = U * lam_row
@@ -304,7 +344,7 @@ def _warm_single(
     except np.linalg.LinAlgError:
         if not np.linalg.eigvals(X).real.min() > 0:
             return None
-    return U, it, r
+    return U, it, r, tol
 
 
 # ---------------------------------------------------------------------------------------------
@@ -317,7 +357,11 @@ def _has_imaginary_eigenvalue(M: Array, lam: Array, s: float, rtol: float) -> bo
     eye = np.eye(nn)
     H = np.block([[-0.5 * A, -eye], [-(np.diag(lam**2) + 0.25 * (A @ A)), -0.5 * A]])
     ev = np.linalg.eigvals(H)
-    return bool(np.min(np.abs(ev.real)) <= rtol * np.linalg.norm(H, 2))
+    # relative to each eigenvalue's own size: with a wide spread of lam the eigenvalues range
+    # over many orders of magnitude (+-lam_i at s = 0), and a threshold relative to ||H|| flagged
+    # the small ones as imaginary (fold_scale returned 0 for lam = (3e-6, 1e-6, 1e6)).  H is
+    # invertible (det X = det Lam > 0 on the branch), so |ev| > 0.
+    return bool(np.min(np.abs(ev.real) / np.abs(ev)) <= rtol)
 
 
 def _fold_scale_one(M: Array, lam: Array, rtol: float = 1e-13) -> float:
@@ -394,7 +438,7 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
     >>> symrb.solve_moser_veselov(1.001 * t * M, [0.7, 1.1, 1.6])  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    symrb.errors.OutOfDomainError: ... so M is 0.1 % past the fold
+    symrb.errors.OutOfDomainError: ... so M is 0.1 % past the fold; ...
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
@@ -412,14 +456,39 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
 
 def _out_of_domain(M: Array, lam: Array) -> OutOfDomainError:
     t = _fold_scale_one(M, lam)
-    past = (1.0 / t - 1.0) * 100.0
+    past = (1.0 / t - 1.0) * 100.0 if t > 0 else float("inf")
     return OutOfDomainError(
         "U Lam - Lam U^T = M has no solution on the branch through the identity: M is past the "
         f"fold of J_D. ||M||_F = {np.linalg.norm(M):.6g}, ||M||_op = {np.linalg.norm(M, 2):.6g}, "
         f"lam = {np.array2string(lam, precision=6, threshold=12)}; along the ray t*M the fold is at "
         f"t = {t:.10g} (||M||_F = {t * np.linalg.norm(M):.6g} there), so M is {past:.4g} % past "
-        "the fold"
+        f"the fold; scale M by less than {t:.10g} (for a time step h, take h below {t:.10g} h)"
     )
+
+
+def _continuation(
+    M: Array, lam: Array, tol: float, maxiter: int, floor: bool
+) -> tuple[Array, int, float, float, float] | None:
+    """Newton along t*M from U = I (t = 0) to t = 1, the step in t adapted; one (n, n) item.
+
+    Returns (U, iterations, residual, margin, tolerance used) on the branch, or None."""
+    U = np.eye(M.shape[-1])[None]
+    Mb, lb = M[None], lam[None]
+    t, dt, total = 0.0, 0.25, 0
+    res = tol_used = np.zeros(1)
+    while t < 1.0:
+        t_new = min(1.0, t + dt)
+        target = t_new * Mb
+        tol_t = np.array([tol * t_new if t_new < 1.0 else tol])
+        Unew, it, res_t, conv, tol_t = _newton(U, target, lb, tol_t, maxiter, floor)
+        total += int(it[0])
+        if conv[0] and _margin(Unew, lb)[0] > 0:
+            U, t, dt, res, tol_used = Unew, t_new, dt * 1.5, res_t, tol_t
+        else:
+            dt /= 2.0
+            if dt < 1e-6:
+                return None
+    return U[0], total, float(res[0]), float(_margin(U, lb)[0]), float(tol_used[0])
 
 
 def _solve_batch(
@@ -428,15 +497,19 @@ def _solve_batch(
     tol: Array,
     maxiter: int,
     U0: Array | None = None,
-) -> tuple[Array, NDArray[np.int64], Array, Array, str]:
-    """Core solver on flat batches (b, n, n), (b, n); raises on failure.
+    floor: bool = False,
+) -> tuple[Array, NDArray[np.int64], Array, Array, str, Array]:
+    """Core solver on flat batches (b, n, n), (b, n); raises on failure.  With ``floor`` each
+    tolerance is raised to the rounding floor of evaluating J_D at the solution.
 
-    Returns (U, iterations, residual, margin, start).
+    Returns (U, iterations, residual, margin, start, tolerance used).
     """
     b = M.shape[0]
     start = "warm" if U0 is not None else "riccati"
+    base = np.asarray(tol, dtype=float)
+    tol = base.copy()
     if U0 is not None:
-        U, iters, res, conv = _newton(U0, M, lam, tol, maxiter)
+        U, iters, res, conv, tol = _newton(U0, M, lam, tol, maxiter, floor)
         margin = _margin(U, lam)
         bad = ~conv | ~(margin > 0)
     else:
@@ -450,10 +523,18 @@ def _solve_batch(
             start = "mixed"
         idx = np.nonzero(bad)[0]
         G, failed = _riccati_guess(M[idx], lam[idx])
-        U2, it2, res2, conv2 = _newton(G, M[idx], lam[idx], tol[idx], maxiter)
+        U2, it2, res2, conv2, tol2 = _newton(G, M[idx], lam[idx], base[idx], maxiter, floor)
         m2 = _margin(U2, lam[idx])
-        U[idx], iters[idx], res[idx], margin[idx] = U2, it2, res2, m2
-        still = failed | ~conv2 | ~(m2 > 0)
+        U[idx], iters[idx], res[idx], margin[idx], tol[idx] = U2, it2, res2, m2, tol2
+        still = ~conv2 | ~(m2 > 0)
+        for j in np.nonzero(still)[0]:
+            # Riccati failed (scipy gives up on badly scaled lam, e.g. spread 1e12) or Newton
+            # from its solution did: follow the branch from U = I along t*M instead
+            i = idx[j]
+            got = _continuation(M[i], lam[i], float(base[i]), maxiter, floor)
+            if got is not None:
+                U[i], iters[i], res[i], margin[i], tol[i] = got
+                still[j] = False
         for j in np.nonzero(still)[0]:
             i = idx[j]
             t = _fold_scale_one(M[i], lam[i])
@@ -466,7 +547,7 @@ def _solve_batch(
                 residual=float(res[i]),
                 iterations=int(iters[i]),
             )
-    return U, iters, res, margin, start
+    return U, iters, res, margin, start, tol
 
 
 def solve_moser_veselov(
@@ -495,7 +576,11 @@ def solve_moser_veselov(
         The diagonal of :math:`\Lambda`, all entries > 0.
     tol : float, optional
         The residual tolerance on :math:`\|U\Lambda-\Lambda U^T-M\|_F`; by default
-        :math:`10\,\varepsilon\,\|M\|_F` for each item.
+        :math:`10\,\varepsilon\max(\|M\|_F, \|\mathrm{offdiag}(|U|\Lambda +
+        \Lambda|U|^T)\|_F)` for each item: ten times the rounding error of evaluating the
+        residual at the solution, which is about :math:`\|M\|_F` unless the terms
+        :math:`U_{ij}\lambda_j` and :math:`\lambda_iU_{ji}` cancel (a wide spread of
+        :math:`\lambda` far from :math:`U = I`).
     maxiter : int, optional
         The most Newton iterations.
     U0 : array_like, shape (..., n, n), optional
@@ -544,7 +629,9 @@ def solve_moser_veselov(
     nn = L.shape[-1]
     A = v.skew(M, "M", nn)
     if tol is not None and not v.real_scalar(tol, "tol") >= 0:
-        raise InputError(f"tol must be a finite number >= 0, got {tol!r}")
+        raise InputError(
+            f"tol must be a finite number >= 0, got {tol!r}; pass a float >= 0 or None"
+        )
     maxiter = v.count(maxiter, "maxiter", 1)
     batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
     G = None
@@ -557,7 +644,9 @@ def solve_moser_veselov(
     Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
     normM = _fro(Ab)
     tolb = np.full(Ab.shape[0], float(tol)) if tol is not None else 10.0 * _EPS * normM
-    U, iters, res, margin, start = _solve_batch(Ab, Lb, tolb, int(maxiter), G)
+    U, iters, res, margin, start, tolb = _solve_batch(
+        Ab, Lb, tolb, int(maxiter), G, floor=tol is None
+    )
     U = U.reshape(batch + (nn, nn))
     if not return_info:
         return U

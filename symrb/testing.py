@@ -232,8 +232,9 @@ def inertias(
     ``"moderate"``
         entries uniform in [0.5, 2];
     ``"spread"``
-        log-uniform entries in :math:`[10^{-6}, 10^6]`, with the two extremes present for
-        :math:`n \ge 3` (spread :math:`10^{12}`);
+        log-uniform entries in :math:`[10^{-k/2}, 10^{k/2}]`, :math:`k \in [1, 12]`, both
+        extremes present (spread :math:`10^k`, up to :math:`10^{12}` with entries from
+        :math:`10^{-6}` to :math:`10^6`);
     ``"near_equal"``
         moderate entries with one pair :math:`\lambda_j = \lambda_i(1 + \delta)`,
         :math:`\delta = 10^{-k}`, :math:`k \in [1, 12]`;
@@ -278,9 +279,11 @@ def _inertia_of_kind(kind: str, nn: int, rng: np.random.Generator, k: int) -> np
     if kind == "moderate":
         return np.sort(rng.uniform(0.5, 2.0, nn))
     if kind == "spread":
-        lam = _log_uniform(rng, 1e-6, 1e6, nn)
-        if nn >= 3:
-            lam[:2] = 1e-6, 1e6
+        # k = 12: entries in [1e-6, 1e6] with both extremes (spread 1e12); smaller k: a spread
+        # of 10^k around 1 (Hypothesis shrinks k towards 1)
+        lo, hi = 10.0 ** (-k / 2), 10.0 ** (k / 2)
+        lam = _log_uniform(rng, lo, hi, nn)
+        lam[:2] = lo, hi
         return np.asarray(rng.permutation(lam))
     if kind == "near_equal":
         lam = rng.uniform(0.5, 2.0, nn)
