@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -308,6 +308,16 @@ class PFromMInfo:
     orthogonality: Array
     delta: Array
     condition: Array
+
+
+@overload
+def P_from_M(Q: ArrayLike, M: ArrayLike, *, return_info: Literal[False] = False) -> Array: ...
+
+
+@overload
+def P_from_M(
+    Q: ArrayLike, M: ArrayLike, *, return_info: Literal[True]
+) -> tuple[Array, PFromMInfo]: ...
 
 
 def P_from_M(
