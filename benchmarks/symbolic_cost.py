@@ -85,7 +85,8 @@ def main(argv: list[str] | None = None) -> int:
                 raise SystemExit(f"{name} at n = {n}: residual {r} != 0")
             if dt > args.budget:
                 break
-        growth = [b["seconds"] / a["seconds"] for a, b in zip(rows, rows[1:]) if a["seconds"] > 0]
+        pairs = zip(rows[:-1], rows[1:], strict=True)
+        growth = [b["seconds"] / a["seconds"] for a, b in pairs if a["seconds"] > 0]
         out["checks"][name] = {  # type: ignore[index]
             "registry_n": registry_n,
             "runs": rows,
