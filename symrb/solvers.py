@@ -572,7 +572,9 @@ def _solve_batch(
         m2 = _margin(U2, lam[idx])
         U[idx], iters[idx], res[idx], margin[idx], tol[idx] = U2, it2, res2, m2, tol2
         still = ~conv2 | ~(m2 > 0)
-        for j in np.nonzero(still)[0]:
+        # the fallback only under the default tolerance: an explicit tol and maxiter are a
+        # budget the caller set (NotConvergedError reports on it)
+        for j in np.nonzero(still if floor else np.zeros_like(still))[0]:
             # Riccati failed (scipy gives up on badly scaled lam, e.g. spread 1e12) or Newton
             # from its solution did: follow the branch from U = I along t*M instead
             i = idx[j]
