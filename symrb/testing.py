@@ -359,7 +359,7 @@ def jd_momenta(
     :math:`\|M\|_F = 10^{-k}`, :math:`k \in [6, 14]`, or to a fraction of the fold,
     :math:`M = (1 - \delta)t^*A` with :math:`t^*` = ``fold_scale(A, lam)`` and
     :math:`\delta \in \{0.5, 0.1, 10^{-3}, 10^{-6}, 10^{-9}\}`, but at least
-    :math:`10^4\varepsilon\max\lambda/\min\lambda` (closer than that,
+    :math:`10^6\varepsilon\max\lambda/\min\lambda` (closer than that,
     :func:`symrb.fold_scale` cannot tell the sides apart: see its accuracy).
 
     Parameters
@@ -394,8 +394,8 @@ def jd_momenta(
         k = draw(st.integers(6, 14))
         M = A * (10.0 ** (-k) / np.linalg.norm(A))
         return M, float(fold_scale(M, lam)), 1.0
-    # closer to the fold than ten times fold_scale's accuracy (1e3 eps spread) the side is unknown
-    floor = min(0.5, 1e4 * float(np.finfo(float).eps) * float(lam.max() / lam.min()))
+    # closer to the fold than ten times fold_scale's accuracy (1e5 eps spread) the side is unknown
+    floor = min(0.5, 1e6 * float(np.finfo(float).eps) * float(lam.max() / lam.min()))
     delta = max(draw(st.sampled_from((0.5, 0.1) + _NEAR_FOLD)), floor)
     t = float(fold_scale(A, lam))
     M = (1.0 - delta) * t * A
@@ -534,6 +534,6 @@ def step_sizes(
     >>> check()
     """
     hf = float(fold_scale(M, lam))
-    floor = min(0.5, 1e4 * float(np.finfo(float).eps) * float(lam.max() / lam.min()))
+    floor = min(0.5, 1e6 * float(np.finfo(float).eps) * float(lam.max() / lam.min()))
     delta = max(draw(st.sampled_from((0.9, 0.5, 0.1) + _NEAR_FOLD)), floor)
     return ((1.0 + delta) if beyond else (1.0 - delta)) * hf, hf
