@@ -10,16 +10,27 @@ from .errors import InputError
 Array = NDArray[np.float64]
 
 
+#: Integers up to this size convert to float64 exactly.
+_EXACT_INT = 2**53
+
+
 def as_float_array(x: ArrayLike, name: str) -> Array:
     """``x`` as a float64 array (a copy only when needed).
 
-    Integer and boolean input is converted; complex input is rejected rather than cast (NumPy
-    would drop the imaginary part with only a warning), and so are strings and non-finite entries.
+    The dtype policy (the book's page "Hard cases"): symrb computes and returns float64 only.
+    float64 input is used as is and integer input is converted when every entry is exact in
+    float64 (magnitude <= 2^53); float32, float16 and long double input is rejected rather than
+    silently promoted or rounded (the stated accuracies are float64 ones, and a float32 result
+    would not meet them), and so are complex input (NumPy would drop the imaginary part with only
+    a warning), strings, integers too large for float64 and non-finite entries.  Every message
+    says how to pass the data instead.
     """
     try:
         raw = np.asarray(x)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a real array, got {type(x).__name__}: {exc}") from None
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(
+            f"{name} must be a real array, got {type(x).__name__}: {exc}; pass a float64 array"
+        ) from None
     kind = raw.dtype.kind
     if kind == "c":
         imag = float(np.max(np.abs(raw.imag), initial=0.0))
@@ -27,15 +38,37 @@ def as_float_array(x: ArrayLike, name: str) -> Array:
             f"{name} must be real, got a complex array (dtype {raw.dtype}, max |imag| = "
             f"{imag:.3g}); pass {name}.real if the imaginary part is meant to be dropped"
         )
+    if kind == "f" and raw.dtype != np.float64:
+        raise InputError(
+            f"{name} must be float64 (symrb computes in float64 only), got dtype {raw.dtype}; "
+            f"pass np.asarray({name}, dtype=np.float64)"
+            + (" (exact for float32 and float16)" if raw.dtype.itemsize < 8 else "")
+        )
     if kind not in "biufO":
-        raise InputError(f"{name} must be a real array of numbers, got dtype {raw.dtype}")
+        raise InputError(
+            f"{name} must be a real array of numbers, got dtype {raw.dtype}; pass a float64 array"
+        )
+    if kind in "iu" and raw.size and int(np.max(np.abs(raw.astype(object)))) > _EXACT_INT:
+        big = int(np.max(np.abs(raw.astype(object))))
+        raise InputError(
+            f"{name} has integers too large to convert to float64 exactly: max |{name}| = {big} "
+            f"> 2^53; pass a float64 array (rounded as you intend)"
+        )
     try:
         a = np.asarray(raw, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be a real array, got {type(x).__name__}: {exc}") from None
-    if not np.all(np.isfinite(a)):
+    except OverflowError as exc:
         raise InputError(
-            f"{name} must be finite; it has {int(np.sum(~np.isfinite(a)))} NaN/inf entries"
+            f"{name} has an entry too large for float64 ({exc}); pass finite float64 values"
+        ) from None
+    except (TypeError, ValueError) as exc:
+        raise InputError(
+            f"{name} must be a real array, got {type(x).__name__}: {exc}; pass a float64 array"
+        ) from None
+    if not np.all(np.isfinite(a)):
+        bad = int(np.sum(~np.isfinite(a)))
+        raise InputError(
+            f"{name} must be finite; it has {bad} NaN/inf entries (first at index "
+            f"{tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])}); remove or replace them"
         )
     return a
 
@@ -44,9 +77,15 @@ def square(x: ArrayLike, name: str, n: int | None = None) -> Array:
     """A float array of shape (..., n, n)."""
     a = as_float_array(x, name)
     if a.ndim < 2 or a.shape[-1] != a.shape[-2]:
-        raise InputError(f"{name} must have shape (..., n, n), got {a.shape}")
+        raise InputError(
+            f"{name} must have shape (..., n, n) (square matrices in the last two axes), got "
+            f"{a.shape}; reshape it or pass the matrices stacked along the leading axes"
+        )
     if n is not None and a.shape[-1] != n:
-        raise InputError(f"{name} must be {n} x {n} to match lam, got {a.shape}")
+        raise InputError(
+            f"{name} must be {n} x {n} to match lam, got {a.shape}; pass matrices of the size "
+            f"of lam (or a lam of length {a.shape[-1]})"
+        )
     return a
 
 
@@ -56,7 +95,11 @@ def skew(x: ArrayLike, name: str, n: int | None = None, rtol: float = 1e-10) -> 
     dev = float(np.max(np.abs(a + np.swapaxes(a, -1, -2)), initial=0.0))
     scale = max(float(np.max(np.abs(a), initial=0.0)), 1.0)
     if dev > rtol * scale:
-        raise InputError(f"{name} must be skew-symmetric; max |{name} + {name}^T| = {dev:.3e}")
+        raise InputError(
+            f"{name} must be skew-symmetric; max |{name} + {name}^T| = {dev:.3e} > {rtol:g} * "
+            f"{scale:.3g}; pass the skew part ({name} - {name}^T) / 2 (symrb.skew_part) if the "
+            "symmetric part is rounding"
+        )
     return a
 
 
@@ -66,11 +109,17 @@ def orthogonal(x: ArrayLike, name: str, n: int | None = None, atol: float = 1e-8
     eye = np.eye(a.shape[-1])
     dev = float(np.max(np.abs(np.swapaxes(a, -1, -2) @ a - eye), initial=0.0))
     if dev > atol:
-        raise InputError(f"{name} must be orthogonal; max |{name}^T {name} - I| = {dev:.3e}")
+        raise InputError(
+            f"{name} must be orthogonal; max |{name}^T {name} - I| = {dev:.3e} > {atol:g}; pass "
+            f"the orthogonal polar factor of {name} (W @ Vt from np.linalg.svd) if the error is "
+            "accumulated rounding"
+        )
     det = np.linalg.det(a)
     if np.any(det < 0):
         raise InputError(
-            f"{name} must have det +1 (be in SO(n)); got det = {float(np.min(det)):.3f}"
+            f"{name} must have det +1 (be in SO(n)); got det = {float(np.min(det)):.3f}; a "
+            f"reflection is not a rotation: flip the sign of one column of {name} if that is "
+            "the intent"
         )
     return a
 
@@ -111,11 +160,11 @@ def inertia(lam: ArrayLike, name: str = "lam", positive: bool = False) -> Array:
             f"length {a.shape[-1]}: if it is the matrix Lambda, pass its diagonal)"
         )
     if a.ndim < 1 or a.shape[-1] < 2:
-        raise InputError(f"{what}, with n >= 2; got shape {a.shape}")
+        raise InputError(f"{what}, with n >= 2; got shape {a.shape}; pass at least two entries")
     if positive and np.any(a <= 0):
         raise InputError(
             f"{name} must be positive (Lambda positive definite); min lam_i = "
-            f"{float(np.min(a)):.6g}{hint}"
+            f"{float(np.min(a)):.6g}{hint}; pass the principal moments of a body (all > 0)"
         )
     s = a[..., :, None] + a[..., None, :]
     nn = a.shape[-1]
@@ -124,7 +173,8 @@ def inertia(lam: ArrayLike, name: str = "lam", positive: bool = False) -> Array:
     if worst <= 0:
         raise InputError(
             f"{name} must satisfy lam_i + lam_j > 0 for i != j (J positive definite); "
-            f"min lam_i + lam_j = {worst:.6g}, lam = {_brief(a)}{hint}"
+            f"min lam_i + lam_j = {worst:.6g}, lam = {_brief(a)}{hint}; pass a lam whose "
+            "pairwise sums are positive"
         )
     return a
 
@@ -132,10 +182,12 @@ def inertia(lam: ArrayLike, name: str = "lam", positive: bool = False) -> Array:
 def real_scalar(x: object, name: str) -> float:
     """``x`` as a finite Python float; rejects complex numbers, strings, booleans and arrays."""
     if isinstance(x, bool | np.bool_) or not isinstance(x, int | float | np.integer | np.floating):
-        raise InputError(f"{name} must be a real number, got {type(x).__name__} {x!r}")
+        raise InputError(
+            f"{name} must be a real number, got {type(x).__name__} {x!r}; pass a Python float"
+        )
     value = float(x)
     if not np.isfinite(value):
-        raise InputError(f"{name} must be finite, got {x!r}")
+        raise InputError(f"{name} must be finite, got {x!r}; pass a finite float")
     return value
 
 
@@ -145,5 +197,7 @@ def count(x: object, name: str, minimum: int = 0) -> int:
     if isinstance(x, float | np.floating) and float(x).is_integer():
         ok = True
     if not ok or int(x) < minimum:  # type: ignore[call-overload]
-        raise InputError(f"{name} must be an integer >= {minimum}, got {x!r}")
+        raise InputError(
+            f"{name} must be an integer >= {minimum}, got {x!r}; pass a Python int >= {minimum}"
+        )
     return int(x)  # type: ignore[call-overload]

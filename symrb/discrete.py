@@ -31,7 +31,7 @@ of :math:`J_D`) ends the run early with ``success`` False rather than raising.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,7 +43,7 @@ from ._progress import progress_bar
 from ._results import Trajectory
 from ._validate import Array
 from .errors import InputError, NotConvergedError, OutOfDomainError
-from .solvers import _EPS, _solve_batch, _warm_single
+from .solvers import _EPS, _condition, _fold_scale_one, _solve_batch, _warm_single
 
 __all__ = [
     "jd_residual",
@@ -60,7 +60,7 @@ _MAXITER = 30
 
 @dataclass
 class DiscreteFlowSolution:
-    """Result of the discrete flows (:func:`symmetric_flow`, :func:`mv_algorithm1`,
+    r"""Result of the discrete flows (:func:`symmetric_flow`, :func:`mv_algorithm1`,
     :func:`mv_algorithm2`, :func:`discrete_rigid_body_flow`), modelled on :class:`FlowSolution`.
 
     Attributes
@@ -86,6 +86,27 @@ class DiscreteFlowSolution:
         The name of the map.
     h : float or None
         The time step, or None for the Moser-Veselov maps.
+    residual : ndarray, shape (number of solves,)
+        :math:`\|U\Lambda - \Lambda U^T - M\|_F` of each solve (the largest over a batch).
+    tol : ndarray, shape (number of solves,)
+        The tolerance each residual met (the default of :func:`symrb.solve_moser_veselov`: ten
+        times the rounding error of evaluating the residual): every entry of ``residual`` is at
+        most its ``tol``.
+    condition : ndarray, shape (number of solves,)
+        The solver's condition estimate :math:`\kappa` of each solve (see
+        :class:`symrb.MVSolveInfo`; the largest over a batch), with ``diagnostics=True``;
+        NaN otherwise.
+    failed_step : int or None
+        The step that failed, or None.
+    fold : float or None
+        When a step failed: :math:`t^*` of :func:`symrb.fold_scale` for that step's momentum
+        (below 1: it is past the fold by :math:`1/t^* - 1`; the smallest over a batch).
+    h_max : float or None
+        When a step of a flow with a time step failed: :math:`t^*h`, the step at which that
+        step's momentum reaches the fold; every step below it can be taken there.
+    halvings : ndarray of int, shape (steps taken,)
+        With ``halve=True``: how many times each step was halved (0: taken whole; ``j``: as
+        :math:`2^j` steps of :math:`h/2^j`).  Empty otherwise.
 
     Examples
     --------
@@ -111,6 +132,13 @@ class DiscreteFlowSolution:
     message: str
     method: str
     h: float | None = None
+    residual: Array = field(default_factory=lambda: np.zeros(0))
+    tol: Array = field(default_factory=lambda: np.zeros(0))
+    condition: Array = field(default_factory=lambda: np.zeros(0))
+    failed_step: int | None = None
+    fold: float | None = None
+    h_max: float | None = None
+    halvings: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def nit(self) -> int:
@@ -157,19 +185,34 @@ def _check_steps(steps: int, save_every: int) -> tuple[int, int]:
 def _check_h(h: float) -> float:
     value = v.real_scalar(h, "h")
     if not value > 0:
-        raise InputError(f"h must be a finite number > 0, got {h!r}")
+        raise InputError(f"h must be a finite number > 0, got {h!r}; pass a float > 0")
     return value
 
 
 class _Stepper:
-    """Solves J_D(U) = M on a flat batch, warm-starting from the previous solution."""
+    """Solves J_D(U) = M on a flat batch, warm-starting from the previous solution.
 
-    def __init__(self, lam: Array, batch: tuple[int, ...]) -> None:
+    After each solve ``last_iterations``, ``last_residual``, ``last_tol`` (and, with
+    ``diagnostics``, ``last_condition``) describe it.
+    """
+
+    def __init__(self, lam: Array, batch: tuple[int, ...], diagnostics: bool = False) -> None:
         nn = lam.shape[-1]
         self.lam = np.broadcast_to(lam, batch + (nn,)).reshape(-1, nn)
         self.U: Array | None = None
         self.U_prev: Array | None = None
+        self.diagnostics = diagnostics
         self.last_iterations = 0  # Newton iterations of the last solve (summed over the batch)
+        self.last_residual = 0.0
+        self.last_tol = 0.0
+        self.last_condition = float("nan")
+
+    def _record(self, U: Array, res: Array, tol: Array) -> None:
+        if res.size:
+            i = int(np.argmax(res / np.where(tol > 0, tol, 1.0)))
+            self.last_residual, self.last_tol = float(res[i]), float(tol[i])
+        if self.diagnostics and U.shape[0]:
+            self.last_condition = float(np.max(_condition(U, self.lam)))
 
     def solve(self, M: Array) -> Array:
         Mf = M.reshape(self.lam.shape[0], *M.shape[-2:])
@@ -183,16 +226,28 @@ class _Stepper:
                 # one Newton-Schulz step back to SO(n), so rounding errors in U^T U - I do not
                 # compound from step to step
                 guess = guess @ (1.5 * np.eye(guess.shape[-1]) - 0.5 * (guess.T @ guess))
-            got = _warm_single(guess, Mf[0], self.lam[0], float(tol[0]), _MAXITER)
+            got = _warm_single(guess, Mf[0], self.lam[0], float(tol[0]), _MAXITER, True)
             if got is not None:
                 self.U_prev = self.U
                 self.U = got[0][None]
                 self.last_iterations = got[1]
+                self._record(self.U, np.array([got[2]]), np.array([got[3]]))
                 return got[0].reshape(M.shape)
-        U, it, _res, _margin, _start = _solve_batch(Mf, self.lam, tol, _MAXITER, self.U)
+        U, it, res, _margin, _start, tol = _solve_batch(
+            Mf, self.lam, tol, _MAXITER, self.U, floor=True
+        )
         self.U_prev, self.U = self.U, U
         self.last_iterations = int(it.sum())
+        self._record(U, res, tol)
         return U.reshape(M.shape)
+
+    def fold(self, M: Array) -> float:
+        """The smallest fold_scale over the batch of M (for the failure report)."""
+        Mf = M.reshape(self.lam.shape[0], *M.shape[-2:])
+        Mf = 0.5 * (Mf - np.swapaxes(Mf, -1, -2))
+        return min(
+            (_fold_scale_one(Mf[i], self.lam[i]) for i in range(Mf.shape[0])), default=np.inf
+        )
 
 
 def _prepare(
@@ -214,7 +269,10 @@ def _prepare(
         shapes = ", ".join(
             f"{name} {a.shape}" for (_x, name, _k), a in zip(mats, arrays, strict=True)
         )
-        raise InputError(f"the batch axes do not broadcast: lam {L.shape}, {shapes}") from None
+        raise InputError(
+            f"the batch axes do not broadcast: lam {L.shape}, {shapes}; pass arrays whose "
+            "leading axes broadcast (numpy rules)"
+        ) from None
     arrays = [np.broadcast_to(a, batch + (nn, nn)).copy() for a in arrays]
     return L, arrays, batch
 
@@ -227,8 +285,15 @@ class _Run:
         self.saved: dict[str, list[Array]] = {}
         self.k: list[int] = []
         self.iterations = np.zeros(solves, dtype=np.int64)
+        self.residual = np.zeros(solves)
+        self.tol = np.zeros(solves)
+        self.condition = np.full(solves, np.nan)
         self.solves = 0
         self.failure = ""
+        self.failed_step: int | None = None
+        self.fold: float | None = None
+        self.h_max: float | None = None
+        self.halvings: list[int] = []
         self.bar = progress_bar(steps, method, progress)
 
     def save(self, k: int, **states: Array) -> None:
@@ -237,27 +302,70 @@ class _Run:
             self.saved.setdefault(name, []).append(x)
 
     def count(self, stepper: _Stepper) -> None:
-        self.iterations[self.solves] = stepper.last_iterations
+        if self.solves == self.iterations.shape[0]:  # halved steps solve more often
+            grow = max(16, self.solves)
+            self.iterations = np.concatenate([self.iterations, np.zeros(grow, dtype=np.int64)])
+            self.residual = np.concatenate([self.residual, np.zeros(grow)])
+            self.tol = np.concatenate([self.tol, np.zeros(grow)])
+            self.condition = np.concatenate([self.condition, np.full(grow, np.nan)])
+        i = self.solves
+        self.iterations[i] = stepper.last_iterations
+        self.residual[i], self.tol[i] = stepper.last_residual, stepper.last_tol
+        self.condition[i] = stepper.last_condition
         self.solves += 1
 
-    def fail(self, k: int, exc: Exception) -> None:
-        self.failure = f"step {k} of {self.steps} failed: {exc}"
+    def fail(
+        self, k: int, exc: Exception, fold: float | None = None, h: float | None = None
+    ) -> None:
+        self.failed_step, self.fold = k, fold
+        note = ""
+        if fold is not None and np.isfinite(fold):
+            if fold <= 1.0:
+                note = f" (the step's momentum is {(1.0 / fold - 1.0) * 100:.4g} % past the fold"
+                if h is not None:
+                    self.h_max = fold * h
+                    note += (
+                        f"; h = {h:.10g}, the largest step that works there is just below "
+                        f"h_max = {self.h_max:.10g})"
+                    )
+                else:
+                    note += f"; the momentum scaled by less than {fold:.10g} works)"
+            else:
+                note = (
+                    f" (the step's momentum is inside the fold by {(1.0 - 1.0 / fold) * 100:.4g} %)"
+                )
+        self.failure = f"step {k} of {self.steps} failed: {exc}{note}"
 
     def result(self, t_scale: float | None) -> DiscreteFlowSolution:
         self.bar.close()
         k = np.asarray(self.k, dtype=np.int64)
         y = Trajectory({name: np.stack(xs) for name, xs in self.saved.items()})
         t = k.astype(np.float64) * (1.0 if t_scale is None else t_scale)
+        halved = sum(1 for j in self.halvings if j)
+        message = self.failure or f"all {self.steps} steps taken"
+        if halved:
+            message += (
+                f"; {halved} step(s) halved (at most {max(self.halvings)} times) to stay inside "
+                "the fold of J_D"
+            )
+        n = self.solves
         return DiscreteFlowSolution(
             t=t,
             k=k,
             y=y,
-            iterations=self.iterations[: self.solves],
+            iterations=self.iterations[:n],
             success=not self.failure,
             status=-1 if self.failure else 0,
-            message=self.failure or f"all {self.steps} steps taken",
+            message=message,
             method=self.method,
             h=t_scale,
+            residual=self.residual[:n],
+            tol=self.tol[:n],
+            condition=self.condition[:n],
+            failed_step=self.failed_step,
+            fold=self.fold,
+            h_max=self.h_max,
+            halvings=np.asarray(self.halvings, dtype=np.int64),
         )
 
 
@@ -314,6 +422,8 @@ def symmetric_flow(
     *,
     save_every: int = 1,
     progress: bool = False,
+    halve: bool = False,
+    diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
     r"""Iterate the symmetric representation ``steps`` times from :math:`(Q_0, P_0)`.
 
@@ -333,6 +443,16 @@ def symmetric_flow(
         Keep every ``save_every``-th state (``s``): the states :math:`k = 0, s, 2s, \dots`.
     progress : bool, optional
         Show a tqdm progress bar (needs the optional package tqdm).
+    halve : bool, optional
+        When a step has no solution on the branch (:math:`h` times the momentum past the fold of
+        :math:`J_D`) or Newton fails, take it as :math:`2^j` steps of :math:`h/2^j` with the
+        smallest such :math:`j \le 30` (for the continuous-time use, where :math:`h` is only a
+        resolution); ``halvings`` and ``message`` say which steps were halved.  Without it such
+        a step ends the run (``failed_step``, ``fold`` and ``h_max`` say where, how far past the
+        fold and the largest step that works).
+    diagnostics : bool, optional
+        Also estimate the solver's condition number at every solve (``condition``; costs about
+        sixteen Sylvester solves a step).
 
     Returns
     -------
@@ -362,8 +482,43 @@ def symmetric_flow(
     steps, save_every = _check_steps(steps, save_every)
     L, (Q, P), batch = _prepare(lam, (Q0, "Q0", "SO"), (P0, "P0", "square"))
     return _symmetric_run(
-        Q, P, L, batch, h, steps, save_every, progress, "symmetric representation"
+        Q,
+        P,
+        L,
+        batch,
+        h,
+        steps,
+        save_every,
+        progress,
+        "symmetric representation",
+        bool(halve),
+        bool(diagnostics),
     )
+
+
+_MAX_HALVINGS = 30
+
+
+def _halved_step(
+    stepper: _Stepper, run: _Run, Q: Array, P: Array, h: float
+) -> tuple[Array, Array, int]:
+    """One step of length h, as 2^j steps of h/2^j with the smallest j that works (j <= 30)."""
+    for j in range(_MAX_HALVINGS + 1):
+        Qj, Pj, hj = Q, P, h / 2.0**j
+        try:
+            for _ in range(2**j):
+                U = stepper.solve(hj * _srb.symmetric_momentum(Qj, Pj))
+                run.count(stepper)
+                Qj, Pj = Qj @ U, Pj @ U
+        except (OutOfDomainError, NotConvergedError):
+            if j == _MAX_HALVINGS:
+                raise
+            stepper.U_prev = None  # the extrapolation assumes a fixed step
+            continue
+        if j:
+            stepper.U_prev = None
+        return Qj, Pj, j
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 def _symmetric_run(
@@ -376,22 +531,29 @@ def _symmetric_run(
     save_every: int,
     progress: bool,
     method: str,
+    halve: bool = False,
+    diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
     """The loop of :func:`symmetric_flow` on validated, broadcast input."""
-    stepper = _Stepper(L, batch)
+    stepper = _Stepper(L, batch, diagnostics)
     run = _Run(steps, steps, method, progress)
     run.save(0, Q=Q.copy(), P=P.copy())
     k = 0
     try:
         for k in range(1, steps + 1):
-            U = stepper.solve(h * _srb.symmetric_momentum(Q, P))
-            run.count(stepper)
-            Q, P = Q @ U, P @ U
+            if halve:
+                Q, P, j = _halved_step(stepper, run, Q, P, h)
+                run.halvings.append(j)
+            else:
+                U = stepper.solve(h * _srb.symmetric_momentum(Q, P))
+                run.count(stepper)
+                Q, P = Q @ U, P @ U
             if k % save_every == 0:
                 run.save(k, Q=Q, P=P)
             run.bar.step()
     except (OutOfDomainError, NotConvergedError) as exc:
-        run.fail(k, exc)
+        scale = h / 2.0**_MAX_HALVINGS if halve else h
+        run.fail(k, exc, stepper.fold(scale * _srb.symmetric_momentum(Q, P)), scale)
         if run.k[-1] != k - 1:
             run.save(k - 1, Q=Q, P=P)
     out = run.result(h)
@@ -407,6 +569,7 @@ def mv_algorithm1(
     *,
     save_every: int = 1,
     progress: bool = False,
+    diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
     r"""MV-Algorithm 1: :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})`.
 
@@ -428,6 +591,9 @@ def mv_algorithm1(
         Keep the configurations :math:`Q_0, Q_s, Q_{2s}, \dots` (``s = save_every``).
     progress : bool, optional
         Show a tqdm progress bar (needs the optional package tqdm).
+    diagnostics : bool, optional
+        Also estimate the solver's condition number at every solve (``condition``; costs about
+        sixteen Sylvester solves a step).
 
     Returns
     -------
@@ -448,18 +614,19 @@ def mv_algorithm1(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qa, Qb), batch = _prepare(lam, (Q0, "Q0", "SO"), (Q1, "Q1", "SO"))
-    stepper = _Stepper(L, batch)
+    stepper = _Stepper(L, batch, bool(diagnostics))
     run = _Run(steps, steps, "MV-Algorithm 1", progress)
     run.save(0, Q=Qa.copy())
     if save_every == 1:
         run.save(1, Q=Qb.copy())
     Lb = np.broadcast_to(L, batch + L.shape[-1:])
     k = 1
+    pending = np.zeros(batch + (L.shape[-1],) * 2)
     try:
         for k in range(2, steps + 2):
             Om = np.swapaxes(Qb, -1, -2) @ Qa
             M = _gen.mv_momentum(Om, Lb)
-            M_next = _gen.mv_transport(Om, M)
+            M_next = pending = _gen.mv_transport(Om, M)
             U = stepper.solve(M_next)  # U = Omega_{k}^T
             run.count(stepper)
             Qa, Qb = Qb, Qb @ U
@@ -467,7 +634,7 @@ def mv_algorithm1(
                 run.save(k, Q=Qb)
             run.bar.step()
     except (OutOfDomainError, NotConvergedError) as exc:
-        run.fail(k - 1, exc)
+        run.fail(k - 1, exc, stepper.fold(pending))
         if run.k[-1] != k - 1:
             run.save(k - 1, Q=Qb)
     return run.result(None)
@@ -481,6 +648,7 @@ def mv_algorithm2(
     *,
     save_every: int = 1,
     progress: bool = False,
+    diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
     r"""MV-Algorithm 2: :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (discrete momenta).
 
@@ -505,6 +673,9 @@ def mv_algorithm2(
         Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
     progress : bool, optional
         Show a tqdm progress bar (needs the optional package tqdm).
+    diagnostics : bool, optional
+        Also estimate the solver's condition number at every solve (``condition``; costs about
+        sixteen Sylvester solves a step).
 
     Returns
     -------
@@ -527,15 +698,16 @@ def mv_algorithm2(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qk, Mk), batch = _prepare(lam, (Q, "Q", "SO"), (M, "M", "skew"))
-    stepper = _Stepper(L, batch)
+    stepper = _Stepper(L, batch, bool(diagnostics))
     run = _Run(steps, steps + 1, "MV-Algorithm 2", progress)
     run.save(0, Q=Qk.copy(), M=Mk.copy())
     k = 1  # the solve before the loop belongs to the first step
+    pending = Mk
     try:
         Om = np.swapaxes(stepper.solve(Mk), -1, -2)  # Omega_k from the paper's (MV2)
         run.count(stepper)
         for k in range(1, steps + 1):
-            Mk_next = _gen.mv_transport(Om, Mk)  # MV3
+            Mk_next = pending = _gen.mv_transport(Om, Mk)  # MV3
             Om = np.swapaxes(stepper.solve(Mk_next), -1, -2)  # Omega_{k+1} from (MV2)
             run.count(stepper)
             Mk = Mk_next
@@ -544,7 +716,7 @@ def mv_algorithm2(
                 run.save(k, Q=Qk, M=Mk)
             run.bar.step()
     except (OutOfDomainError, NotConvergedError) as exc:
-        run.fail(k, exc)
+        run.fail(k, exc, stepper.fold(pending))
         if run.k[-1] != k - 1:
             run.save(k - 1, Q=Qk, M=Mk)
     return run.result(None)
@@ -559,6 +731,8 @@ def discrete_rigid_body_flow(
     *,
     save_every: int = 1,
     progress: bool = False,
+    halve: bool = False,
+    diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
     r"""The discrete rigid body at step ``h`` from the body momentum ``M0`` (continuous scale).
 
@@ -585,6 +759,16 @@ def discrete_rigid_body_flow(
         Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
     progress : bool, optional
         Show a tqdm progress bar (needs the optional package tqdm).
+    halve : bool, optional
+        When a step has no solution on the branch (:math:`h` times the momentum past the fold of
+        :math:`J_D`) or Newton fails, take it as :math:`2^j` steps of :math:`h/2^j` with the
+        smallest such :math:`j \le 30` (for the continuous-time use, where :math:`h` is only a
+        resolution); ``halvings`` and ``message`` say which steps were halved.  Without it such
+        a step ends the run (``failed_step``, ``fold`` and ``h_max`` say where, how far past the
+        fold and the largest step that works).
+    diagnostics : bool, optional
+        Also estimate the solver's condition number at every solve (``condition``; costs about
+        sixteen Sylvester solves a step).
 
     Returns
     -------
@@ -618,4 +802,7 @@ def discrete_rigid_body_flow(
     steps, save_every = _check_steps(steps, save_every)
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     method = "discrete rigid body"
-    return _symmetric_run(Q, Q @ (0.5 * M), L, batch, h, steps, save_every, progress, method)
+    P = Q @ (0.5 * M)
+    return _symmetric_run(
+        Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
+    )

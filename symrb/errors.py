@@ -19,7 +19,7 @@ class SymrbError(Exception):
     ...     symrb.J(symrb.hat([1, 2, 3]), [1.0, 2.0])
     ... except symrb.SymrbError as exc:
     ...     print(type(exc).__name__, exc)
-    InputError Omega must be 2 x 2 to match lam, got (3, 3)
+    InputError Omega must be 2 x 2 to match lam, got (3, 3); pass matrices of the size of lam (or a lam of length 3)
     """
 
 
@@ -33,10 +33,10 @@ class InputError(SymrbError, ValueError):
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> symrb.J_inv(np.ones((3, 3)), [0.7, 1.1, 1.6])
+    >>> symrb.J_inv(np.ones((3, 3)), [0.7, 1.1, 1.6])  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    symrb.errors.InputError: M must be skew-symmetric; max |M + M^T| = 2.000e+00
+    symrb.errors.InputError: M must be skew-symmetric; max |M + M^T| = 2.000e+00 > 1e-10 * 1; pass the skew part ...
     >>> symrb.J_inv(symrb.hat([1, 2, 3]), np.diag([0.7, 1.1, 1.6]))  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...

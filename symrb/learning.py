@@ -89,9 +89,11 @@ _KERNELS: dict[tuple[str, bool], tuple[Callable, Callable]] = {
 
 def _kernels(activation: str, residual: bool) -> tuple[Callable, Callable]:
     if activation not in _ACTIVATIONS:
-        raise InputError(f"activation must be one of {_ACTIVATIONS}, got {activation!r}")
+        raise InputError(
+            f"activation must be one of {_ACTIVATIONS}, got {activation!r}; pass one of them"
+        )
     if not isinstance(residual, bool | np.bool_):
-        raise InputError(f"residual must be True or False, got {residual!r}")
+        raise InputError(f"residual must be True or False, got {residual!r}; pass a bool")
     return _KERNELS[(activation, bool(residual))]
 
 
@@ -99,16 +101,25 @@ def _weights(K: ArrayLike, beta: ArrayLike) -> tuple[Array, Array]:
     KK = v.as_float_array(K, "K")
     bb = v.as_float_array(beta, "beta")
     if KK.ndim != 3 or KK.shape[1] != KK.shape[2] or KK.shape[0] < 1:
-        raise InputError(f"K must have shape (N, n, n) with N >= 1 layers, got {KK.shape}")
+        raise InputError(
+            f"K must have shape (N, n, n) with N >= 1 layers, got {KK.shape}; pass one square "
+            "weight matrix per layer"
+        )
     if bb.shape != KK.shape[:2]:
-        raise InputError(f"beta must have shape (N, n) = {KK.shape[:2]} to match K, got {bb.shape}")
+        raise InputError(
+            f"beta must have shape (N, n) = {KK.shape[:2]} to match K, got {bb.shape}; pass one "
+            "bias vector per layer"
+        )
     return KK, bb
 
 
 def _states_like(x: ArrayLike, name: str, n: int) -> Array:
     a = v.as_float_array(x, name)
     if a.ndim < 1 or a.shape[-1] != n:
-        raise InputError(f"{name} must have shape (..., n) with n = {n} (from K), got {a.shape}")
+        raise InputError(
+            f"{name} must have shape (..., n) with n = {n} (from K), got {a.shape}; pass states "
+            "of the size of K's matrices"
+        )
     return a
 
 
@@ -187,7 +198,8 @@ def squared_error(xN: ArrayLike, targets: ArrayLike) -> float:
     y = v.as_float_array(targets, "targets")
     if a.shape != y.shape:
         raise InputError(
-            f"targets must have the shape of the final states {a.shape}, got {y.shape}"
+            f"targets must have the shape of the final states {a.shape}, got {y.shape}; pass one "
+            "target per sample"
         )
     return float(0.5 * np.sum((a - y) ** 2))
 
@@ -217,11 +229,15 @@ def _check_sweep_inputs(states, K, beta, targets):
     N, n = KK.shape[0], KK.shape[1]
     if st.ndim < 2 or st.shape[0] != N + 1 or st.shape[-1] != n:
         raise InputError(
-            f"states must have shape (N + 1, ..., n) = ({N + 1}, ..., {n}) to match K, got {st.shape}"
+            f"states must have shape (N + 1, ..., n) = ({N + 1}, ..., {n}) to match K, got {st.shape}; "
+            "pass the output of resnet_forward with the same K"
         )
     y = v.as_float_array(targets, "targets")
     if y.shape != st.shape[1:]:
-        raise InputError(f"targets must have shape {st.shape[1:]} (one per sample), got {y.shape}")
+        raise InputError(
+            f"targets must have shape {st.shape[1:]} (one per sample), got {y.shape}; pass one "
+            "target per sample"
+        )
     return st, KK, bb, y
 
 
@@ -418,9 +434,9 @@ def train(
     [42.47 32.83]
     """
     if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 0:
-        raise InputError(f"steps must be a non-negative integer, got {steps!r}")
+        raise InputError(f"steps must be a non-negative integer, got {steps!r}; pass an int >= 0")
     if not v.real_scalar(lr, "lr") > 0:
-        raise InputError(f"lr must be a positive finite number, got {lr!r}")
+        raise InputError(f"lr must be a positive finite number, got {lr!r}; pass a float > 0")
     KK, bb = _weights(K, beta)
     KK, bb = KK.copy(), bb.copy()
     losses = np.empty(int(steps) + 1)
@@ -428,7 +444,9 @@ def train(
         for i in range(int(steps)):
             loss, gK, gb = loss_gradients(x0, KK, bb, targets, activation, residual)
             if not np.isfinite(loss):
-                raise InputError(f"loss became non-finite at step {i} (lr = {lr} too large?)")
+                raise InputError(
+                    f"loss became non-finite at step {i} (lr = {lr} too large?); pass a smaller lr"
+                )
             losses[i] = loss
             KK -= lr * gK
             bb -= lr * gb
@@ -468,7 +486,7 @@ def toy_classification(num: int = 200, seed: int | np.random.Generator | None = 
     ((200, 2), (200, 2), 99)
     """
     if isinstance(num, bool) or not isinstance(num, int | np.integer) or num < 1:
-        raise InputError(f"num must be a positive integer, got {num!r}")
+        raise InputError(f"num must be a positive integer, got {num!r}; pass an int >= 1")
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     x = rng.uniform(-1.0, 1.0, size=(int(num), 2))
     c = np.where(x[:, 1] - 0.5 * np.sin(np.pi * x[:, 0]) >= 0, 1.0, -1.0)

@@ -212,10 +212,16 @@ def double_bracket_flow(
     """
     xx, nn = _pair_xN(x0, N, "x0")
     if xx.ndim != 2 or nn.ndim != 2:
-        raise InputError(f"x0 and N must be single (n, n) matrices, got {xx.shape} and {nn.shape}")
+        raise InputError(
+            f"x0 and N must be single (n, n) matrices, got {xx.shape} and {nn.shape}; pass one "
+            "matrix each (loop over a batch)"
+        )
     ts = v.as_float_array(t, "t")
     if ts.ndim != 1 or ts.size == 0 or np.any(np.diff(ts) <= 0) or ts[0] < 0:
-        raise InputError(f"t must be a non-empty increasing 1-D array of times >= 0, got {ts}")
+        raise InputError(
+            f"t must be a non-empty increasing 1-D array of times >= 0, got {ts}; pass sorted "
+            "distinct times"
+        )
     k = xx.shape[-1]
     sol = solve_ivp(
         lambda _t, y: _gen.double_bracket_rhs(y.reshape(k, k), nn).ravel(),
@@ -414,26 +420,33 @@ def solve_orbit_bvp(
     """
     nn = v.skew(N, "N")
     if nn.ndim != 2:
-        raise InputError(f"N must be a single (n, n) skew matrix, got shape {nn.shape}")
+        raise InputError(
+            f"N must be a single (n, n) skew matrix, got shape {nn.shape}; pass one matrix"
+        )
     k = nn.shape[-1]
     xx = v.skew(x0, "x0", k)
     if xx.ndim not in (2, 3):
-        raise InputError(f"x0 must have shape (n, n) or (M, n, n), got {xx.shape}")
+        raise InputError(
+            f"x0 must have shape (n, n) or (M, n, n), got {xx.shape}; pass the samples stacked "
+            "along one axis"
+        )
     xs0 = xx[None] if xx.ndim == 2 else xx
     M = xs0.shape[0]
     if M < 1:
-        raise InputError("x0 must hold at least one sample")
+        raise InputError("x0 must hold at least one sample, got 0; pass at least one")
     if not v.real_scalar(T, "T") > 0:
-        raise InputError(f"T must be a positive finite time, got {T!r}")
+        raise InputError(f"T must be a positive finite time, got {T!r}; pass a float > 0")
     if costate not in ("corrected", "printed"):
-        raise InputError(f"costate must be 'corrected' or 'printed', got {costate!r}")
+        raise InputError(
+            f"costate must be 'corrected' or 'printed', got {costate!r}; pass one of them"
+        )
     if not (continuation_start > 0 and continuation_growth > 1):
         raise InputError(
             "continuation_start must be > 0 and continuation_growth > 1, got "
-            f"{continuation_start!r} and {continuation_growth!r}"
+            f"{continuation_start!r} and {continuation_growth!r}; pass values in those ranges"
         )
     if int(nodes) < 3:
-        raise InputError(f"nodes must be >= 3, got {nodes}")
+        raise InputError(f"nodes must be >= 3, got {nodes}; pass an int >= 3")
     sign = -1.0 if costate == "corrected" else 1.0
     pT = sign * nn
 

@@ -79,6 +79,16 @@ class MVSolveInfo:
         :math:`\|U^TU - I\|_F`.
     margin : ndarray
         :math:`\min\operatorname{Re}\sigma(U\Lambda) > 0`, which tends to 0 at the fold.
+    condition : ndarray
+        :math:`\kappa = \max_i\lambda_i\,\|L_U^{-1}\|_2`, the condition number of the solution:
+        :math:`L_U(\xi) = U\xi\Lambda + \Lambda\xi U^T` is the derivative of :math:`J_D` at
+        :math:`U` along :math:`U\xi`, so a change :math:`\delta M` moves :math:`U` by at most
+        about :math:`\kappa\|\delta M\|_F/\max_i\lambda_i`.  It is
+        :math:`\max\lambda_i/\min_{i\ne j}(\lambda_i+\lambda_j)` at :math:`M = 0` and grows
+        without bound at the fold.  Estimated by eight sweeps of the power method (a lower bound,
+        typically within a few per cent).  Accuracy stated and tested (tests/test_properties.py):
+        :math:`\|U - U_*\|_F \le 10\sqrt{n}\,\varepsilon\,\kappa` for the exact solution
+        :math:`U_*` of the rounded data.
     start : str
         ``"riccati"`` (cold start), ``"warm"`` (from ``U0``) or ``"mixed"``.
 
@@ -89,6 +99,8 @@ class MVSolveInfo:
     >>> U, info = symrb.solve_moser_veselov(M, [0.7, 1.1, 1.6], return_info=True)
     >>> info.start, bool(info.residual <= info.tol), bool(info.margin > 0)
     ('riccati', True, True)
+    >>> print(round(float(info.condition), 2))  # close to 1.6 / (0.7 + 1.1) at M = 0
+    0.89
     """
 
     iterations: NDArray[np.int64]
@@ -97,6 +109,7 @@ class MVSolveInfo:
     orthogonality: Array
     margin: Array
     start: str
+    condition: Array
 
 
 # ---------------------------------------------------------------------------------------------
@@ -120,11 +133,24 @@ def _sylvester_sym(X: Array, C: Array) -> Array:
         # row-major vec: vec(X^T T) = (X^T kron I) vec T, vec(T X) = (I kron X^T) vec T
         K = np.einsum("bki,jl->bijkl", X, eye) + np.einsum("ik,blj->bijkl", eye, X)
         K = K.reshape(b, nn * nn, nn * nn)
-        T = np.linalg.solve(K, C.reshape(b, nn * nn, 1)).reshape(b, nn, nn)
+        try:
+            T = np.linalg.solve(K, C.reshape(b, nn * nn, 1)).reshape(b, nn, nn)
+        except np.linalg.LinAlgError:
+            # a singular system (exactly at or past the fold): NaN for those items, which the
+            # Newton loop treats as a failed step, instead of an exception for the whole batch
+            T = np.full_like(C, np.nan)
+            for i in range(b):
+                try:
+                    T[i] = np.linalg.solve(K[i], C[i].reshape(-1)).reshape(nn, nn)
+                except np.linalg.LinAlgError:
+                    pass
     else:
         T = np.empty_like(C)
         for i in range(b):
-            T[i] = sla.solve_sylvester(X[i].T, X[i], C[i])
+            try:
+                T[i] = sla.solve_sylvester(X[i].T, X[i], C[i])
+            except (np.linalg.LinAlgError, ValueError):
+                T[i] = np.nan
     return 0.5 * (T + np.swapaxes(T, -1, -2))
 
 
@@ -135,15 +161,41 @@ def _times_cayley(U: Array, xi: Array) -> Array:
     return U + U @ np.linalg.solve(eye - 0.5 * xi, xi)
 
 
-def _newton_step(U: Array, M: Array, lam: Array, R: Array) -> Array:
-    """One Newton step for J_D(U cay(xi)) = M, where R = M - J_D(U) (see the module docstring)."""
+def _solve_linearised(U: Array, lam: Array, R: Array) -> Array:
+    """The skew xi with U xi Lam + Lam xi U^T = R (the derivative of J_D at U along U xi)."""
     X = U * lam[:, None, :]
     Xt = np.swapaxes(X, -1, -2)
     C = 0.5 * (R @ X - Xt @ R)
     T = _sylvester_sym(X, C)
     xi = np.swapaxes(U, -1, -2) @ (0.5 * R + T) / lam[:, None, :]
-    xi = 0.5 * (xi - np.swapaxes(xi, -1, -2))
-    return _times_cayley(U, xi)
+    return 0.5 * (xi - np.swapaxes(xi, -1, -2))
+
+
+def _newton_step(U: Array, M: Array, lam: Array, R: Array) -> Array:
+    """One Newton step for J_D(U cay(xi)) = M, where R = M - J_D(U) (see the module docstring)."""
+    return _times_cayley(U, _solve_linearised(U, lam, R))
+
+
+def _condition(U: Array, lam: Array, sweeps: int = 8) -> Array:
+    """max(lam) ||L_U^{-1}||_2 for L_U(xi) = U xi Lam + Lam xi U^T on so(n), per item.
+
+    The adjoint of L_U in the Frobenius pairing is L_{U^T}, so the power iteration on
+    L_{U^T}^{-1} L_U^{-1} (two solves of the Newton step's Sylvester form a sweep) converges to
+    ||L_U^{-1}||_2^2 from below.  A fixed start keeps the estimate deterministic.
+    """
+    b, nn, _ = U.shape
+    x = np.broadcast_to(np.triu(np.arange(1.0, nn * nn + 1).reshape(nn, nn) % 7 + 1.0, 1), U.shape)
+    x = x - np.swapaxes(x, -1, -2)
+    x = x / _fro(x)[:, None, None]
+    Ut = np.swapaxes(U, -1, -2)
+    growth = np.zeros(b)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for _ in range(sweeps):
+            y = _solve_linearised(Ut, lam, _solve_linearised(U, lam, x))
+            growth = _fro(y)
+            x = y / growth[:, None, None]
+        out = lam.max(axis=-1) * np.sqrt(growth)
+    return np.where(np.isfinite(out), out, np.inf)
 
 
 def _polar(U: Array) -> Array:
@@ -184,12 +236,26 @@ def _riccati_guess(M: Array, lam: Array) -> tuple[Array, NDArray[np.bool_]]:
     return U, failed
 
 
-def _newton(
-    U: Array, M: Array, lam: Array, tol: Array, maxiter: int
-) -> tuple[Array, NDArray[np.int64], Array, NDArray[np.bool_]]:
-    """Newton iterations on every item until ||J_D(U) - M||_F <= tol (per item).
+def _rounding_tol(U: Array, lam: Array) -> Array:
+    """10 eps ||offdiag(|U| Lam + Lam |U|^T)||_F: the rounding floor of evaluating J_D(U).
 
-    Returns (U, iterations, residual, converged).
+    The off-diagonal entries of J_D(U) are differences U_ij lam_j - lam_i U_ji; each is computed
+    with an error of about eps (|U_ij| lam_j + lam_i |U_ji|), which exceeds eps ||M|| when the
+    terms cancel (a wide spread of lam far from U = I).  The diagonal is exactly zero.
+    """
+    A = np.abs(U) * lam[:, None, :]
+    S = A + lam[:, :, None] * np.abs(np.swapaxes(U, -1, -2))
+    S = S - S * np.eye(U.shape[-1])
+    return 10.0 * _EPS * _fro(S)
+
+
+def _newton(
+    U: Array, M: Array, lam: Array, tol: Array, maxiter: int, floor: bool = False
+) -> tuple[Array, NDArray[np.int64], Array, NDArray[np.bool_], Array]:
+    """Newton iterations on every item until ||J_D(U) - M||_F <= tol (per item); with
+    ``floor``, tol is raised to the rounding floor :func:`_rounding_tol` of the current U.
+
+    Returns (U, iterations, residual, converged, the tolerance used).
     """
     U = U.copy()
     b = U.shape[0]
@@ -197,6 +263,8 @@ def _newton(
     slow = np.zeros(b, dtype=np.int64)
     R = M - _jd(U, lam)
     res = _fro(R)
+    base = tol
+    tol = np.maximum(base, _rounding_tol(U, lam)) if floor else base
     active = res > tol
     for _ in range(maxiter):
         if not active.any():
@@ -217,16 +285,19 @@ def _newton(
         # an item stops when it meets tol, when a step is not finite, or after four steps in a
         # row that did not halve the residual (rounding floor or divergence)
         slow = np.where(ok & (rnew > 0.5 * old), slow + 1, 0)
+        if floor:
+            tol = np.maximum(base, _rounding_tol(U, lam))
         active = ok & (res > tol) & (slow < 4)
-    return U, iters, res, res <= tol
+    return U, iters, res, res <= tol, tol
 
 
 def _warm_single(
-    U: Array, M: Array, lam: Array, tol: float, maxiter: int
-) -> tuple[Array, int, float] | None:
+    U: Array, M: Array, lam: Array, tol: float, maxiter: int, floor: bool = False
+) -> tuple[Array, int, float, float] | None:
     """Newton from a nearby U for one (n, n) matrix, with 2-D arrays (lower call overhead for time
     steppers).  Returns (U, iterations, residual) when it converges on the branch, else None (the
-    caller then falls back to the batched solver with its Riccati start)."""
+    caller then falls back to the batched solver with its Riccati start); with ``floor`` the
+    tolerance is raised to the rounding floor (:func:`_rounding_tol`), returned last."""
     nn = lam.shape[0]
     eye = np.eye(nn)
     lam_row, lam_col = lam[None, :], lam[:, None]
@@ -234,19 +305,25 @@ def _warm_single(
     r = float(np.sqrt(np.vdot(R, R)))
     it = 0
     slow = 0
+    base = tol
+    if floor:
+        tol = max(base, float(_rounding_tol(U[None], lam[None])[0]))
     while r > tol:
         if it >= maxiter or slow >= 4:
             return None
         X = U * lam_row
         C = 0.5 * (R @ X - X.T @ R)
-        if nn <= _KRON_MAX_N:
-            Xt = X.T
-            K = (Xt[:, None, :, None] * eye[None, :, None, :]) + (
-                eye[:, None, :, None] * Xt[None, :, None, :]
-            )
-            T = np.linalg.solve(K.reshape(nn * nn, nn * nn), C.reshape(-1)).reshape(nn, nn)
-        else:
-            T = sla.solve_sylvester(X.T, X, C)
+        try:
+            if nn <= _KRON_MAX_N:
+                Xt = X.T
+                K = (Xt[:, None, :, None] * eye[None, :, None, :]) + (
+                    eye[:, None, :, None] * Xt[None, :, None, :]
+                )
+                T = np.linalg.solve(K.reshape(nn * nn, nn * nn), C.reshape(-1)).reshape(nn, nn)
+            else:
+                T = sla.solve_sylvester(X.T, X, C)
+        except (np.linalg.LinAlgError, ValueError):  # singular: at the fold
+            return None
         xi = U.T @ (0.5 * R + 0.5 * (T + T.T)) / lam_row
         xi = 0.5 * (xi - xi.T)
         Unew = U + U @ np.linalg.solve(eye - 0.5 * xi, xi)
@@ -257,6 +334,8 @@ def _warm_single(
             return None
         slow = slow + 1 if rnew > 0.5 * r else 0
         U, R, r = Unew, Rnew, rnew
+        if floor:
+            tol = max(base, float(_rounding_tol(U[None], lam[None])[0]))
     # branch certificate: a positive definite symmetric part of X = U Lam puts every eigenvalue of
     # X in the right half-plane (Cholesky is cheap); otherwise look at the eigenvalues
     X = U * lam_row
@@ -265,7 +344,7 @@ def _warm_single(
     except np.linalg.LinAlgError:
         if not np.linalg.eigvals(X).real.min() > 0:
             return None
-    return U, it, r
+    return U, it, r, tol
 
 
 # ---------------------------------------------------------------------------------------------
@@ -278,7 +357,11 @@ def _has_imaginary_eigenvalue(M: Array, lam: Array, s: float, rtol: float) -> bo
     eye = np.eye(nn)
     H = np.block([[-0.5 * A, -eye], [-(np.diag(lam**2) + 0.25 * (A @ A)), -0.5 * A]])
     ev = np.linalg.eigvals(H)
-    return bool(np.min(np.abs(ev.real)) <= rtol * np.linalg.norm(H, 2))
+    # relative to each eigenvalue's own size: with a wide spread of lam the eigenvalues range
+    # over many orders of magnitude (+-lam_i at s = 0), and a threshold relative to ||H|| flagged
+    # the small ones as imaginary (fold_scale returned 0 for lam = (3e-6, 1e-6, 1e6)).  H is
+    # invertible (det X = det Lam > 0 on the branch), so |ev| > 0.
+    return bool(np.min(np.abs(ev.real) / np.abs(ev)) <= rtol)
 
 
 def _fold_scale_one(M: Array, lam: Array, rtol: float = 1e-13) -> float:
@@ -325,7 +408,14 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
     Computed as the first :math:`t` where the Hamiltonian matrix of the Riccati form (module
     docstring) has an eigenvalue on the imaginary axis: a scan of :math:`(0, t_{\max}]` with
     :math:`t_{\max}\|M\|_{op} = 2\max\lambda` (beyond which :math:`\|J_D(U)\|_{op}\le 2\max\lambda`
-    rules out any solution), then bisection to a relative accuracy of about 1e-13.
+    rules out any solution), then bisection to a relative accuracy of about 1e-13.  The
+    eigenvalues near the fold lose accuracy in proportion to the spread of :math:`\lambda`, so
+    the result is accurate to about :math:`10^{-13} + 10^5\varepsilon\max\lambda/\min\lambda`
+    (relative; up to a tenth of that was measured, 2.3e-6 for a spread of :math:`10^6` with a
+    nearly equal pair of small moments): closer to the fold than that, whether a momentum is
+    inside is not decided by this function (the solver then reports the fold as reached).
+    Beyond a spread of about :math:`10^7` the estimate is unreliable (an error of 23 % was
+    measured at a spread of :math:`10^8`).
 
     Parameters
     ----------
@@ -355,7 +445,7 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
     >>> symrb.solve_moser_veselov(1.001 * t * M, [0.7, 1.1, 1.6])  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    symrb.errors.OutOfDomainError: ... so M is 0.1 % past the fold
+    symrb.errors.OutOfDomainError: ... so M is 0.1 % past the fold; ...
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
@@ -371,16 +461,81 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
 # the solver
 
 
+def _fold_accuracy(lam: Array) -> float:
+    """The relative accuracy of fold_scale: 1e-13 + 1e5 eps max(lam)/min(lam) (measured by the
+    property suite under its thorough profile: errors up to about 1e4 eps times the spread, with
+    a spread of 1e6 and a nearly equal pair of small moments)."""
+    return 1e-13 + 1e5 * _EPS * float(lam.max() / lam.min())
+
+
 def _out_of_domain(M: Array, lam: Array) -> OutOfDomainError:
     t = _fold_scale_one(M, lam)
-    past = (1.0 / t - 1.0) * 100.0
+    past = (1.0 / t - 1.0) * 100.0 if t > 0 else float("inf")
     return OutOfDomainError(
         "U Lam - Lam U^T = M has no solution on the branch through the identity: M is past the "
         f"fold of J_D. ||M||_F = {np.linalg.norm(M):.6g}, ||M||_op = {np.linalg.norm(M, 2):.6g}, "
         f"lam = {np.array2string(lam, precision=6, threshold=12)}; along the ray t*M the fold is at "
         f"t = {t:.10g} (||M||_F = {t * np.linalg.norm(M):.6g} there), so M is {past:.4g} % past "
-        "the fold"
+        f"the fold; scale M by less than {t:.10g} (for a time step h, take h below {t:.10g} h)"
     )
+
+
+def _damped_newton(
+    U: Array, M: Array, lam: Array, base: float, maxiter: int, floor: bool
+) -> tuple[Array, int, float, float] | None:
+    """Newton with backtracking on one (n, n) item: a step U cay(a xi) is taken with the largest
+    a in 1, 1/2, ..., 2^-20 that lowers the residual and keeps U Lam on the branch (margin > 0).
+
+    Returns (U, iterations, residual, tolerance used), or None when it stalls.
+    """
+    Ub, Mb, lb = U[None], M[None], lam[None]
+    R = Mb - _jd(Ub, lb)
+    r = float(_fro(R)[0])
+    for it in range(4 * maxiter):
+        tol = max(base, float(_rounding_tol(Ub, lb)[0])) if floor else base
+        if r <= tol:
+            return Ub[0], it, r, tol
+        with np.errstate(all="ignore"):
+            xi = _solve_linearised(Ub, lb, R)
+        if not np.all(np.isfinite(xi)):
+            return None
+        a = 1.0
+        while a > 1e-6:
+            Un = _times_cayley(Ub, a * xi)
+            Rn = Mb - _jd(Un, lb)
+            rn = float(_fro(Rn)[0])
+            if rn < (1.0 - a / 4.0) * r and _margin(Un, lb)[0] > 0:
+                break
+            a *= 0.5
+        else:
+            return None
+        Ub, R, r = Un, Rn, rn
+    return None
+
+
+def _continuation(
+    M: Array, lam: Array, tol: float, maxiter: int, floor: bool
+) -> tuple[Array, int, float, float, float] | None:
+    """Damped Newton along t*M from U = I (t = 0) to t = 1, the step in t adapted; one item.
+
+    Returns (U, iterations, residual, margin, tolerance used) on the branch, or None."""
+    U = np.eye(M.shape[-1])
+    t, dt, total = 0.0, 0.25, 0
+    res = tol_used = 0.0
+    for _ in range(400):
+        if t >= 1.0:
+            return U, total, res, float(_margin(U[None], lam[None])[0]), tol_used
+        t_new = min(1.0, t + dt)
+        got = _damped_newton(U, t_new * M, lam, tol * t_new, maxiter, floor)
+        if got is not None:
+            U, it, res, tol_used = got
+            total += it
+            t, dt = t_new, dt * 1.5
+        else:
+            dt /= 4.0
+            if dt < 1e-12:
+                return None
+    return None
 
 
 def _solve_batch(
@@ -389,15 +544,19 @@ def _solve_batch(
     tol: Array,
     maxiter: int,
     U0: Array | None = None,
-) -> tuple[Array, NDArray[np.int64], Array, Array, str]:
-    """Core solver on flat batches (b, n, n), (b, n); raises on failure.
+    floor: bool = False,
+) -> tuple[Array, NDArray[np.int64], Array, Array, str, Array]:
+    """Core solver on flat batches (b, n, n), (b, n); raises on failure.  With ``floor`` each
+    tolerance is raised to the rounding floor of evaluating J_D at the solution.
 
-    Returns (U, iterations, residual, margin, start).
+    Returns (U, iterations, residual, margin, start, tolerance used).
     """
     b = M.shape[0]
     start = "warm" if U0 is not None else "riccati"
+    base = np.asarray(tol, dtype=float)
+    tol = base.copy()
     if U0 is not None:
-        U, iters, res, conv = _newton(U0, M, lam, tol, maxiter)
+        U, iters, res, conv, tol = _newton(U0, M, lam, tol, maxiter, floor)
         margin = _margin(U, lam)
         bad = ~conv | ~(margin > 0)
     else:
@@ -411,14 +570,24 @@ def _solve_batch(
             start = "mixed"
         idx = np.nonzero(bad)[0]
         G, failed = _riccati_guess(M[idx], lam[idx])
-        U2, it2, res2, conv2 = _newton(G, M[idx], lam[idx], tol[idx], maxiter)
+        U2, it2, res2, conv2, tol2 = _newton(G, M[idx], lam[idx], base[idx], maxiter, floor)
         m2 = _margin(U2, lam[idx])
-        U[idx], iters[idx], res[idx], margin[idx] = U2, it2, res2, m2
-        still = failed | ~conv2 | ~(m2 > 0)
+        U[idx], iters[idx], res[idx], margin[idx], tol[idx] = U2, it2, res2, m2, tol2
+        still = ~conv2 | ~(m2 > 0)
+        # the fallback only under the default tolerance: an explicit tol and maxiter are a
+        # budget the caller set (NotConvergedError reports on it)
+        for j in np.nonzero(still if floor else np.zeros_like(still))[0]:
+            # Riccati failed (scipy gives up on badly scaled lam, e.g. spread 1e12) or Newton
+            # from its solution did: follow the branch from U = I along t*M instead
+            i = idx[j]
+            got = _continuation(M[i], lam[i], float(base[i]), maxiter, floor)
+            if got is not None:
+                U[i], iters[i], res[i], margin[i], tol[i] = got
+                still[j] = False
         for j in np.nonzero(still)[0]:
             i = idx[j]
             t = _fold_scale_one(M[i], lam[i])
-            if t <= 1.0:
+            if t <= 1.0 + _fold_accuracy(lam[i]):
                 raise _out_of_domain(M[i], lam[i])
             raise NotConvergedError(
                 f"solve_moser_veselov: Newton did not reach tol = {tol[i]:.3e} for batch item {i} "
@@ -427,7 +596,7 @@ def _solve_batch(
                 residual=float(res[i]),
                 iterations=int(iters[i]),
             )
-    return U, iters, res, margin, start
+    return U, iters, res, margin, start, tol
 
 
 def solve_moser_veselov(
@@ -456,7 +625,11 @@ def solve_moser_veselov(
         The diagonal of :math:`\Lambda`, all entries > 0.
     tol : float, optional
         The residual tolerance on :math:`\|U\Lambda-\Lambda U^T-M\|_F`; by default
-        :math:`10\,\varepsilon\,\|M\|_F` for each item.
+        :math:`10\,\varepsilon\max(\|M\|_F, \|\mathrm{offdiag}(|U|\Lambda +
+        \Lambda|U|^T)\|_F)` for each item: ten times the rounding error of evaluating the
+        residual at the solution, which is about :math:`\|M\|_F` unless the terms
+        :math:`U_{ij}\lambda_j` and :math:`\lambda_iU_{ji}` cancel (a wide spread of
+        :math:`\lambda` far from :math:`U = I`).
     maxiter : int, optional
         The most Newton iterations.
     U0 : array_like, shape (..., n, n), optional
@@ -505,7 +678,9 @@ def solve_moser_veselov(
     nn = L.shape[-1]
     A = v.skew(M, "M", nn)
     if tol is not None and not v.real_scalar(tol, "tol") >= 0:
-        raise InputError(f"tol must be a finite number >= 0, got {tol!r}")
+        raise InputError(
+            f"tol must be a finite number >= 0, got {tol!r}; pass a float >= 0 or None"
+        )
     maxiter = v.count(maxiter, "maxiter", 1)
     batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
     G = None
@@ -518,7 +693,9 @@ def solve_moser_veselov(
     Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
     normM = _fro(Ab)
     tolb = np.full(Ab.shape[0], float(tol)) if tol is not None else 10.0 * _EPS * normM
-    U, iters, res, margin, start = _solve_batch(Ab, Lb, tolb, int(maxiter), G)
+    U, iters, res, margin, start, tolb = _solve_batch(
+        Ab, Lb, tolb, int(maxiter), G, floor=tol is None
+    )
     U = U.reshape(batch + (nn, nn))
     if not return_info:
         return U
@@ -530,5 +707,6 @@ def solve_moser_veselov(
         orthogonality=np.asarray(orth).reshape(batch),
         margin=margin.reshape(batch),
         start=start,
+        condition=_condition(U.reshape(-1, nn, nn), Lb).reshape(batch),
     )
     return U, info
