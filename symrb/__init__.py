@@ -28,7 +28,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "continuous": (
         "symmetric_momentum", "symmetric_rigid_body_rhs", "mclachlan_scovel_rhs",
-        "multi_sample_control", "multi_sample_rhs", "gl_hamiltonian", "P_from_M", "Flow",
+        "multi_sample_control", "multi_sample_rhs", "gl_hamiltonian", "P_from_M", "PFromMInfo", "Flow",
         "RigidBody", "SymmetricRigidBody", "McLachlanScovel", "MultiSampleSymmetricRigidBody",
         "Trajectory", "FlowSolution", "integrate",
     ),

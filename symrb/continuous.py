@@ -46,6 +46,7 @@ __all__ = [
     "multi_sample_rhs",
     "gl_hamiltonian",
     "P_from_M",
+    "PFromMInfo",
     "Flow",
     "RigidBody",
     "SymmetricRigidBody",
