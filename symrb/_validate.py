@@ -25,6 +25,8 @@ def as_float_array(x: ArrayLike, name: str) -> Array:
     a warning), strings, integers too large for float64 and non-finite entries.  Every message
     says how to pass the data instead.
     """
+    if type(x) is np.ndarray and x.dtype == np.float64 and np.isfinite(x).all():
+        return x  # the common case, without the conversions below (as np.asarray would return it)
     try:
         raw = np.asarray(x)
     except (TypeError, ValueError, OverflowError) as exc:
@@ -92,8 +94,8 @@ def square(x: ArrayLike, name: str, n: int | None = None) -> Array:
 def skew(x: ArrayLike, name: str, n: int | None = None, rtol: float = 1e-10) -> Array:
     """A float array of shape (..., n, n) with x^T = -x to ``rtol`` relative to its size."""
     a = square(x, name, n)
-    dev = float(np.max(np.abs(a + np.swapaxes(a, -1, -2)), initial=0.0))
-    scale = max(float(np.max(np.abs(a), initial=0.0)), 1.0)
+    dev = float(np.abs(a + np.swapaxes(a, -1, -2)).max()) if a.size else 0.0
+    scale = max(float(np.abs(a).max()) if a.size else 0.0, 1.0)
     if dev > rtol * scale:
         raise InputError(
             f"{name} must be skew-symmetric; max |{name} + {name}^T| = {dev:.3e} > {rtol:g} * "
@@ -107,7 +109,7 @@ def orthogonal(x: ArrayLike, name: str, n: int | None = None, atol: float = 1e-8
     """A float array of shape (..., n, n) in SO(n): x^T x = I and det x = +1 to ``atol``."""
     a = square(x, name, n)
     eye = np.eye(a.shape[-1])
-    dev = float(np.max(np.abs(np.swapaxes(a, -1, -2) @ a - eye), initial=0.0))
+    dev = float(np.abs(np.swapaxes(a, -1, -2) @ a - eye).max()) if a.size else 0.0
     if dev > atol:
         raise InputError(
             f"{name} must be orthogonal; max |{name}^T {name} - I| = {dev:.3e} > {atol:g}; pass "
@@ -115,7 +117,7 @@ def orthogonal(x: ArrayLike, name: str, n: int | None = None, atol: float = 1e-8
             "accumulated rounding"
         )
     det = np.linalg.det(a)
-    if np.any(det < 0):
+    if (det < 0).any():
         raise InputError(
             f"{name} must have det +1 (be in SO(n)); got det = {float(np.min(det)):.3f}; a "
             f"reflection is not a rotation: flip the sign of one column of {name} if that is "
@@ -161,15 +163,18 @@ def inertia(lam: ArrayLike, name: str = "lam", positive: bool = False) -> Array:
         )
     if a.ndim < 1 or a.shape[-1] < 2:
         raise InputError(f"{what}, with n >= 2; got shape {a.shape}; pass at least two entries")
-    if positive and np.any(a <= 0):
+    if positive and (a <= 0).any():
         raise InputError(
             f"{name} must be positive (Lambda positive definite); min lam_i = "
             f"{float(np.min(a)):.6g}{hint}; pass the principal moments of a body (all > 0)"
         )
-    s = a[..., :, None] + a[..., None, :]
-    nn = a.shape[-1]
-    off = ~np.eye(nn, dtype=bool)
-    worst = float(np.min(s[..., off]))
+    if a.ndim == 1:  # one lam: the smallest lam_i + lam_j (i != j) is the sum of the two least
+        two = np.partition(a, 1)[:2]
+        worst = float(two[0] + two[1])
+    else:
+        s_ = a[..., :, None] + a[..., None, :]
+        off = ~np.eye(a.shape[-1], dtype=bool)
+        worst = float(np.min(s_[..., off]))
     if worst <= 0:
         raise InputError(
             f"{name} must satisfy lam_i + lam_j > 0 for i != j (J positive definite); "
