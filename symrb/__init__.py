@@ -36,7 +36,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
         "jd_residual", "symmetric_step", "symmetric_flow", "mv_algorithm1", "mv_algorithm2",
         "discrete_rigid_body_flow", "DiscreteFlowSolution",
     ),
-    "engine": ("MVStepper", "mv_flow", "PREPROCESSED_ORDERS"),
+    "engine": ("MVStepper", "mv_flow"),
     "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
     "exact": ("ExactSolution", "rigid_body_exact"),
     "learning": (
@@ -52,7 +52,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "scenes": (
         "SceneError", "When", "RigidBodyScene", "SymmetricRigidBodyScene",
-        "McLachlanScovelScene", "DoubleBracketScene", "OrbitExtremalScene", "ResNetScene", "Scene",
+        "McLachlanScovelScene", "DoubleBracketScene", "OrbitExtremalScene", "ResNetScene",
         "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan", "plan_scene",
         "SceneResult", "SceneStore", "run_scene", "expand_grid", "SweepResult", "sweep",
     ),

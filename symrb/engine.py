@@ -68,7 +68,7 @@ from .discrete import DiscreteFlowSolution, _check_h, _check_steps, _prepare
 from .errors import InputError, NotConvergedError, OutOfDomainError
 from .solvers import solve_moser_veselov
 
-__all__ = ["MVStepper", "mv_flow", "PREPROCESSED_ORDERS"]
+__all__ = ["MVStepper", "mv_flow"]
 
 #: The orders of the preprocessed Moser-Veselov method (n = 3), 2 meaning none.
 PREPROCESSED_ORDERS = (2, 4, 6, 8, 10)

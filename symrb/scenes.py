@@ -96,7 +96,6 @@ __all__ = [
     "DoubleBracketScene",
     "OrbitExtremalScene",
     "ResNetScene",
-    "Scene",
     "parse_scene",
     "load_scene",
     "scene_inputs",
@@ -353,7 +352,15 @@ class _SceneBase(_Model):
 
 
 class RigidBodyScene(_SceneBase):
-    """The free rigid body (momentum only, or with the attitude: effect ``attitude``)."""
+    """The free rigid body (momentum only, or with the attitude: effect ``attitude``).
+
+    Examples
+    --------
+    >>> from symrb.scenes import RigidBodyScene
+    >>> RigidBodyScene.EFFECTS, sorted(RigidBodyScene.OBSERVABLES)  # doctest: +NORMALIZE_WHITESPACE
+    (('attitude',), ['M', 'Omega', 'Q', 'casimirs', 'energy', 'lax_spectrum', 'manakov',
+    'orthogonality'])
+    """
 
     EFFECTS = ("attitude",)
     OBSERVABLES = {
@@ -374,7 +381,14 @@ class RigidBodyScene(_SceneBase):
 
 class SymmetricRigidBodyScene(_SceneBase):
     """The symmetric rigid body (Q, P) of Section 3.2; effect ``samples`` for the learning
-    version (m samples sharing the control)."""
+    version (m samples sharing the control).
+
+    Examples
+    --------
+    >>> from symrb.scenes import SymmetricRigidBodyScene
+    >>> SymmetricRigidBodyScene.EFFECTS, sorted(SymmetricRigidBodyScene.OBSERVABLES)
+    (('samples',), ['H', 'M', 'P', 'Q', 'U', 'energy', 'orthogonality'])
+    """
 
     EFFECTS = ("samples",)
     OBSERVABLES = {
@@ -389,7 +403,14 @@ class SymmetricRigidBodyScene(_SceneBase):
 
 
 class McLachlanScovelScene(_SceneBase):
-    """The McLachlan-Scovel equations (Q, B) of Section 3.2, from B0 = Q0 M0."""
+    """The McLachlan-Scovel equations (Q, B) of Section 3.2, from B0 = Q0 M0.
+
+    Examples
+    --------
+    >>> from symrb.scenes import McLachlanScovelScene
+    >>> McLachlanScovelScene.EFFECTS, sorted(McLachlanScovelScene.OBSERVABLES)
+    ((), ['B', 'M', 'Q', 'energy', 'orthogonality'])
+    """
 
     OBSERVABLES = {"Q": None, "B": None, "M": None, "energy": None, "orthogonality": None}
     system: Literal["mclachlan_scovel"]
@@ -400,7 +421,14 @@ class McLachlanScovelScene(_SceneBase):
 
 
 class DoubleBracketScene(_SceneBase):
-    """The double bracket flow x' = [x, [x, N]] of Section 3.5."""
+    """The double bracket flow x' = [x, [x, N]] of Section 3.5.
+
+    Examples
+    --------
+    >>> from symrb.scenes import DoubleBracketScene
+    >>> DoubleBracketScene.EFFECTS, sorted(DoubleBracketScene.OBSERVABLES)
+    ((), ['casimirs', 'pairing', 'potential', 'x'])
+    """
 
     OBSERVABLES = {"x": None, "potential": None, "pairing": None, "casimirs": None}
     system: Literal["double_bracket"]
@@ -412,7 +440,14 @@ class DoubleBracketScene(_SceneBase):
 
 class OrbitExtremalScene(_SceneBase):
     """Extremals of the adjoint-orbit problem with Brockett's potential and the terminal cost
-    <x_T, N> (Section 3.5; ``symrb.solve_orbit_bvp``)."""
+    <x_T, N> (Section 3.5; ``symrb.solve_orbit_bvp``).
+
+    Examples
+    --------
+    >>> from symrb.scenes import OrbitExtremalScene
+    >>> OrbitExtremalScene.EFFECTS, sorted(OrbitExtremalScene.OBSERVABLES)
+    (('terminal_cost', 'potential', 'samples', 'costates'), ['p', 'u', 'x'])
+    """
 
     EFFECTS = ("terminal_cost", "potential", "samples", "costates")
     REQUIRED = ("terminal_cost", "potential")
@@ -425,7 +460,14 @@ class OrbitExtremalScene(_SceneBase):
 
 
 class ResNetScene(_SceneBase):
-    """A ResNet trained by gradient descent through the costates (Section 2, Remarks 1-2)."""
+    """A ResNet trained by gradient descent through the costates (Section 2, Remarks 1-2).
+
+    Examples
+    --------
+    >>> from symrb.scenes import ResNetScene
+    >>> ResNetScene.EFFECTS, sorted(ResNetScene.OBSERVABLES)
+    (('terminal_cost', 'costates'), ['K', 'accuracy', 'beta', 'costates', 'loss', 'states'])
+    """
 
     EFFECTS = ("terminal_cost", "costates")
     OBSERVABLES = {
@@ -689,6 +731,7 @@ def load_scene(path_or_text: str | os.PathLike[str]) -> Scene:
     Returns
     -------
     Scene
+        The validated scene (one of the ``*Scene`` models, chosen by ``system``).
 
     Raises
     ------
@@ -881,6 +924,20 @@ class Plan:
         Further remarks (e.g. what changes against a scene with more effects).
     modules : tuple of str
         The symrb modules the run uses (their source enters the cache key).
+
+    Examples
+    --------
+    >>> from symrb.scenes import parse_scene, plan_scene
+    >>> scene = parse_scene({
+    ...     "system": "rigid_body",
+    ...     "parameters": {"n": 3, "lam": [0.7, 1.1, 1.6], "M0": [0.5, 1.0, 1.5]},
+    ...     "integrator": {"kind": "continuous", "rtol": 1e-8},
+    ...     "horizon": {"T": 1.0},
+    ...     "observables": {"energy": "end"},
+    ... })
+    >>> plan = plan_scene(scene)
+    >>> plan.propagated
+    ('M',)
     """
 
     system: str
@@ -1046,6 +1103,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     Returns
     -------
     Plan
+        What is propagated, what is skipped and why, the save times and the cost estimate.
 
     Raises
     ------
@@ -1889,6 +1947,12 @@ class SweepResult:
         (``<name>``) and its largest change from the first record (``<name>_drift``).
     results : list of SceneResult
         The results in the table's order (the arrays).
+
+    Examples
+    --------
+    >>> from symrb.scenes import SweepResult
+    >>> sorted(SweepResult.__dataclass_fields__)
+    ['results', 'table']
     """
 
     table: Any
