@@ -71,15 +71,22 @@ from pathlib import Path
 from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Field,
-    TypeAdapter,
-    ValidationError,
-    field_validator,
-    model_validator,
-)
+
+try:
+    from pydantic import (
+        BaseModel,
+        ConfigDict,
+        Field,
+        TypeAdapter,
+        ValidationError,
+        field_validator,
+        model_validator,
+    )
+except ImportError as exc:  # pragma: no cover - exercised in the clean-venv wheel test
+    raise ImportError(
+        "symrb.scenes needs pydantic, which comes with the scenes extra: "
+        "pip install 'symrb[scenes]' (or pip install pydantic)"
+    ) from exc
 
 from . import _validate as v
 from ._generated import rigid_body as _rb

@@ -60,11 +60,13 @@ SNIPPET = textwrap.dedent(
         if not any(part.startswith("_") for part in m.name.split("."))
     ]
     for name in public:
-        if name == "symrb.testing":  # needs the test extra (hypothesis): says so when missing
+        # modules of an extra (hypothesis, pydantic) say which extra when it is missing
+        extra = {"symrb.testing": "symrb[test]", "symrb.scenes": "symrb[scenes]"}.get(name)
+        if extra is not None:
             try:
                 importlib.import_module(name)
             except ImportError as exc:
-                assert "symrb[test]" in str(exc), exc
+                assert extra in str(exc), exc
             continue
         importlib.import_module(name)
     generated = sorted(m.name for m in pkgutil.iter_modules(symrb._generated.__path__))
