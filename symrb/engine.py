@@ -251,8 +251,8 @@ def _fixed_point_n(
 
 
 def _cay(X: Array, eye: Array) -> Array:
-    U: Array = np.asarray(np.linalg.solve(eye - X, eye + X), dtype=np.float64)
-    return U
+    """cay(X) = (I + X)(I - X)^{-1} = I + D (the one formula, :func:`_cay_increment`)."""
+    return eye + _cay_increment(X, eye)
 
 
 def _cay_increment(X: Array, eye: Array) -> Array:

@@ -1530,6 +1530,32 @@ def d10_engine_against_50_digits() -> float:
     return float(np.max(errs))
 
 
+@D10.check(Level.FLOAT64, tol=1e-12)
+def d10_engine_general_n_equations() -> float:
+    """symrb.engine.mv_flow at n = 5 and n = 8 (the general-n solver and its increment update,
+    not the n = 3 kernels), 40 steps of h = 0.05: with U_k = Q_k^T Q_{k+1} from the returned
+    attitudes, the defining equations J_D(U_k) = h M_k (reference.J_D, explicit Lambda) and
+    M_{k+1} = U_k^T M_k U_k, and U_k^T U_k = I: max residual relative to max(1, |h M_k|)."""
+    from symrb import engine
+
+    worst = 0.0
+    for dim in (5, 8):
+        rng = np.random.default_rng(50 + dim)
+        lam = rng.uniform(0.5, 2.0, dim)
+        Q0 = ref.random_rotation(dim, rng)
+        M0 = ref.random_skew(dim, rng, 1.0)
+        h = 0.05
+        sol = engine.mv_flow(Q0, M0, lam, h, 40)
+        Q, M = sol.y.Q, sol.y.M
+        U = np.swapaxes(Q[:-1], -1, -2) @ Q[1:]
+        scale = max(1.0, float(np.abs(h * M).max()))
+        r1 = np.abs(ref.J_D(U, lam) - h * M[:-1]).max() / scale
+        r2 = np.abs(np.swapaxes(U, -1, -2) @ M[:-1] @ U - M[1:]).max() / max(1.0, np.abs(M).max())
+        r3 = np.abs(np.swapaxes(U, -1, -2) @ U - np.eye(dim)).max()
+        worst = max(worst, float(r1), float(r2), float(r3))
+    return worst
+
+
 @D10.check(Level.FLOAT64, tol=0.2)
 def d10_compositions_order_against_elliptic() -> float:
     """The MV-Algorithm 2 map is symmetric (time-reversible), so its symmetric compositions
