@@ -464,10 +464,15 @@ class MVStepper:
         X = self._X_n(h * Mf, h)
         # with U = I + D: QU = Q + QD and, M being skew, U^T M U = M + MD - (MD)^T + D^T(MD):
         # the O(1) state is added to once, to an O(h) increment (what keeps the rounding errors
-        # of a long run a random walk, growing like eps sqrt(N), rather than eps N)
+        # of a long run a random walk, growing like eps sqrt(N), rather than eps N).  The
+        # increment is made exactly skew: D^T(MD) is skew only to rounding, and a symmetric part
+        # S of M is carried as S + D^T S D (the terms SD + D^T S cancel in the antisymmetrised
+        # products), which grows by up to (1 + ||D||^2) a step: from rounding to O(||M||) in
+        # 10^4 steps at h ||M|| ~ 0.3 before this was written so
         D = _cay_increment(X, self._eye)
         MD = Mf @ D
-        dM = MD - np.swapaxes(MD, -1, -2) + np.swapaxes(D, -1, -2) @ MD
+        DMD = np.swapaxes(D, -1, -2) @ MD
+        dM = (MD - np.swapaxes(MD, -1, -2)) + 0.5 * (DMD - np.swapaxes(DMD, -1, -2))
         return (Qf + Qf @ D).reshape(Qa.shape), (Mf + dM).reshape(Ma.shape)
 
 

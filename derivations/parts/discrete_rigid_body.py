@@ -1535,7 +1535,10 @@ def d10_engine_general_n_equations() -> float:
     """symrb.engine.mv_flow at n = 5 and n = 8 (the general-n solver and its increment update,
     not the n = 3 kernels), 40 steps of h = 0.05: with U_k = Q_k^T Q_{k+1} from the returned
     attitudes, the defining equations J_D(U_k) = h M_k (reference.J_D, explicit Lambda) and
-    M_{k+1} = U_k^T M_k U_k, and U_k^T U_k = I: max residual relative to max(1, |h M_k|)."""
+    M_{k+1} = U_k^T M_k U_k, and U_k^T U_k = I: max residual relative to max(1, |h M_k|).  Then
+    3000 steps at n = 5 with h ||M||_op = 0.5: max |M + M^T| (an exactly skew update gives 0), and
+    the relative drift of tr M^T M in units of 10 eps sqrt(N), scaled so that 1 unit = 1e-12 (the
+    tolerance)."""
     from symrb import engine
 
     worst = 0.0
@@ -1553,7 +1556,18 @@ def d10_engine_general_n_equations() -> float:
         r2 = np.abs(np.swapaxes(U, -1, -2) @ M[:-1] @ U - M[1:]).max() / max(1.0, np.abs(M).max())
         r3 = np.abs(np.swapaxes(U, -1, -2) @ U - np.eye(dim)).max()
         worst = max(worst, float(r1), float(r2), float(r3))
-    return worst
+    # a long run with a large step (h ||M||_op = 0.5, 3000 steps): M stays skew-symmetric (an
+    # update skew only to rounding let a symmetric part grow like (1 + ||D||^2)^k, to 6e-2 here)
+    # and tr M^2 drifts by no more than rounding does in 3000 steps
+    rng = np.random.default_rng(55)
+    lam = rng.uniform(0.5, 2.0, 5)
+    M0 = ref.random_skew(5, rng, 1.0)
+    M0 = M0 / np.linalg.norm(M0, 2)
+    M = engine.mv_flow(np.eye(5), M0, lam, 0.5, 3000, save_every=3000).y.M
+    sym = np.abs(M + np.swapaxes(M, -1, -2)).max()
+    casimir = np.einsum("kij,kij->k", M, M)
+    drift = abs(casimir[-1] / casimir[0] - 1.0) / (10.0 * np.sqrt(3000.0))  # in units of
+    return max(worst, float(sym), float(drift) * 1e-12 / np.finfo(float).eps)  # 10 eps sqrt(N)
 
 
 @D10.check(Level.FLOAT64, tol=0.2)
