@@ -322,29 +322,58 @@ def test_flow_past_the_fold_halves_when_asked(n, data):
     assert np.all(halved.residual <= halved.tol)
 
 
-@examples(0.5)
-@given(st.sampled_from(["spread", "near_equal"]), dimensions(3, 5), seeds())
-def test_long_run_with_hard_inertia_stays_within_10_eps_sqrt_N(kind, n, rng):
-    """The long-time bound for hard inertia: relative energy and Casimir errors and
-    max |Q^T Q - I| within 100 eps sqrt(N) (ten times the accuracy chapter's goal; checked from
-    N = 100 on, every 50 steps)."""
-    lam = symrb.testing._inertia_of_kind(kind, n, rng, 12)
+def _long_run_error(method, lam, N, rng, save_every=100):
+    """The largest relative energy and tr M^2 errors and max |Q^T Q - I| of a run of N steps
+    (h M_0 at a tenth of the way or so to the fold), as (k, running maximum)."""
+    n = lam.size
     M0 = symrb.random_so(n, seed=rng)
-    M0 = M0 * (0.5 * lam.min() / np.linalg.norm(M0, 2))  # a tenth of the way or so to the fold
-    N = 1000
-    sol = symrb.mv_algorithm2(np.eye(n), M0, lam, N, save_every=50)
+    M0 = M0 * (0.5 * lam.min() / np.linalg.norm(M0, 2))
+    if method == "mv_flow":
+        sol = symrb.mv_flow(np.eye(n), M0, lam, 1.0, N, save_every=save_every)
+    else:
+        sol = symrb.mv_algorithm2(np.eye(n), M0, lam, N, save_every=save_every)
     assert sol.success, sol.message
-    eH, eC, _ = _invariant_errors(sol, lam, "mv_algorithm2")
-    Q = sol.y["Q"]  # the accuracy chapter's measure: the largest entry of Q^T Q - I
-    orth = np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(n)).max(axis=(-2, -1))
-    steps = np.maximum(sol.k, 100)
-    # hard inertia misses the chapter's 10 eps sqrt(N) by a small factor (measured up to 3.1x on
-    # tr M^2 for spreads, 6x for a near-equal pair in the book): stated as 100 eps sqrt(N), an
-    # open finding
-    bound = 100 * EPS * np.sqrt(steps)
-    assert np.all(eC <= bound), ("casimir", (eC / bound).max())
-    assert np.all(orth <= bound), ("orthogonality", (orth / bound).max())
-    assert np.all(eH <= bound), ("energy", (eH / bound).max())
+    eH, eC, orth = _invariant_errors(sol, lam, method)
+    return sol.k[1:], np.maximum.accumulate(np.maximum.reduce([eH, eC, orth])[1:])
+
+
+@examples(0.25)
+@given(st.sampled_from(["spread", "near_equal"]), dimensions(3, 5), seeds())
+def test_long_run_mv_flow_hard_inertia_within_the_long_time_goal(kind, n, rng):
+    """mv_flow, the accuracy chapter's long-run method, with a near-equal pair (1e-12, n = 3..5)
+    or a spread of 1e6 (n = 4, 5): every invariant within the chapter's 10 eps sqrt(N), checked
+    every 100 steps from N = 100 on (10^4 steps at n = 3, 2000 above)."""
+    assume(not (kind == "spread" and n == 3))  # the known limit below
+    lam = symrb.testing._inertia_of_kind(kind, n, rng, 6 if kind == "spread" else 12)
+    k, err = _long_run_error("mv_flow", lam, 10_000 if n == 3 else 2000, rng)
+    ratio = err / (10 * EPS * np.sqrt(np.maximum(k, 100)))
+    assert ratio.max() <= 1.0, (lam, ratio.max())
+
+
+def test_known_limit_mv_flow_n3_wide_spread_drifts_linearly():
+    """The known limit, n = 3 with a spread of 1e6: the fused step's rounding errors repeat from
+    step to step (the motion is close to a steady rotation) and the invariants drift linearly.
+    Stated bound 2 eps a step (measured 0.2 to 1.2 over three initial momenta); the test also
+    fails if the drift is gone (then the book's "Hard cases" page and this limit are out of
+    date)."""
+    lam = np.array([1e-3, 1.0, 1e3])
+    k, err = _long_run_error("mv_flow", lam, 20_000, np.random.default_rng(2))
+    assert err[-1] <= 2 * EPS * k[-1], err[-1] / (EPS * k[-1])
+    late = k >= 2000
+    slope = np.polyfit(np.log(k[late]), np.log(err[late]), 1)[0]
+    assert slope > 0.8 and err[-1] > 10 * EPS * np.sqrt(k[-1]), (slope, err[-1])
+
+
+@examples(0.25)
+@given(st.sampled_from(["spread", "near_equal"]), dimensions(3, 5), seeds())
+def test_long_run_mv_algorithm2_hard_inertia_within_its_stated_linear_bound(kind, n, rng):
+    """MV-Algorithm 2 (the solver's Newton polish from an extrapolated, Newton-Schulz
+    re-orthogonalised start) drifts linearly with hard inertia: stated bound 2 eps a step
+    (measured up to 1.8), plus 10 eps sqrt(N); spread 1e12 or a near-equal pair (1e-12)."""
+    lam = symrb.testing._inertia_of_kind(kind, n, rng, 12)
+    k, err = _long_run_error("mv_algorithm2", lam, 1000, rng, save_every=50)
+    bound = 2 * EPS * k + 10 * EPS * np.sqrt(np.maximum(k, 100))
+    assert np.all(err <= bound), (lam, (err / bound).max())
 
 
 # ---------------------------------------------------------------------------------------------
