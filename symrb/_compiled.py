@@ -86,11 +86,11 @@ def _build() -> Callable[..., Any]:
                     o = step(
                         s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, q31, q32, q33
                     )
-                s = o[0]
-                m1, m2, m3 = o[2], o[3], o[4]
-                q11, q12, q13, q21, q22, q23, q31, q32, q33 = (
-                    o[5], o[6], o[7], o[8], o[9], o[10], o[11], o[12], o[13]
-                )  # fmt: skip
+                s = o[0]  # the kernel returns increments: the state is rounded once a step
+                m1, m2, m3 = m1 + o[2], m2 + o[3], m3 + o[4]
+                q11, q12, q13 = q11 + o[5], q12 + o[6], q13 + o[7]
+                q21, q22, q23 = q21 + o[8], q22 + o[9], q23 + o[10]
+                q31, q32, q33 = q31 + o[11], q32 + o[12], q33 + o[13]
                 if (k0 + k) % save_every == 0:
                     ms[j, b, 0], ms[j, b, 1], ms[j, b, 2] = m1, m2, m3
                     qs[j, b, 0], qs[j, b, 1], qs[j, b, 2] = q11, q12, q13

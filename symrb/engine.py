@@ -84,7 +84,14 @@ _FLOW_METHODS = _SOLVERS + ("numpy", "numba")
 #: method="auto" compiles (numba) n = 3 runs of at least this many body-steps
 _NUMBA_MIN_WORK = 20_000
 _snewton3 = _gen.mv3_cayley_s_newton
-_step3 = _gen.mv3_cayley_step
+_kernel3 = _gen.mv3_cayley_step  # returns increments dm, dQ: the caller adds them
+
+
+def _step3(s: Any, h: Any, m1: Any, m2: Any, m3: Any, l1: Any, l2: Any, l3: Any, *q: Any) -> Any:
+    """mv3_cayley_step with its increments added: (s_next, ds, m_next (3), Q_next (9))."""
+    o = _kernel3(s, h, m1, m2, m3, l1, l2, l3, *q)
+    return (o[0], o[1], m1 + o[2], m2 + o[3], m3 + o[4], q[0] + o[5], q[1] + o[6], q[2] + o[7],
+            q[3] + o[8], q[4] + o[9], q[5] + o[10], q[6] + o[11], q[7] + o[12], q[8] + o[13])  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------------------

@@ -294,9 +294,11 @@ def mv3_cayley_step(s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, 
     r"""One Moser-Veselov step, n = 3: one Newton step on the scalar form, then the update.
 
     s_next = s + ds with ds of mv3_cayley_s_newton; x = adj(D - hat b) b / det at s_next,
-    U = cay(hat x), m_next = U^T m, Q_next = Q U (mv3_cayley_update).  The caller accepts the
-    step when |ds| is small enough (s_next then a root to rounding).  Arguments may be floats
-    or arrays of one broadcast shape (no conversion).
+    U = cay(hat x); returns the increments dm = (U - I)^T m and dQ = Q (U - I): m_next = m +
+    dm = U^T m, Q_next = Q + dQ = Q U (mv3_cayley_update; the caller adds them, so that the
+    state is rounded once a step).  The caller accepts the step when |ds| is small enough
+    (s_next then a root to rounding).  Arguments may be floats or arrays of one broadcast
+    shape (no conversion).
 
     Parameters
     ----------
@@ -339,25 +341,25 @@ def mv3_cayley_step(s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, 
     -------
     s_next : array
     ds : array
-    m1_next : array
-    m2_next : array
-    m3_next : array
-    q11_next : array
-    q12_next : array
-    q13_next : array
-    q21_next : array
-    q22_next : array
-    q23_next : array
-    q31_next : array
-    q32_next : array
-    q33_next : array
+    dm1 : array
+    dm2 : array
+    dm3 : array
+    dq11 : array
+    dq12 : array
+    dq13 : array
+    dq21 : array
+    dq22 : array
+    dq23 : array
+    dq31 : array
+    dq32 : array
+    dq33 : array
 
     Notes
     -----
     Checked by claim D10 (``symrb verify D10``);
     expressions from ``derivations.parts.discrete_rigid_body``.
 
-    Total ops per batch item: 222 scalar.
+    Total ops per batch item: 216 scalar.
     """
     t0 = 2 * l2
     t1 = 2 * l1
@@ -388,63 +390,63 @@ def mv3_cayley_step(s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, 
     )
     t18 = -t17
     t19 = t18 + t4
-    t20 = t18 + t6
-    t21 = t19 * t20
-    t22 = -t5
-    t23 = m3 * t11
-    t24 = h * m1 * (t15 + t21) + m2 * t23 * (-t0 - t22)
-    t25 = t24**2
-    t26 = t18 + t8
-    t27 = h * m2 * (t15 + t19 * t26) + m1 * t23 * (t1 + t22)
+    t20 = t18 + t8
+    t21 = -t5
+    t22 = m3 * t11
+    t23 = h * m2 * (t15 + t19 * t20) + m1 * t22 * (t1 + t21)
+    t24 = t23**2
+    t25 = 2 * t24
+    t26 = t18 + t6
+    t27 = h * m3 * (t15 + t20 * t26) + m1 * m2 * t11 * (t0 - t1)
     t28 = t27**2
-    t29 = h * m3 * (t15 + t20 * t26) + m1 * m2 * t11 * (t0 - t1)
-    t30 = t29**2
-    t31 = t12 * t26 + t13 * t20 + t14 * t19 + t21 * t26
-    t32 = 1.0 / (t25 + t28 + t30 + t31**2)
-    t33 = 2 * t28
-    t34 = 2 * t30
-    t35 = t32 * (-t33 - t34) + 1
-    t36 = 2 * t24
-    t37 = t27 * t36
-    t38 = 2 * t31
-    t39 = t29 * t38 + t37
-    t40 = m2 * t32
-    t41 = t29 * t36
-    t42 = -t27 * t38 + t41
-    t43 = m3 * t32
-    t44 = 2 * t25
-    t45 = t32 * (-t34 - t44) + 1
-    t46 = -t29 * t38 + t37
-    t47 = m1 * t32
-    t48 = 2 * t27 * t29
-    t49 = t31 * t36 + t48
-    t50 = t32 * (-t33 - t44) + 1
-    t51 = t27 * t38 + t41
-    t52 = -t24 * t38 + t48
-    t53 = q12 * t32
-    t54 = q13 * t32
-    t55 = q11 * t32
-    t56 = q22 * t32
-    t57 = q23 * t32
-    t58 = q21 * t32
-    t59 = q32 * t32
-    t60 = q33 * t32
-    t61 = q31 * t32
+    t29 = 2 * t28
+    t30 = -t25 - t29
+    t31 = t19 * t26
+    t32 = h * m1 * (t15 + t31) + m2 * t22 * (-t0 - t21)
+    t33 = t32**2
+    t34 = t12 * t20 + t13 * t26 + t14 * t19 + t20 * t31
+    t35 = 1.0 / (t24 + t28 + t33 + t34**2)
+    t36 = m1 * t35
+    t37 = 2 * t32
+    t38 = t23 * t37
+    t39 = 2 * t34
+    t40 = t27 * t39 + t38
+    t41 = m2 * t35
+    t42 = t27 * t37
+    t43 = -t23 * t39 + t42
+    t44 = m3 * t35
+    t45 = -t27 * t39 + t38
+    t46 = 2 * t33
+    t47 = -t29 - t46
+    t48 = 2 * t23 * t27
+    t49 = t34 * t37 + t48
+    t50 = t23 * t39 + t42
+    t51 = -t32 * t39 + t48
+    t52 = -t25 - t46
+    t53 = q11 * t35
+    t54 = q12 * t35
+    t55 = q13 * t35
+    t56 = q21 * t35
+    t57 = q22 * t35
+    t58 = q23 * t35
+    t59 = q31 * t35
+    t60 = q32 * t35
+    t61 = q33 * t35
     return (
         s + t17,
         t17,
-        m1 * t35 + t39 * t40 + t42 * t43,
-        m2 * t45 + t43 * t49 + t46 * t47,
-        m3 * t50 + t40 * t52 + t47 * t51,
-        q11 * t35 + t39 * t53 + t42 * t54,
-        q12 * t45 + t46 * t55 + t49 * t54,
-        q13 * t50 + t51 * t55 + t52 * t53,
-        q21 * t35 + t39 * t56 + t42 * t57,
-        q22 * t45 + t46 * t58 + t49 * t57,
-        q23 * t50 + t51 * t58 + t52 * t56,
-        q31 * t35 + t39 * t59 + t42 * t60,
-        q32 * t45 + t46 * t61 + t49 * t60,
-        q33 * t50 + t51 * t61 + t52 * t59,
+        t30 * t36 + t40 * t41 + t43 * t44,
+        t36 * t45 + t41 * t47 + t44 * t49,
+        t36 * t50 + t41 * t51 + t44 * t52,
+        t30 * t53 + t40 * t54 + t43 * t55,
+        t45 * t53 + t47 * t54 + t49 * t55,
+        t50 * t53 + t51 * t54 + t52 * t55,
+        t30 * t56 + t40 * t57 + t43 * t58,
+        t45 * t56 + t47 * t57 + t49 * t58,
+        t50 * t56 + t51 * t57 + t52 * t58,
+        t30 * t59 + t40 * t60 + t43 * t61,
+        t45 * t59 + t47 * t60 + t49 * t61,
+        t50 * t59 + t51 * t60 + t52 * t61,
     )
 
 
