@@ -587,12 +587,28 @@ def _solve_batch(
         for j in np.nonzero(still)[0]:
             i = idx[j]
             t = _fold_scale_one(M[i], lam[i])
-            if t <= 1.0 + _fold_accuracy(lam[i]):
+            if t <= 1.0:
                 raise _out_of_domain(M[i], lam[i])
+            acc = _fold_accuracy(lam[i])
+            spread = float(lam[i].max() / lam[i].min())
+            where = (
+                f"M is inside the domain (fold at t = {t:.10g} along t*M)"
+                if t > 1.0 + acc
+                # fold_scale cannot tell the sides apart this close (the thorough profile found
+                # an OutOfDomainError saying "-49.84 % past the fold" for an M half way to it)
+                else f"M is at the fold as far as fold_scale can tell (t = {t:.10g} along t*M, "
+                f"known to a relative {acc:.2g} at this spread of lam)"
+            )
             raise NotConvergedError(
                 f"solve_moser_veselov: Newton did not reach tol = {tol[i]:.3e} for batch item {i} "
                 f"(residual {res[i]:.3e} after {iters[i]} iterations, branch margin "
-                f"{margin[i]:.3e}); M is inside the domain (fold at t = {t:.10g} along t*M)",
+                f"{margin[i]:.3e}); {where}. "
+                + (
+                    f"lam spreads over {spread:.3g}: above 1e6 the solver can stall (a known "
+                    "limit); a smaller M (a smaller time step) is further from the fold"
+                    if spread > 1e6
+                    else "a smaller M (a smaller time step) is further from the fold"
+                ),
                 residual=float(res[i]),
                 iterations=int(iters[i]),
             )

@@ -63,6 +63,7 @@ __all__ = [
     "attitudes",
     "jd_momenta",
     "jd_cases",
+    "hard_inertia",
     "pfm_momenta",
     "step_sizes",
 ]
@@ -273,6 +274,55 @@ def inertias(
     nn = draw(dimensions(2, max_n)) if n is None else int(n)
     kind = draw(st.sampled_from(kinds))
     return _inertia_of_kind(kind, nn, draw(seeds()), draw(st.integers(1, 12)))
+
+
+def hard_inertia(
+    kind: str, n: int, k: int, seed: int | np.random.Generator | None = None
+) -> np.ndarray:
+    r"""One inertia :math:`\lambda \in \mathbb{R}^n_{>0}` of a kind, as :func:`inertias` draws it.
+
+    The kinds: ``"spread"``, entries log-uniform in :math:`[10^{-k/2}, 10^{k/2}]` with both ends
+    present (spread :math:`\max\lambda/\min\lambda = 10^k`); ``"near_equal"``, moderate entries
+    with one pair :math:`\lambda_j = \lambda_i(1 + 10^{-k})`; ``"equal_pair"``, ``"moderate"``
+    (uniform in [0.5, 2]) and ``"spherical"`` (all equal), for which ``k`` is not used.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`INERTIA_KINDS`.
+    n : int
+        The dimension, >= 2.
+    k : int
+        The exponent: the spread is :math:`10^k`, or the pair's relative gap :math:`10^{-k}`.
+    seed : int or numpy.random.Generator, optional
+        The random source (a Generator is advanced, so that the same sequence of calls gives
+        the same cases).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Raises
+    ------
+    symrb.errors.InputError
+        For an unknown kind or n < 2.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb.testing import hard_inertia
+    >>> lam = hard_inertia("spread", 4, 8, seed=1)
+    >>> float(lam.max() / lam.min())
+    100000000.0
+    """
+    from .errors import InputError
+
+    if kind not in INERTIA_KINDS:
+        raise InputError(f"kind must be one of {INERTIA_KINDS}, got {kind!r}")
+    if int(n) < 2:
+        raise InputError(f"n must be at least 2, got {n!r}")
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    return _inertia_of_kind(kind, int(n), rng, int(k))
 
 
 def _inertia_of_kind(kind: str, nn: int, rng: np.random.Generator, k: int) -> np.ndarray:

@@ -85,9 +85,7 @@ def test_solver_solves_on_the_branch_up_to_the_fold(case):
     """Residual <= tol = 10 eps ||M||_F, orthogonal to 10 n eps, det +1, on the branch; the
     condition estimate grows like 1/sqrt(distance to the fold) (bounded by 100/sqrt(delta))."""
     M, lam = _frozen(case.M, case.lam)
-    # the known limit (test_known_limit_spread_beyond_1e8): Newton and the continuation fail
-    # for spreads above 1e8 away from M = 0
-    assume(lam.max() / lam.min() <= SPREAD_LIMIT or case.distance == 1.0)
+    assume(_in_scope(case))
     U, info = symrb.solve_moser_veselov(M, lam, return_info=True)
     n = case.n
     assert info.residual <= info.tol
@@ -100,17 +98,32 @@ def test_solver_solves_on_the_branch_up_to_the_fold(case):
     assert info.condition <= 100 * spread / np.sqrt(min(case.distance, 1.0))
 
 
-SPREAD_LIMIT = 1e8
+# The known limit: above a spread of 1e6, Newton from the Riccati start and the damped
+# continuation from U = I can both stall away from M = 0 (the book's "Hard cases" page measures
+# how often: none of 720 cases at 1e6, 4 at 1e7, 17 at 1e8). The solver properties are stated
+# up to 1e6 (the issue's range); tiny momenta (distance 1) at any spread.
+SPREAD_LIMIT = 1e6
+
+
+def _in_scope(case) -> bool:
+    return bool(case.lam.max() / case.lam.min() <= SPREAD_LIMIT or case.distance == 1.0)
 
 
 @pytest.mark.xfail(raises=errors.NotConvergedError, strict=True)
-def test_known_limit_spread_beyond_1e8():
-    """Found by the property above: lam spread 1e10, half way to the fold, Newton from the
-    Riccati start and the damped continuation from U = I both stall (kappa about 1e10)."""
-    rng = np.random.default_rng(2)
-    lam = symrb.testing._inertia_of_kind("spread", 4, rng, 10)  # 1e-5 .. 1e5
-    A = symrb.random_so(4, seed=rng)
-    symrb.solve_moser_veselov(0.5 * symrb.fold_scale(A, lam) * A, lam)
+@pytest.mark.parametrize(
+    ("seed", "n", "k", "delta"),
+    [(2, 4, 10, 0.5), (112, 4, 8, 0.5)],
+    ids=["spread-1e10-half-way", "spread-1e8-half-way"],
+)
+def test_known_limit_spread_above_1e6(seed, n, k, delta):
+    """Found by the thorough profile: lam spread 1e10 or 1e8 (n = 4), M half way to the fold
+    (as fold_scale locates it; at these spreads fold_scale itself can be off: the book's "Hard
+    cases" page): Newton from the Riccati start and the damped continuation from U = I both stall, and
+    the error says so (NotConvergedError, not OutOfDomainError: M is inside the domain)."""
+    rng = np.random.default_rng(seed)
+    lam = symrb.testing._inertia_of_kind("spread", n, rng, k)
+    A = symrb.random_so(n, seed=rng)
+    symrb.solve_moser_veselov((1 - delta) * symrb.fold_scale(A, lam) * A, lam)
 
 
 def _on_branch_rotation(rng: np.random.Generator, n: int, lam: np.ndarray, scale: float):
@@ -131,7 +144,7 @@ def test_solver_forward_error_within_condition_times_eps(n, data):
     """||U - U_true||_F <= 10 sqrt(n) eps kappa, U_true a known solution of the rounded data."""
     lam = data.draw(inertias(n=n))
     # the known limit (found here by the thorough profile: spread 1e11, n = 9, ||xi|| = 1)
-    assume(lam.max() / lam.min() <= SPREAD_LIMIT)
+    assume(lam.max() / lam.min() <= SPREAD_LIMIT)  # the known limit
     rng = data.draw(seeds())
     scale = 10.0 ** data.draw(st.floats(-8, 0.5))
     U_true = _on_branch_rotation(rng, n, lam, scale)
@@ -145,6 +158,7 @@ def test_solver_forward_error_within_condition_times_eps(n, data):
 @examples(1)
 @given(jd_cases(max_n=6, near_fold=True), batch_shapes())
 def test_solver_batches_broadcast_and_agree_with_single_solves(case, shape):
+    assume(_in_scope(case))
     Mb = np.broadcast_to(case.M, shape + case.M.shape)
     U = symrb.solve_moser_veselov(Mb, case.lam)
     assert U.shape == Mb.shape
@@ -157,6 +171,7 @@ def test_solver_batches_broadcast_and_agree_with_single_solves(case, shape):
 @examples(1)
 @given(jd_cases(max_n=8))
 def test_solver_is_deterministic_and_leaves_inputs_alone(case):
+    assume(_in_scope(case))
     M, lam = _frozen(case.M, case.lam)
     first = symrb.solve_moser_veselov(M, lam, return_info=True)
     assert _same(first, symrb.solve_moser_veselov(M, lam, return_info=True))
@@ -460,6 +475,7 @@ def test_learning_gradients_match_central_differences(N, n, m, rng, residual):
 @examples(2)
 @given(jd_cases(max_n=8), attitudes(3))
 def test_no_nonfinite_output_from_finite_input(case, Q3):
+    assume(_in_scope(case))
     M, lam = case.M, case.lam
     n = case.n
     outs = [
