@@ -100,7 +100,7 @@ def test_solver_solves_on_the_branch_up_to_the_fold(case):
 
 # The known limit: above a spread of 1e6, Newton from the Riccati start and the damped
 # continuation from U = I can both stall away from M = 0 (the book's "Hard cases" page measures
-# how often: none of 720 cases at 1e6, 4 at 1e7, 17 at 1e8). The solver properties are stated
+# how often: none of 360 solves at 1e6, 2 at 1e7, 10 at 1e8). The solver properties are stated
 # up to 1e6 (the range); tiny momenta (distance 1) at any spread.
 SPREAD_LIMIT = 1e6
 
