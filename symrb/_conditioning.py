@@ -45,15 +45,20 @@ def sensitivity(
     directions: int = DIRECTIONS,
     tau: float = TAU,
     seed: int = SEED,
+    tangent: Callable[[Array], Array] | None = None,
 ) -> Array:
     """The relative condition number :math:`\\kappa(t_i)` at each output time.
 
     ``solve(Y0)`` integrates the batch ``Y0`` of shape ``(b, d)`` (one row per initial state)
     with one step-size sequence and returns the states at the output times, shape ``(K, b, d)``.
-    ``y0`` has shape ``(d,)``.  Returns an array of shape ``(K,)``.
+    ``y0`` has shape ``(d,)``.  ``tangent`` maps random directions (rows) into the space the
+    state lives in (e.g. skew matrices), when the field is only meant for that space.  Returns
+    an array of shape ``(K,)``.
     """
     rng = np.random.default_rng(seed)
     V = rng.standard_normal((directions, y0.size))
+    if tangent is not None:
+        V = tangent(V)
     V /= _rows(V)[:, None]
     scale = float(np.linalg.norm(y0))
     if scale == 0.0:
