@@ -261,7 +261,9 @@ def _mp_resnet(x0, K, beta, y, activation, residual):
 @examples(0.4)
 @given(st.integers(1, 4), st.integers(2, 4), st.integers(1, 4), seeds(), st.booleans(),
        st.sampled_from(["tanh", "logistic"]), st.sampled_from([0.3, 1.0, 3.0]))  # fmt: skip
-def test_resnet_sweep_error_within_eps_times_condition_squared(N, n, m, rng, residual, act, size):
+def test_resnet_sweep_error_within_eps_times_condition(N, n, m, rng, residual, act, size):
+    """Costates and gradients against 40 digits within 10 (N+1) n eps kappa times the sizes
+    (measured worst: 0.03 of it)."""
     x0 = rng.standard_normal((m, n))
     y = rng.standard_normal((m, n))
     K = size * rng.standard_normal((N, n, n))
@@ -271,7 +273,7 @@ def test_resnet_sweep_error_within_eps_times_condition_squared(N, n, m, rng, res
     p, info2 = symrb.costate_sweep(states, K, beta, y, act, residual, return_info=True)
     assert info2 == info and info.layers == N and info.condition >= 1
     xr, pr, gKr, gbr = _mp_resnet(x0, K, beta, y, act, residual)
-    unit = 10 * (N + 1) * n * EPS * info.condition**2
+    unit = 10 * (N + 1) * n * EPS * info.condition
     s_a = np.linalg.norm(xr, axis=-1).max(axis=0) + np.linalg.norm(pr, axis=-1).max(axis=0)
     err_p = np.linalg.norm(p - pr, axis=-1).max(axis=0)  # per sample
     assert np.all(err_p <= unit * s_a), (err_p / (unit * s_a)).max()
@@ -314,7 +316,7 @@ def _mp_so(Q0, U, lam, T, alpha):
 
 @examples(0.4)
 @given(st.integers(1, 5), dimensions(2, 4), st.integers(1, 4), seeds(), st.sampled_from([0.0, 0.7]))
-def test_so_network_sweep_error_within_eps_times_condition_squared(N, n, M, rng, alpha):
+def test_so_network_sweep_error_within_eps_times_condition(N, n, M, rng, alpha):
     Q0 = symrb.random_SO(n, (M,), seed=rng)
     T = symrb.random_SO(n, (M,), seed=rng)
     U = symrb.random_SO(n, (N,), seed=rng)
@@ -323,7 +325,7 @@ def test_so_network_sweep_error_within_eps_times_condition_squared(N, n, M, rng,
     Q, P, info2 = learning.so_network_costates(Q0, U, T, return_info=True)
     assert info2 == info and abs(info.condition - 1) <= 10 * N * n * EPS
     Qr, Pr, Gr = _mp_so(Q0, U, lam, T, alpha)
-    unit = 10 * (N + 1) * n * EPS * info.condition**2
+    unit = 10 * (N + 1) * n * EPS * info.condition
     Pmax = np.linalg.norm(Pr, axis=(-2, -1)).max()
     err_P = np.linalg.norm(P - Pr, axis=(-2, -1)).max(axis=0)
     assert np.all(err_P <= unit * (np.sqrt(n) + np.linalg.norm(Pr, axis=(-2, -1)).max(axis=0)))
