@@ -39,6 +39,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,6 +57,7 @@ __all__ = [
     "squared_error",
     "costate_sweep",
     "loss_gradients",
+    "SweepInfo",
     "train",
     "TrainResult",
     "toy_classification",
@@ -204,6 +206,88 @@ def squared_error(xN: ArrayLike, targets: ArrayLike) -> float:
     return float(0.5 * np.sum((a - y) ** 2))
 
 
+@dataclass(frozen=True)
+class SweepInfo:
+    r"""The condition estimate of a forward and costate sweep (``return_info=True`` of
+    :func:`costate_sweep`, :func:`loss_gradients`, :func:`so_network_gradients` and
+    :func:`so_network_costates`).
+
+    Attributes
+    ----------
+    condition : float
+        :math:`\kappa = \max_a\max_{k\le j}\prod_{i=k}^{j-1}\|J^a_i\|_2 \ge 1`, the largest
+        amplification of a perturbation between two layers of the sweep:
+        :math:`J^a_i = \partial f/\partial x(x^a_i, u_i)` is the layer's Jacobian at sample a,
+        which carries a change of :math:`x^a_i` forward to :math:`x^a_{i+1}` and (transposed) a
+        change of :math:`p^a_{i+1}` back to :math:`p^a_i`.  For the residual layer
+        :math:`J = I + \operatorname{diag}(\sigma'(z))K`, for the plain one
+        :math:`\operatorname{diag}(\sigma'(z))K`, for the SO(n) network (right multiplication
+        by :math:`U_i`) :math:`\|U_i\|_2 = 1` up to rounding, so :math:`\kappa \approx 1` there.
+    layers : int
+        The number N of layers.
+
+    Notes
+    -----
+    A sweep is an explicit recursion, so it has no residual to report (recomputing
+    :math:`p_k - J_k^Tp_{k+1}` in the same arithmetic gives 0): its accuracy is the forward
+    error.  Each layer and adjoint step commits a rounding error of about
+    :math:`n\varepsilon` relative to the sizes of its terms; errors of the forward pass reach
+    :math:`x_N`, hence :math:`p_N = -(x_N - y)`, amplified by at most :math:`\kappa`, and every
+    error of a costate reaches :math:`p_0` amplified by at most :math:`\kappa` again (so
+    :math:`\kappa^2` in the worst case; rounding errors are not aligned with the most expanding
+    direction, and one factor :math:`\kappa` is what is measured).  Stated and tested
+    (tests/test_conditions.py, against a 40-digit mpmath sweep): per sample a,
+    :math:`\max_k\|p^a_k - p^a_{k,\mathrm{exact}}\| \le 10(N+1)n\varepsilon\kappa s_a`,
+    :math:`s_a = \max_k\|x^a_k\| + \max_k\|p^a_k\|`, and for the gradients
+    :math:`\max_k\|\delta K_k\|_F, \|\delta\beta_k\| \le 10(N+1)n\varepsilon\kappa\sum_a s_a
+    (1 + \max_k\|x^a_k\|)` (measured worst: 0.03 of the bound over 144 random networks).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> x0, y = np.array([[0.5, -0.5], [1.0, 0.0]]), np.array([[1.0, 0.0], [0.0, 1.0]])
+    >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))
+    >>> Phi, dK, dbeta, info = symrb.loss_gradients(x0, K, beta, y, return_info=True)
+    >>> print(round(info.condition, 3), info.layers)
+    1.728 3
+    """
+
+    condition: float
+    layers: int
+
+
+def _window_product(log_norms: Array) -> float:
+    """max over samples and windows k <= j of prod_{i=k}^{j-1} ||J_i|| (the empty window: 1),
+    from log_norms of shape (N, samples): Kadane's maximum subarray sum on the logarithms."""
+    best = np.zeros(log_norms.shape[1:])
+    cur = np.zeros(log_norms.shape[1:])
+    for row in log_norms:
+        cur = np.maximum(0.0, cur + row)
+        best = np.maximum(best, cur)
+    return float(np.exp(np.max(best, initial=0.0)))
+
+
+def _resnet_condition(
+    states: Array, KK: Array, bb: Array, activation: str, residual: bool
+) -> float:
+    """kappa of :class:`SweepInfo` for the residual network (layer Jacobians per sample)."""
+    N, n = KK.shape[0], KK.shape[1]
+    x = states[:-1].reshape(N, -1, n)  # (N, samples, n)
+    z = np.einsum("kij,kaj->kai", KK, x) + bb[:, None, :]
+    if activation == "tanh":
+        ds = 1.0 - np.tanh(z) ** 2
+    else:
+        sig = 0.5 * (1.0 + np.tanh(0.5 * z))
+        ds = sig * (1.0 - sig)
+    J = ds[..., :, None] * KK[:, None]  # diag(sigma'(z)) K, (N, samples, n, n)
+    if residual:
+        J = J + np.eye(n)
+    with np.errstate(divide="ignore"):
+        logs = np.log(np.linalg.norm(J, 2, axis=(-2, -1)))
+    return _window_product(logs)
+
+
 def _sweep(
     states: Array, KK: Array, bb: Array, y: Array, activation: str, residual: bool
 ) -> tuple[Array, Array, Array]:
@@ -241,6 +325,32 @@ def _check_sweep_inputs(states, K, beta, targets):
     return st, KK, bb, y
 
 
+@overload
+def costate_sweep(
+    states: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    targets: ArrayLike,
+    activation: str = ...,
+    residual: bool = ...,
+    *,
+    return_info: Literal[False] = False,
+) -> Array: ...
+
+
+@overload
+def costate_sweep(
+    states: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    targets: ArrayLike,
+    activation: str = ...,
+    residual: bool = ...,
+    *,
+    return_info: Literal[True],
+) -> tuple[Array, SweepInfo]: ...
+
+
 def costate_sweep(
     states: ArrayLike,
     K: ArrayLike,
@@ -248,7 +358,9 @@ def costate_sweep(
     targets: ArrayLike,
     activation: str = "tanh",
     residual: bool = True,
-) -> Array:
+    *,
+    return_info: bool = False,
+) -> Array | tuple[Array, SweepInfo]:
     r"""The costates :math:`p^a_k`, shape (N + 1, ..., n), of the squared-error problem.
 
     :math:`p^a_N = -(x^a_N - y^a)` and :math:`p^a_k = \partial_x H(p^a_{k+1}, x^a_k, u_k)`; they
@@ -268,11 +380,16 @@ def costate_sweep(
         The activation :math:`\sigma`.
     residual : bool, optional
         True for residual layers, False for plain ones.
+    return_info : bool, optional
+        Also return a :class:`SweepInfo` with the condition estimate of the sweep (one SVD of
+        each layer's Jacobian per sample; not computed by default).
 
     Returns
     -------
     p : ndarray, shape (N + 1, ..., n)
         The costates.
+    info : SweepInfo
+        Only with ``return_info=True``.
 
     Examples
     --------
@@ -286,7 +403,37 @@ def costate_sweep(
     True
     """
     st, KK, bb, y = _check_sweep_inputs(states, K, beta, targets)
-    return _sweep(st, KK, bb, y, activation, residual)[0]
+    p = _sweep(st, KK, bb, y, activation, residual)[0]
+    if not return_info:
+        return p
+    kappa = _resnet_condition(st, KK, bb, activation, residual)
+    return p, SweepInfo(condition=kappa, layers=int(KK.shape[0]))
+
+
+@overload
+def loss_gradients(
+    x0: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    targets: ArrayLike,
+    activation: str = ...,
+    residual: bool = ...,
+    *,
+    return_info: Literal[False] = False,
+) -> tuple[float, Array, Array]: ...
+
+
+@overload
+def loss_gradients(
+    x0: ArrayLike,
+    K: ArrayLike,
+    beta: ArrayLike,
+    targets: ArrayLike,
+    activation: str = ...,
+    residual: bool = ...,
+    *,
+    return_info: Literal[True],
+) -> tuple[float, Array, Array, SweepInfo]: ...
 
 
 def loss_gradients(
@@ -296,7 +443,9 @@ def loss_gradients(
     targets: ArrayLike,
     activation: str = "tanh",
     residual: bool = True,
-) -> tuple[float, Array, Array]:
+    *,
+    return_info: bool = False,
+) -> tuple[float, Array, Array] | tuple[float, Array, Array, SweepInfo]:
     r"""Loss and weight gradients through the maximum principle.
 
     The gradients are :math:`\partial\Phi/\partial u_k = -\sum_a \partial_u H(p^a_{k+1}, x^a_k,
@@ -316,6 +465,9 @@ def loss_gradients(
         The activation :math:`\sigma`.
     residual : bool, optional
         True for residual layers, False for plain ones.
+    return_info : bool, optional
+        Also return a :class:`SweepInfo` with the condition estimate of the sweeps (accuracy
+        stated there; not computed by default).
 
     Returns
     -------
@@ -325,6 +477,8 @@ def loss_gradients(
         :math:`\partial\Phi/\partial K`.
     dbeta : ndarray, shape (N, n)
         :math:`\partial\Phi/\partial\beta`.
+    info : SweepInfo
+        Only with ``return_info=True``.
 
     Examples
     --------
@@ -345,7 +499,10 @@ def loss_gradients(
     states = resnet_forward(x0, K, beta, activation, residual)
     st, KK, bb, y = _check_sweep_inputs(states, K, beta, targets)
     _p, gK, gb = _sweep(st, KK, bb, y, activation, residual)
-    return squared_error(st[-1], y), gK, gb
+    if not return_info:
+        return squared_error(st[-1], y), gK, gb
+    kappa = _resnet_condition(st, KK, bb, activation, residual)
+    return squared_error(st[-1], y), gK, gb, SweepInfo(condition=kappa, layers=int(KK.shape[0]))
 
 
 @dataclass(frozen=True)
@@ -662,13 +819,45 @@ def so_network_forward(Q0: ArrayLike, U: ArrayLike) -> Array:
     return Qs.reshape(UU.shape[0] + 1, Q.shape[0], n, n)
 
 
+def _so_condition(U: Array) -> float:
+    """kappa of :class:`SweepInfo` for the SO(n) network: the layer Jacobians are right
+    multiplications by U_k (forward) and U_k^T (backward), of norm ||U_k||_2."""
+    return _window_product(np.log(np.linalg.norm(U, 2, axis=(-2, -1)))[:, None])
+
+
+@overload
+def so_network_gradients(
+    Q0: ArrayLike,
+    U: ArrayLike,
+    lam: ArrayLike,
+    targets: ArrayLike,
+    alpha: float = ...,
+    *,
+    return_info: Literal[False] = False,
+) -> tuple[float, Array]: ...
+
+
+@overload
+def so_network_gradients(
+    Q0: ArrayLike,
+    U: ArrayLike,
+    lam: ArrayLike,
+    targets: ArrayLike,
+    alpha: float = ...,
+    *,
+    return_info: Literal[True],
+) -> tuple[float, Array, SweepInfo]: ...
+
+
 def so_network_gradients(
     Q0: ArrayLike,
     U: ArrayLike,
     lam: ArrayLike,
     targets: ArrayLike,
     alpha: float = 0.0,
-) -> tuple[float, Array]:
+    *,
+    return_info: bool = False,
+) -> tuple[float, Array] | tuple[float, Array, SweepInfo]:
     r"""Loss and skew gradients of the SO(n) network from the costates of the maximum principle.
 
     The loss is
@@ -713,6 +902,9 @@ def so_network_gradients(
         The targets :math:`T^a` (in SO(n) for the paper's problem; any matrices work).
     alpha : float, optional
         The weight :math:`\alpha \ge 0` of the running cost.
+    return_info : bool, optional
+        Also return a :class:`SweepInfo` (the condition estimate of the sweeps, about 1 for
+        orthogonal controls; not computed by default).
 
     Returns
     -------
@@ -720,6 +912,11 @@ def so_network_gradients(
         :math:`L(U)`.
     G : ndarray, shape (N, n, n)
         The skew gradients :math:`G_k`.
+    info : SweepInfo
+        Only with ``return_info=True``.  Accuracy stated and tested (tests/test_conditions.py,
+        against a 40-digit mpmath sweep): :math:`\max_k\|G_k - G_{k,\mathrm{exact}}\|_F \le
+        10(N+1)n\varepsilon\kappa(M\sqrt n\,(\sqrt n + \max_{k,a}\|P^a_k\|_F) +
+        \alpha\max_i\lambda_i)`.
 
     Raises
     ------
@@ -749,10 +946,26 @@ def so_network_gradients(
     UU = _so_controls(U)
     prob = _SOProblem(Q0, targets, lam, alpha, UU.shape[-1])
     loss, G = prob.gradients(UU)
-    return loss, G
+    if not return_info:
+        return loss, G
+    return loss, G, SweepInfo(condition=_so_condition(UU), layers=int(UU.shape[0]))
 
 
-def so_network_costates(Q0: ArrayLike, U: ArrayLike, targets: ArrayLike) -> tuple[Array, Array]:
+@overload
+def so_network_costates(
+    Q0: ArrayLike, U: ArrayLike, targets: ArrayLike, *, return_info: Literal[False] = False
+) -> tuple[Array, Array]: ...
+
+
+@overload
+def so_network_costates(
+    Q0: ArrayLike, U: ArrayLike, targets: ArrayLike, *, return_info: Literal[True]
+) -> tuple[Array, Array, SweepInfo]: ...
+
+
+def so_network_costates(
+    Q0: ArrayLike, U: ArrayLike, targets: ArrayLike, *, return_info: bool = False
+) -> tuple[Array, Array] | tuple[Array, Array, SweepInfo]:
     r"""The layers and the costates of the SO(n) network (the forward and the backward sweep).
 
     :math:`P^a_N = -(Q^a_N - T^a)`, :math:`P^a_k = P^a_{k+1}U_k^T` (claim D9, the costates of
@@ -766,6 +979,8 @@ def so_network_costates(Q0: ArrayLike, U: ArrayLike, targets: ArrayLike) -> tupl
         The controls, in SO(n).
     targets : array_like, shape (M, n, n)
         The targets :math:`T^a`.
+    return_info : bool, optional
+        Also return a :class:`SweepInfo` (not computed by default).
 
     Returns
     -------
@@ -773,6 +988,10 @@ def so_network_costates(Q0: ArrayLike, U: ArrayLike, targets: ArrayLike) -> tupl
         The layers :math:`Q^a_k`.
     P : ndarray, shape (N + 1, M, n, n)
         The costates :math:`P^a_k`.
+    info : SweepInfo
+        Only with ``return_info=True``.  Accuracy stated and tested: per sample,
+        :math:`\max_k\|P^a_k - P^a_{k,\mathrm{exact}}\|_F \le 10(N+1)n\varepsilon\kappa
+        (\sqrt n + \max_k\|P^a_k\|_F)`.
 
     Examples
     --------
@@ -792,7 +1011,10 @@ def so_network_costates(Q0: ArrayLike, U: ArrayLike, targets: ArrayLike) -> tupl
     _G, Ps = _so_backward(Qs, UU, np.ones(n), Ts, 0.0, costates=True)
     assert Ps is not None
     shape = (UU.shape[0] + 1, Q.shape[0], n, n)
-    return Qs.reshape(shape), Ps.reshape(shape)
+    if not return_info:
+        return Qs.reshape(shape), Ps.reshape(shape)
+    info = SweepInfo(condition=_so_condition(UU), layers=int(UU.shape[0]))
+    return Qs.reshape(shape), Ps.reshape(shape), info
 
 
 def so_extremal_residual(
@@ -859,7 +1081,7 @@ def _so_extremal(prob: _SOProblem, U: Array) -> Array:
 
 @dataclass(frozen=True)
 class SOTrainResult:
-    """Outcome of :func:`train_so_gradient`, :func:`train_so_msa` and :func:`train_so_shooting`.
+    r"""Outcome of :func:`train_so_gradient`, :func:`train_so_msa` and :func:`train_so_shooting`.
 
     Attributes
     ----------
@@ -868,7 +1090,7 @@ class SOTrainResult:
     losses : ndarray, shape (iterations + 1,)
         The loss before each iteration and at the end.
     residuals : ndarray, shape (iterations + 1,)
-        The first-order optimality residual :math:`\\max_k\\|G_k\\|_F` (the Riemannian gradient,
+        The first-order optimality residual :math:`\max_k\|G_k\|_F` (the Riemannian gradient,
         :func:`so_network_gradients`) at the same points.
     iterations : int
         The number of iterations done.
@@ -878,6 +1100,15 @@ class SOTrainResult:
         Whether the method's stopping test was met.
     method : str
         ``"gradient"``, ``"msa"`` or ``"shooting"``.
+    M0 : ndarray, shape (n, n), or None
+        :func:`train_so_shooting`: the momentum :math:`M_0` found.  None for the other methods.
+    shooting_residual : float or None
+        :func:`train_so_shooting`: :math:`\|F(M_0)\|_2`, the residual of the shooting equation.
+        None for the other methods.
+    condition : float or None
+        :func:`train_so_shooting` with ``condition=True``: :math:`1/\sigma_{\min}(\partial
+        F/\partial M_0)`, which bounds :math:`\|M_0 - M_0^*\|` by :math:`\kappa` times
+        ``shooting_residual`` to first order.  None otherwise.
 
     Examples
     --------
@@ -897,6 +1128,9 @@ class SOTrainResult:
     residual: float
     converged: bool
     method: str
+    M0: Array | None = None
+    shooting_residual: float | None = None
+    condition: float | None = None
 
 
 def _grad_norm(G: Array) -> float:
@@ -1227,6 +1461,7 @@ def train_so_shooting(
     tol: float = 1e-12,
     maxfev: int = 400,
     progress: bool = False,
+    condition: bool = False,
 ) -> SOTrainResult:
     r"""The extremal equations of claim D9 as a two-point boundary value problem, by shooting.
 
@@ -1267,12 +1502,31 @@ def train_so_shooting(
         The most evaluations of :math:`F`.
     progress : bool, optional
         Show a progress bar (tqdm) over the evaluations.
+    condition : bool, optional
+        Also compute the condition number of the shooting equation at the solution
+        (``SOTrainResult.condition``: :math:`\kappa = 1/\sigma_{\min}(\partial F/\partial
+        M_0)` by central differences, :math:`n(n-1)` more evaluations of F).  Not computed by
+        default.
 
     Returns
     -------
     SOTrainResult
         ``losses`` and ``residuals`` at every evaluation of :math:`F`; ``iterations`` is the
-        number of evaluations.
+        number of evaluations; ``M0`` the returned :math:`M_0` and ``shooting_residual``
+        :math:`\|F(M_0)\|_2` (on the strict upper triangle).
+
+    Notes
+    -----
+    The equation solved is :math:`F(M_0) = 0` on :math:`\mathfrak{so}(n)` (coordinates: the
+    strict upper triangle).  To first order :math:`M_0 - M_0^* = (\partial F/\partial M_0)^{-1}
+    F(M_0)`, so :math:`\|M_0 - M_0^*\| \le \kappa\|F(M_0)\|` with
+    :math:`\kappa = 1/\sigma_{\min}(\partial F/\partial M_0)` (dimensionless: F and
+    :math:`M_0` are both momenta), and rounding in evaluating F (about
+    :math:`(N+1)Mn\varepsilon` times the size of its terms) bounds how small
+    ``shooting_residual`` can get.  Stated and tested (tests/test_conditions.py, against a
+    solve from another starting guess): two solutions differ by at most
+    :math:`10\kappa(\|F_1\| + \|F_2\| + 2(N+1)Mn\varepsilon\sqrt n\,(\sqrt n +
+    \max_a\|P^a_0\|_F))`.
 
     Raises
     ------
@@ -1287,6 +1541,9 @@ def train_so_shooting(
     >>> res = train_so_shooting(Q0, T, [1.0, 2.0, 3.0], alpha=1.0, layers=3)
     >>> bool(res.converged), bool(res.residual < 1e-9)
     (True, True)
+    >>> res = train_so_shooting(Q0, T, [1.0, 2.0, 3.0], alpha=1.0, layers=3, condition=True)
+    >>> bool(res.shooting_residual < 1e-13), round(res.condition, 3)
+    (True, 0.095)
     """
     from scipy.optimize import root
 
@@ -1322,25 +1579,39 @@ def train_so_shooting(
             M = U[k].T @ M @ U[k]
         return U
 
+    if not isinstance(condition, bool | np.bool_):
+        raise InputError(f"condition must be True or False, got {condition!r}; pass a bool")
+
+    def shoot(x: Array) -> tuple[Array, Array, Array] | None:
+        """(F(x), U, G), or None beyond the fold of J_D."""
+        try:
+            U = controls(x)
+        except OutOfDomainError:
+            return None
+        Qs = _so_forward(prob.Qs0, U)
+        G, Ps = _so_backward(Qs, U, prob.lam, prob.Ts, prob.alpha, costates=True)
+        assert Ps is not None
+        last["Qs"] = Qs
+        R = _gsr.symmetric_momentum(Qs[0], Ps[0])
+        return np.asarray(R[iu] - x), U, G
+
     with progress_bar(maxfev, "SO(n) shooting", progress) as bar:
 
         def F(x: Array) -> Array:
-            try:
-                U = controls(x)
-            except OutOfDomainError:  # beyond the fold of J_D: push the root finder back
+            out = shoot(x)
+            if out is None:  # beyond the fold of J_D: push the root finder back
                 return -10.0 * (1.0 + np.abs(x)) * np.sign(x + (x == 0))
-            Qs = _so_forward(prob.Qs0, U)
-            G, Ps = _so_backward(Qs, U, prob.lam, prob.Ts, prob.alpha, costates=True)
-            assert Ps is not None
-            losses.append(_so_loss(Qs[-1], prob.Ts, U, prob.lam, prob.alpha))
+            Fx, U, G = out
+            losses.append(_so_loss(last["Qs"][-1], prob.Ts, U, prob.lam, prob.alpha))
             residuals.append(_grad_norm(G))
             last["U"] = U
+            last["F"] = Fx
             bar.step()
-            R = _gsr.symmetric_momentum(Qs[0], Ps[0])
-            return np.asarray(R[iu] - x)
+            return Fx
 
         sol = root(F, x0, method="hybr", options={"xtol": tol, "maxfev": maxfev})
         F(sol.x)  # the reported controls are those of the returned M_0
+    kappa = _shooting_condition(shoot, sol.x) if condition else None
     return SOTrainResult(
         U=last["U"],
         losses=np.array(losses),
@@ -1349,7 +1620,30 @@ def train_so_shooting(
         residual=residuals[-1],
         converged=bool(sol.success),
         method="shooting",
+        M0=_skew_from_upper(sol.x, n),
+        shooting_residual=float(np.linalg.norm(last["F"])) if "F" in last else float("inf"),
+        condition=kappa,
     )
+
+
+def _shooting_condition(
+    shoot: Callable[[Array], tuple[Array, Array, Array] | None], x: Array
+) -> float:
+    """1 / the smallest singular value of dF/dm at m = x (central differences, relative step
+    1e-6; the nonlinearity error is O(1e-12) relative, the rounding error O(eps / 1e-6)); NaN
+    when a difference crosses the fold of J_D."""
+    d = x.size
+    step = 1e-6 * max(1.0, float(np.linalg.norm(x)))
+    J = np.empty((d, d))
+    for j in range(d):
+        e = np.zeros(d)
+        e[j] = step
+        plus, minus = shoot(x + e), shoot(x - e)
+        if plus is None or minus is None:
+            return float("nan")
+        J[:, j] = (plus[0] - minus[0]) / (2 * step)
+    smallest = float(np.linalg.svd(J, compute_uv=False)[-1])
+    return 1.0 / smallest if smallest > 0 else float("inf")
 
 
 def so_rotation_task(

@@ -30,12 +30,13 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_bvp, solve_ivp
 
+from . import _conditioning as _cond
 from . import _validate as v
 from ._generated import adjoint_orbits as _gen
 from ._validate import Array
@@ -47,6 +48,7 @@ __all__ = [
     "brockett_potential",
     "double_bracket_rhs",
     "double_bracket_flow",
+    "DoubleBracketInfo",
     "OrbitBVPResult",
     "solve_orbit_bvp",
 ]
@@ -169,9 +171,69 @@ def double_bracket_rhs(x: ArrayLike, N: ArrayLike) -> Array:
     return _gen.double_bracket_rhs(xx, nn)
 
 
+@dataclass(frozen=True)
+class DoubleBracketInfo:
+    r"""What :func:`double_bracket_flow` measured (with ``return_info=True``).
+
+    Attributes
+    ----------
+    condition : ndarray, shape (m,)
+        :math:`\kappa(t_i)`, the relative condition number of the flow map from time 0 to each
+        output time (the largest relative growth of a skew perturbation of ``x0``; see
+        :func:`symrb.integrate`'s Notes for the estimate).
+    error_estimate : ndarray, shape (m,)
+        :math:`\|x(t_i) - \hat x(t_i)\|_F/\|x(t_i)\|_F` for a run :math:`\hat x` at tolerances
+        ``rtol / 100``, ``atol / 100``.
+    nfev : int
+        The evaluations of the vector field by the returned run.
+
+    Examples
+    --------
+    >>> import symrb
+    >>> x0, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
+    >>> xs, info = symrb.double_bracket_flow(x0, N, [0, 1, 5], return_info=True)
+    >>> print(info.condition.round(2))
+    [1.   1.22 0.87]
+    """
+
+    condition: Array
+    error_estimate: Array
+    nfev: int
+
+
+@overload
 def double_bracket_flow(
-    x0: ArrayLike, N: ArrayLike, t: ArrayLike, rtol: float = 1e-11, atol: float = 1e-12
-) -> Array:
+    x0: ArrayLike,
+    N: ArrayLike,
+    t: ArrayLike,
+    rtol: float = ...,
+    atol: float = ...,
+    *,
+    return_info: Literal[False] = False,
+) -> Array: ...
+
+
+@overload
+def double_bracket_flow(
+    x0: ArrayLike,
+    N: ArrayLike,
+    t: ArrayLike,
+    rtol: float = ...,
+    atol: float = ...,
+    *,
+    return_info: Literal[True],
+) -> tuple[Array, DoubleBracketInfo]: ...
+
+
+def double_bracket_flow(
+    x0: ArrayLike,
+    N: ArrayLike,
+    t: ArrayLike,
+    rtol: float = 1e-11,
+    atol: float = 1e-12,
+    *,
+    return_info: bool = False,
+) -> Array | tuple[Array, DoubleBracketInfo]:
     r"""Integrate the double bracket flow :math:`\dot x = [x, [x, N]]` from ``x0``.
 
     The flow stays on the orbit of ``x0`` and decreases :math:`\langle x, N\rangle` at the rate
@@ -188,16 +250,34 @@ def double_bracket_flow(
         Increasing output times, >= 0 (the flow starts at time 0).
     rtol, atol : float, optional
         The tolerances of ``solve_ivp``.
+    return_info : bool, optional
+        Also return a :class:`DoubleBracketInfo`: the condition number of the flow and an error
+        estimate at each output time (costs about four more integrations; none by default).
 
     Returns
     -------
     ndarray, shape (m, n, n)
         x at the times ``t``.
+    info : DoubleBracketInfo
+        Only with ``return_info=True``.
 
     Raises
     ------
     NotConvergedError
         If the integrator fails.
+
+    Notes
+    -----
+    The equation is the initial value problem :math:`\dot x = [x, [x, N]]`, :math:`x(0) = x_0`.
+    A local error of the integrator (about ``rtol`` :math:`\|x\|`) committed at time s reaches
+    time t multiplied by the derivative of the flow map, so the relative error at t is about the
+    tolerance times the relative condition number :math:`\kappa(t)` (``return_info=True``;
+    estimated as in :func:`symrb.integrate`).  Near an equilibrium that is not the minimum (a
+    saddle: x commutes with N but is not sorted like it) perturbations grow exponentially until
+    the flow leaves it, and so does :math:`\kappa`.  Accuracy stated and tested
+    (tests/test_conditions.py, against a run at ``rtol = 1e-13``): the relative error and the
+    error estimate at each output time are at most
+    :math:`10\,(\mathrm{rtol} + \mathrm{atol}/\|x(t)\|_{rms})\,\kappa(t)`.
 
     Examples
     --------
@@ -222,24 +302,52 @@ def double_bracket_flow(
             f"t must be a non-empty increasing 1-D array of times >= 0, got {ts}; pass sorted "
             "distinct times"
         )
+    if not isinstance(return_info, bool | np.bool_):
+        raise InputError(f"return_info must be True or False, got {return_info!r}; pass a bool")
     k = xx.shape[-1]
-    sol = solve_ivp(
-        lambda _t, y: _gen.double_bracket_rhs(y.reshape(k, k), nn).ravel(),
+    sol = _db_solve(xx.reshape(1, k * k), nn, ts, rtol, atol)
+    if not sol.success:
+        raise NotConvergedError(f"double_bracket_flow: {sol.message}", float("nan"), sol.nfev)
+    xs = sol.y.T.reshape(-1, k, k)
+    if not return_info:
+        return xs
+
+    def batch(X0: Array) -> Array:
+        run = _db_solve(X0, nn, ts, rtol, atol)
+        if not run.success:
+            return np.full((ts.size, X0.shape[0], k * k), np.nan)
+        return np.asarray(run.y.T.reshape(ts.size, X0.shape[0], k * k))
+
+    def skew(V: Array) -> Array:  # the flow lives on so(n): perturb within it
+        W = V.reshape(-1, k, k)
+        return np.asarray((W - np.swapaxes(W, -1, -2)).reshape(V.shape))
+
+    kappa = _cond.sensitivity(batch, xx.ravel(), tangent=skew)
+    tight = max(rtol / _cond.TIGHTER, 100 * float(np.finfo(float).eps))
+    ref = _db_solve(xx.reshape(1, k * k), nn, ts, tight, atol / _cond.TIGHTER)
+    err = _cond.relative_difference(sol.y.T, ref.y.T) if ref.success else np.full(ts.size, np.nan)
+    return xs, DoubleBracketInfo(condition=kappa, error_estimate=err, nfev=int(sol.nfev))
+
+
+def _db_solve(X0: Array, nn: Array, ts: Array, rtol: float, atol: float) -> Any:
+    """``solve_ivp`` (DOP853) of the double bracket flow for the batch ``X0`` of shape (b, k k),
+    one step-size sequence for the batch; the result's ``y`` has shape (b k k, len(ts))."""
+    b, kk = X0.shape
+    k = nn.shape[-1]
+    return solve_ivp(
+        lambda _t, y: _gen.double_bracket_rhs(y.reshape(b, k, k), nn).ravel(),
         (0.0, float(ts[-1])),
-        xx.ravel(),
+        X0.ravel(),
         t_eval=ts,
         method="DOP853",
         rtol=rtol,
         atol=atol,
     )
-    if not sol.success:
-        raise NotConvergedError(f"double_bracket_flow: {sol.message}", float("nan"), sol.nfev)
-    return sol.y.T.reshape(-1, k, k)
 
 
 @dataclass(frozen=True)
 class OrbitBVPResult:
-    """Solution of the two-point boundary value problem of :func:`solve_orbit_bvp`.
+    r"""Solution of the two-point boundary value problem of :func:`solve_orbit_bvp`.
 
     Attributes
     ----------
@@ -261,6 +369,12 @@ class OrbitBVPResult:
         ``"corrected"`` or ``"printed"`` (the endpoint condition imposed).
     sol : object
         ``solve_bvp``'s result; :meth:`at` evaluates the solution at any time.
+    condition : float or None
+        With ``condition=True`` (and success): :math:`\kappa = \max(\kappa_1, \kappa_2)`, the
+        conditioning constants of the boundary value problem linearised about the solution
+        (see :func:`solve_orbit_bvp`'s Notes): a change :math:`\delta` of the boundary values
+        and a defect :math:`r(t)` of the equations move the solution by at most about
+        :math:`\kappa(\|\delta\| + \int_0^T\|r\|\,dt)`.  None otherwise.
 
     Examples
     --------
@@ -282,6 +396,7 @@ class OrbitBVPResult:
     bc_residual: float
     costate: str
     sol: Any
+    condition: float | None = None
 
     def at(self, t: ArrayLike) -> tuple[Array, Array]:
         """(x, p) at the times ``t`` (1-D), shapes (len(t), M, n, n), from the collocation spline."""
@@ -348,6 +463,7 @@ def solve_orbit_bvp(
     p_guess: ArrayLike | None = None,
     continuation_start: float = 1.0,
     continuation_growth: float = 1.5,
+    condition: bool = False,
 ) -> OrbitBVPResult:
     r"""Solve the maximum principle's two-point boundary value problem of the learning version (S15).
 
@@ -398,11 +514,51 @@ def solve_orbit_bvp(
         The horizon below which no continuation is needed, > 0.
     continuation_growth : float, optional
         The factor between successive horizons of the continuation, > 1.
+    condition : bool, optional
+        Also compute the conditioning constant of the problem at the solution
+        (``OrbitBVPResult.condition``; see Notes); costs one integration of the linearised
+        equations for the fundamental matrix.  Not computed by default.
 
     Returns
     -------
     OrbitBVPResult
         The solution on the collocation mesh, with ``success`` and the residuals.
+
+    Notes
+    -----
+    The equations are :math:`\dot y = f(y)` for the packed state and costates
+    :math:`y = (x, p)` (:math:`D` coordinates: the strict upper triangles) with the separated
+    boundary conditions :math:`B_ay(0) + B_by(T) = \beta` (:math:`B_a` picks the states,
+    :math:`B_b` the costates).  ``solve_bvp`` returns a cubic spline S whose defect
+    :math:`r = S' - f(S)` satisfies ``residual`` :math:`= \max` of its root mean square,
+    relative to :math:`1 + |f|`, over each mesh interval :math:`\le` ``tol``.  For the
+    fundamental matrix :math:`\dot\Phi = A(t)\Phi`, :math:`\Phi(0) = I` of the linearisation
+    :math:`A = \partial f/\partial y` along S and :math:`Q = B_a + B_b\Phi(T)`, the error of S
+    is bounded by (Ascher, Mattheij and Russell, *Numerical Solution of Boundary Value Problems
+    for ODEs*, 1995, Section 3.2)
+
+    .. math::
+
+        \max_t\|S(t) - y(t)\| \lesssim \kappa_1\|\delta\| + \kappa_2\int_0^T\|r\|\,dt,\qquad
+        \kappa_1 = \max_t\|\Phi(t)Q^{-1}\|_2,\quad \kappa_2 = \max_{t,s}\|G(t, s)\|_2,
+
+    with :math:`\delta` the boundary mismatch (``bc_residual``) and the Green's function
+    :math:`G(t,s) = \Phi(t)Q^{-1}B_a\Phi(s)^{-1}` for :math:`s < t`,
+    :math:`-\Phi(t)Q^{-1}B_b\Phi(T)\Phi(s)^{-1}` for :math:`s > t`.  ``condition=True``
+    reports :math:`\kappa = \max(\kappa_1, \kappa_2)` on at most 101 times :math:`t_i` of the
+    final mesh, computed stably by multiple shooting: with the transition matrices
+    :math:`\Phi_i` of the linearisation over :math:`[t_i, t_{i+1}]` (A by central differences of
+    f along the spline, ``solve_ivp`` DOP853 at ``rtol = 1e-8``), the matrix S of the linear
+    system :math:`z_{i+1} - \Phi_iz_i = r_i`, :math:`B_az_0 + B_bz_{m-1} = \beta` has the
+    blocks :math:`G(t_i, t_{j+1})` and :math:`\Phi(t_i)Q^{-1}` in its inverse, and
+    :math:`\kappa` is the largest 2-norm of a :math:`D\times D` block of :math:`S^{-1}`: the
+    conditioning of the problem's (multiple-shooting) Newton matrix at the solution, which the
+    collocation Newton matrix of ``solve_bvp`` approximates.  NaN when S is singular to working
+    precision.
+
+    Accuracy stated and tested (tests/test_conditions.py, against a solve at ``tol = 1e-10``):
+    :math:`\max_t\|S(t) - y(t)\|_2 \le \kappa\,(\mathrm{bc\_residual} +
+    T\,\mathrm{residual}\,(1 + \max_t\|f\|_\infty))`.
 
     Examples
     --------
@@ -417,6 +573,12 @@ def solve_orbit_bvp(
     >>> flow = symrb.double_bracket_flow(x0, N, res.t)
     >>> bool(np.abs(res.x[:, 0] - flow).max() < 1e-6)
     True
+
+    The conditioning constant bounds the error by the residuals:
+
+    >>> res = symrb.solve_orbit_bvp(x0, N, 2.0, condition=True)
+    >>> print(round(res.condition, 2))
+    1.35
     """
     nn = v.skew(N, "N")
     if nn.ndim != 2:
@@ -485,6 +647,7 @@ def solve_orbit_bvp(
     bcr = float(np.max(np.abs(bc(sol.y[:, 0], sol.y[:, -1]))))
     res = float(np.max(sol.rms_residuals)) if sol.rms_residuals is not None else float("inf")
     ok = bool(sol.success) and np.all(np.isfinite(sol.y))
+    kappa = _bvp_condition(rhs, sol, half) if condition and ok else None
     return OrbitBVPResult(
         t=sol.x,
         x=x,
@@ -496,4 +659,49 @@ def solve_orbit_bvp(
         bc_residual=bcr,
         costate=costate,
         sol=sol,
+        condition=kappa,
     )
+
+
+def _jacobian(rhs: Callable[[float, Array], Array], t: float, y: Array) -> Array:
+    """A = df/dy at y by central differences (the columns of f evaluated at once)."""
+    D = y.size
+    step = 1e-6 * np.maximum(1.0, np.abs(y))
+    E = np.diag(step)
+    cols = np.concatenate([y[:, None] + E, y[:, None] - E], axis=1)
+    F = rhs(t, cols)
+    return np.asarray((F[:, :D] - F[:, D:]) / (2 * step))
+
+
+def _bvp_condition(rhs: Callable[[float, Array], Array], sol: Any, half: int) -> float:
+    """The conditioning constant of the separated BVP y' = f(y), y_x(0), y_p(T) given,
+    linearised along the spline ``sol.sol``, by multiple shooting (see :func:`solve_orbit_bvp`'s
+    Notes): the largest block norm of the inverse of the multiple-shooting matrix."""
+    t_mesh = sol.x
+    D = sol.y.shape[0]
+    idx = np.unique(np.round(np.linspace(0, t_mesh.size - 1, min(t_mesh.size, 101))).astype(int))
+    ts = t_mesh[idx]
+    m = ts.size
+
+    def var(t: float, phi: Array) -> Array:
+        A = _jacobian(rhs, t, sol.sol(t))
+        return np.asarray((A @ phi.reshape(D, D)).ravel())
+
+    # rows i = 0..m-2: z_{i+1} - Phi_i z_i (Phi_i the transition matrix over [t_i, t_{i+1}]);
+    # the last D rows: the boundary conditions B_a z_0 + B_b z_{m-1}
+    S = np.zeros((m * D, m * D))
+    eye = np.eye(D)
+    for i in range(m - 1):
+        run = solve_ivp(
+            var, (ts[i], ts[i + 1]), eye.ravel(), method="DOP853", rtol=1e-8, atol=1e-12
+        )
+        if not run.success or not np.all(np.isfinite(run.y)):
+            return float("nan")
+        S[i * D : (i + 1) * D, i * D : (i + 1) * D] = -run.y[:, -1].reshape(D, D)
+        S[i * D : (i + 1) * D, (i + 1) * D : (i + 2) * D] = eye
+    S[(m - 1) * D : (m - 1) * D + half, :half] = eye[:half, :half]
+    S[(m - 1) * D + half :, (m - 1) * D + half : m * D] = eye[half:, half:]
+    if np.linalg.cond(S) > 1e-2 / float(np.finfo(float).eps):
+        return float("nan")
+    blocks = np.linalg.inv(S).reshape(m, D, m, D).transpose(0, 2, 1, 3)
+    return float(np.max(np.linalg.norm(blocks, 2, axis=(-2, -1))))
