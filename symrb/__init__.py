@@ -40,7 +40,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
     "exact": ("ExactSolution", "rigid_body_exact"),
     "learning": (
-        "resnet_forward", "squared_error", "costate_sweep", "loss_gradients", "train",
+        "resnet_forward", "squared_error", "costate_sweep", "loss_gradients", "SweepInfo", "train",
         "TrainResult", "toy_classification", "so_network_forward", "so_network_gradients",
         "so_network_costates", "so_extremal_residual", "so_procrustes", "so_rotation_task",
         "SOTrainResult", "train_so_gradient", "train_so_msa", "train_so_shooting", "DigitsTask",
@@ -48,7 +48,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "orbits": (
         "orbit_extremal_rhs", "orbit_hamiltonian", "brockett_potential", "double_bracket_rhs",
-        "double_bracket_flow", "OrbitBVPResult", "solve_orbit_bvp",
+        "double_bracket_flow", "DoubleBracketInfo", "OrbitBVPResult", "solve_orbit_bvp",
     ),
     "scenes": (
         "SceneError", "When", "RigidBodyScene", "SymmetricRigidBodyScene",
