@@ -218,6 +218,26 @@ def test_orbit_bvp_random_error_within_condition_times_residuals(rng, T):
     assert err <= bound, err / bound
 
 
+@pytest.mark.parametrize("case", range(len(BVP_CASES) - 1))
+def test_orbit_bvp_condition_bounds_the_observed_sensitivity(case):
+    """kappa from below: moving x_0 by delta moves the solution by at most about kappa delta
+    (two solves at tol 1e-10, delta = 1e-5 ||x_0||; a kappa computed without the transition
+    matrices, or scaled down, falls below the observed change)."""
+    x0, N, T = BVP_CASES[case]
+    res = symrb.solve_orbit_bvp(x0, N, T, condition=True)
+    rng = np.random.default_rng(case)
+    E = symrb.random_so(3, seed=rng)
+    dx = 1e-5 * np.linalg.norm(x0) * E / np.linalg.norm(E)
+    a = symrb.solve_orbit_bvp(x0, N, T, tol=1e-10, max_nodes=100000)
+    b = symrb.solve_orbit_bvp(x0 + dx, N, T, tol=1e-10, max_nodes=100000)
+    assert a.success and b.success
+    t = np.linspace(0.0, T, 301)
+    moved = np.linalg.norm(_pack(*b.at(t)) - _pack(*a.at(t)), axis=0).max()
+    observed = moved / np.linalg.norm(_pack(dx, np.zeros_like(dx)))
+    assert observed <= 2.0 * res.condition, (observed, res.condition)
+    assert observed >= 0.01 * res.condition, (observed, res.condition)  # not a wild overestimate
+
+
 def test_orbit_bvp_condition_only_when_asked():
     x0, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
     assert symrb.solve_orbit_bvp(x0, N, 1.0).condition is None
