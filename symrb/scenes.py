@@ -688,7 +688,8 @@ _KIND_TAGS = ("continuous", "mv", "mv_algorithm2", "discrete", "bvp", "gradient_
 
 
 def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
-    out = [str(x) for x in loc]
+    # the members of a union (a reduction or a list of them) are not keys
+    out = [str(x) for x in loc if not re.match(r"^(literal|tuple)\[", str(x))]
     if out and system is not None and out[0] == system:
         out = out[1:]
     for i in range(len(out) - 1):
@@ -736,6 +737,8 @@ def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: st
         elif err["type"] in ("union_tag_invalid", "union_tag_not_found"):
             got = (err.get("ctx") or {}).get("tag")
             msg = f"unknown system {got!r}" if got is not None else "system is required"
+        if any(q["key"] == ".".join(loc) for q in problems):
+            continue  # one problem per key: the first member of a union that failed
         problems.append({"key": ".".join(loc), "line": line, "message": msg, "allowed": allowed})
     return SceneError(problems, source)
 
