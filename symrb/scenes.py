@@ -27,7 +27,9 @@ models; an error names the key, its line in the file and the allowed values
 attitude when only momenta or energies are observed, no costate sweep without a terminal cost, no
 diagnostic that is not asked for), which public functions and generated kernels to call, and the
 times at which to save (as diffrax's ``SaveAt``: the union of the observables' times, each
-observable evaluated only at its own).  :meth:`Plan.explain` prints the plan with what is skipped
+observable evaluated only at its own; a windowed observable reduced per window as
+:class:`When` describes, its unreduced series not kept; the ``*_gap`` observables compared with
+the second run of a ``[compare]`` table).  :meth:`Plan.explain` prints the plan with what is skipped
 and why, and an estimated cost.  :func:`run_scene` runs a scene and returns a
 :class:`SceneResult` (arrays, the scene, the plan, the versions), cached on disk by a SHA-256 of
 the canonical scene and of the source of the symrb modules it uses, so a rerun that changes
@@ -41,8 +43,9 @@ The systems (``system = ...``) and what each offers:
 system                 effects                         observables
 =====================  ==============================  =============================================
 rigid_body             attitude                        M, Q, Omega, energy, casimirs, manakov,
-                                                       lax_spectrum, orthogonality
-symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality, U
+                                                       lax_spectrum, orthogonality, M_gap, Q_gap
+symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality, U,
+                                                       M_gap, Q_gap
 mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
 double_bracket         (none)                          x, potential, pairing, casimirs
 orbit_extremal         terminal_cost, potential,       x, p, u
