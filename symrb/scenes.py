@@ -708,7 +708,7 @@ def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: st
     system = data.get("system") if isinstance(data, Mapping) else None
     model = _SYSTEMS.get(system) if isinstance(system, str) else None
     lines = _toml_lines(text) if text is not None else {}
-    problems = []
+    problems: list[dict[str, Any]] = []
     for err in exc.errors():
         loc = _clean_loc(err["loc"], system if model is not None else None)
         # a bad key of the observables table: pydantic reports (observables, name, [key])
@@ -870,12 +870,25 @@ def load_scene(path_or_text: str | os.PathLike[str]) -> Scene:
     if isinstance(path_or_text, os.PathLike) or "\n" not in str(path_or_text):
         path = Path(path_or_text)
         try:
+            st = os.stat(path)
+            key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
+            if key in _LOADED:  # validated before, and unchanged since (scenes are frozen)
+                return _LOADED[key]
             text = path.read_text()
         except OSError as exc:
             raise InputError(f"scene file {str(path)!r} cannot be read: {exc}") from None
         source = path.name
-    else:
-        text, source = str(path_or_text), "scene"
+        scene = _load_text(text, source)
+        _LOADED[key] = scene
+        return scene
+    return _load_text(str(path_or_text), "scene")
+
+
+#: scene files validated in this process, by (path, modification time, size)
+_LOADED: dict[tuple[str, int, int], Any] = {}
+
+
+def _load_text(text: str, source: str) -> Scene:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -1171,7 +1184,7 @@ def _continuous_save(scene: Any) -> tuple[Array, dict[str, tuple[int, ...]]]:
                 )
             per[name] = ts
     t_eval = np.unique(np.concatenate(list(per.values())))
-    index = {k: tuple(int(i) for i in np.searchsorted(t_eval, ts)) for k, ts in per.items()}
+    index = {k: tuple(np.searchsorted(t_eval, ts).tolist()) for k, ts in per.items()}
     return t_eval, index
 
 
@@ -1200,12 +1213,10 @@ def _fixed_step_save(scene: Any, h: float) -> tuple[int, int, dict[str, tuple[in
                     f"got {list(map(float, ts[bad] if np.any(bad) else ts))}",
                 )
         per[name] = ks
-    every = 0
-    for ks in per.values():
-        for k in ks:
-            every = math.gcd(every, int(k))
-    every = max(every, 1)
-    index = {name: tuple(int(k) // every for k in ks) for name, ks in per.items()}
+    every = max(int(np.gcd.reduce(np.concatenate([np.asarray(ks, dtype=np.int64)
+                                                  for ks in per.values()]))), 1)  # fmt: skip
+    index = {name: tuple((np.asarray(ks, dtype=np.int64) // every).tolist())
+             for name, ks in per.items()}  # fmt: skip
     return steps, every, index
 
 

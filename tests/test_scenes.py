@@ -641,7 +641,9 @@ def test_mv_algorithm2_scene_equals_mv_algorithm2() -> None:
     assert "mv_algorithm2" in r.plan.route
 
 
-REDUCED = BASE.replace("energy = {points = 6}", "energy = {points = 6, windows = 2, reduce = 'max'}")
+REDUCED = BASE.replace(
+    "energy = {points = 6}", "energy = {points = 6, windows = 2, reduce = 'max'}"
+)
 
 
 @pytest.mark.parametrize(
