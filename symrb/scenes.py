@@ -27,7 +27,9 @@ models; an error names the key, its line in the file and the allowed values
 attitude when only momenta or energies are observed, no costate sweep without a terminal cost, no
 diagnostic that is not asked for), which public functions and generated kernels to call, and the
 times at which to save (as diffrax's ``SaveAt``: the union of the observables' times, each
-observable evaluated only at its own).  :meth:`Plan.explain` prints the plan with what is skipped
+observable evaluated only at its own; a windowed observable reduced per window as
+:class:`When` describes, its unreduced series not kept; the ``*_gap`` observables compared with
+the second run of a ``[compare]`` table).  :meth:`Plan.explain` prints the plan with what is skipped
 and why, and an estimated cost.  :func:`run_scene` runs a scene and returns a
 :class:`SceneResult` (arrays, the scene, the plan, the versions), cached on disk by a SHA-256 of
 the canonical scene and of the source of the symrb modules it uses, so a rerun that changes
@@ -41,8 +43,9 @@ The systems (``system = ...``) and what each offers:
 system                 effects                         observables
 =====================  ==============================  =============================================
 rigid_body             attitude                        M, Q, Omega, energy, casimirs, manakov,
-                                                       lax_spectrum, orthogonality
-symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality, U
+                                                       lax_spectrum, orthogonality, M_gap, Q_gap
+symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality, U,
+                                                       M_gap, Q_gap
 mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
 double_bracket         (none)                          x, potential, pairing, casimirs
 orbit_extremal         terminal_cost, potential,       x, p, u
@@ -157,26 +160,52 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
+Reduction = Literal["max", "min", "max_abs", "max_abs_change", "max_rel_change"]
+#: what each reduction keeps of a window, entry by entry; x_0 is the first record
+REDUCTIONS: dict[str, str] = {
+    "max": "the largest x",
+    "min": "the smallest x",
+    "max_abs": "the largest |x|",
+    "max_abs_change": "the largest |x - x_0|",
+    "max_rel_change": "the largest |x - x_0| / |x_0|",
+}
+
+
 class When(_Model):
-    """When to record an observable: exactly one of ``end``, ``every``, ``times``, ``points``.
+    r"""When to record an observable: exactly one of ``end``, ``every``, ``times``, ``points``;
+    optionally reduced per window (``windows`` with ``reduce``).
 
     In TOML: ``"end"`` (the final state only), ``{every = k}`` (every k-th step of a fixed-step
     integrator or training step), ``{times = [t1, t2, ...]}`` (chosen times in ``[0, T]``) or
     ``{points = K}`` (K equally spaced times from 0 to T).
 
+    A windowed reduction, ``{points = 1001, windows = 25, reduce = "max_rel_change"}``, splits
+    the records (the first one included) into ``windows`` consecutive blocks of nearly equal
+    size (as ``numpy.array_split``) and keeps, per block and per entry of the observable, one
+    value: the largest ``x`` (``"max"``), the smallest (``"min"``), the largest :math:`|x|`
+    (``"max_abs"``), the largest :math:`|x - x_0|` (``"max_abs_change"``) or
+    :math:`|x - x_0|/|x_0|` (``"max_rel_change"``), :math:`x_0` being the first record.  The
+    time of a window is that of its last record.  A list of reductions,
+    ``reduce = ["min", "max"]``, keeps each, stacked on axis 1 in the order given.  The
+    unreduced series is not kept.
+
     Examples
     --------
     >>> from symrb.scenes import When
     >>> When.model_validate("end")
-    When(end=True, every=None, times=None, points=None)
+    When(end=True, every=None, times=None, points=None, windows=None, reduce=None)
     >>> When.model_validate({"points": 3}).describe()
     '3 equally spaced times in [0, T]'
+    >>> When.model_validate({"every": 1, "windows": 20, "reduce": "max_abs_change"}).describe()
+    'every 1 steps, reduced to the largest |x - x_0| over each of 20 windows'
     """
 
     end: bool = False
     every: int | None = Field(default=None, ge=1)
     times: tuple[float, ...] | None = None
     points: int | None = Field(default=None, ge=2)
+    windows: int | None = Field(default=None, ge=1)
+    reduce: Reduction | tuple[Reduction, ...] | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -202,17 +231,42 @@ class When(_Model):
             not self.times or any(b <= a for a, b in zip(self.times, self.times[1:], strict=False))
         ):
             raise ValueError(f"times must be a non-empty increasing list, got {list(self.times)}")
+        if (self.windows is None) != (self.reduce is None):
+            has, lacks = ("windows", "reduce") if self.reduce is None else ("reduce", "windows")
+            raise ValueError(
+                f"{has} needs {lacks}: a windowed reduction gives both, e.g. "
+                '{points = 1001, windows = 25, reduce = "max_abs_change"}'
+            )
+        if self.windows is not None and self.end:
+            raise ValueError("a windowed reduction needs a series: give every, times or points, "
+                             "not end")  # fmt: skip
+        if isinstance(self.reduce, tuple) and (
+            not self.reduce or len(set(self.reduce)) != len(self.reduce)
+        ):
+            raise ValueError(f"reduce must list distinct reductions, got {list(self.reduce)}")
         return self
+
+    @property
+    def reductions(self) -> tuple[str, ...]:
+        """The reductions asked for, as a tuple (empty without a windowed reduction)."""
+        if self.reduce is None:
+            return ()
+        return (self.reduce,) if isinstance(self.reduce, str) else tuple(self.reduce)
 
     def describe(self) -> str:
         """The request in words."""
         if self.end:
             return "at the end"
         if self.every is not None:
-            return f"every {self.every} steps"
-        if self.points is not None:
-            return f"{self.points} equally spaced times in [0, T]"
-        return f"at t = {list(self.times or ())}"
+            what = f"every {self.every} steps"
+        elif self.points is not None:
+            what = f"{self.points} equally spaced times in [0, T]"
+        else:
+            what = f"at t = {list(self.times or ())}"
+        if self.windows is not None:
+            red = " and ".join(REDUCTIONS[r] for r in self.reductions)
+            what += f", reduced to {red} over each of {self.windows} windows"
+        return what
 
 
 class TimeHorizon(_Model):
@@ -251,6 +305,23 @@ class Discrete(_Model):
 
     kind: Literal["discrete"]
     h: float = Field(gt=0)
+
+
+class MVAlgorithm2(_Model):
+    """The paper's MV-Algorithm 2 (``symrb.mv_algorithm2``) at step ``h``: started from
+    :math:`(Q_0, hM_0)`, its discrete momenta divided by ``h`` are recorded as ``M``."""
+
+    kind: Literal["mv_algorithm2"]
+    h: float = Field(gt=0)
+
+
+class Compare(_Model):
+    """A second run on the same parameters (the same initial data), for the ``*_gap``
+    observables: ``integrator`` (required) and ``system`` (default: the scene's own; the rigid
+    body and the symmetric rigid body describe the same motion)."""
+
+    system: Literal["rigid_body", "symmetric_rigid_body"] | None = None
+    integrator: Annotated[Continuous | MV | MVAlgorithm2 | Discrete, Field(discriminator="kind")]
 
 
 class DoubleBracketIVP(_Model):
@@ -311,11 +382,16 @@ class OrbitParameters(_Model):
 
 class NetworkParameters(_Model):
     """The ResNet of Section 2, Remark 1 on ``symrb.toy_classification(samples, seed)``, with
-    ``layers`` layers of width 2, started from zero weights."""
+    ``layers`` layers of width 2, started from zero biases and the weights ``K0_scale`` times
+    standard normal numbers drawn from ``numpy.random.default_rng(K0_seed)`` (zero weights when
+    ``K0_scale = 0``, the default)."""
 
     layers: int = Field(default=4, ge=1)
     samples: int = Field(default=200, ge=1)
     seed: int = 0
+    #: the initial weights K are K0_scale times standard normal numbers from K0_seed (0: zeros)
+    K0_scale: float = Field(default=0.0, ge=0)
+    K0_seed: int = 0
 
 
 _ALL_EFFECTS = ("attitude", "samples", "terminal_cost", "potential", "costates")
@@ -365,23 +441,34 @@ class RigidBodyScene(_SceneBase):
     --------
     >>> from symrb.scenes import RigidBodyScene
     >>> RigidBodyScene.EFFECTS, sorted(RigidBodyScene.OBSERVABLES)  # doctest: +NORMALIZE_WHITESPACE
-    (('attitude',), ['M', 'Omega', 'Q', 'casimirs', 'energy', 'lax_spectrum', 'manakov',
-    'orthogonality'])
+    (('attitude',), ['M', 'M_gap', 'Omega', 'Q', 'Q_gap', 'casimirs', 'energy', 'lax_spectrum',
+    'manakov', 'orthogonality'])
     """
 
     EFFECTS = ("attitude",)
     OBSERVABLES = {
         "M": None, "Omega": None, "energy": None, "casimirs": None, "manakov": None,
-        "lax_spectrum": None, "Q": "attitude", "orthogonality": "attitude",
+        "lax_spectrum": None, "Q": "attitude", "orthogonality": "attitude", "M_gap": None,
+        "Q_gap": "attitude",
     }  # fmt: skip
     system: Literal["rigid_body"]
     parameters: BodyParameters = BodyParameters()
-    integrator: Annotated[Continuous | MV | Discrete, Field(discriminator="kind")]
+    integrator: Annotated[Continuous | MV | MVAlgorithm2 | Discrete, Field(discriminator="kind")]
     horizon: TimeHorizon
+    compare: Compare | None = None
     observables: dict[
         Literal[
-            "M", "Omega", "energy", "casimirs", "manakov", "lax_spectrum", "Q", "orthogonality"
-        ],
+            "M",
+            "Omega",
+            "energy",
+            "casimirs",
+            "manakov",
+            "lax_spectrum",
+            "Q",
+            "orthogonality",
+            "M_gap",
+            "Q_gap",
+        ],  # fmt: skip
         When,
     ]
 
@@ -394,19 +481,22 @@ class SymmetricRigidBodyScene(_SceneBase):
     --------
     >>> from symrb.scenes import SymmetricRigidBodyScene
     >>> SymmetricRigidBodyScene.EFFECTS, sorted(SymmetricRigidBodyScene.OBSERVABLES)
-    (('samples',), ['H', 'M', 'P', 'Q', 'U', 'energy', 'orthogonality'])
+    (('samples',), ['H', 'M', 'M_gap', 'P', 'Q', 'Q_gap', 'U', 'energy', 'orthogonality'])
     """
 
     EFFECTS = ("samples",)
     OBSERVABLES = {
         "Q": None, "P": None, "M": None, "H": None, "energy": None, "orthogonality": None,
-        "U": "samples",
+        "U": "samples", "M_gap": None, "Q_gap": None,
     }  # fmt: skip
     system: Literal["symmetric_rigid_body"]
     parameters: BodyParameters = BodyParameters()
     integrator: Annotated[Continuous | Discrete, Field(discriminator="kind")]
     horizon: TimeHorizon
-    observables: dict[Literal["Q", "P", "M", "H", "energy", "orthogonality", "U"], When]
+    compare: Compare | None = None
+    observables: dict[
+        Literal["Q", "P", "M", "H", "energy", "orthogonality", "U", "M_gap", "Q_gap"], When
+    ]
 
 
 class McLachlanScovelScene(_SceneBase):
@@ -597,15 +687,18 @@ def _model_at(model: Any, loc: Sequence[Any]) -> Any:
     return cur
 
 
-_KIND_TAGS = ("continuous", "mv", "discrete", "bvp", "gradient_descent")
+_KIND_TAGS = ("continuous", "mv", "mv_algorithm2", "discrete", "bvp", "gradient_descent")
 
 
 def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
-    out = [str(x) for x in loc]
+    # the members of a union (a reduction or a list of them) are not keys
+    out = [str(x) for x in loc if not re.match(r"^(literal|tuple)\[", str(x))]
     if out and system is not None and out[0] == system:
         out = out[1:]
-    if len(out) > 1 and out[0] == "integrator" and out[1] in _KIND_TAGS:
-        out.pop(1)
+    for i in range(len(out) - 1):
+        if out[i] == "integrator" and out[i + 1] in _KIND_TAGS:
+            out.pop(i + 1)
+            break
     if len(out) > 2 and out[0] == "observables" and out[2] in ("[key]",):
         out = out[:2]
     return tuple(out)
@@ -615,7 +708,7 @@ def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: st
     system = data.get("system") if isinstance(data, Mapping) else None
     model = _SYSTEMS.get(system) if isinstance(system, str) else None
     lines = _toml_lines(text) if text is not None else {}
-    problems = []
+    problems: list[dict[str, Any]] = []
     for err in exc.errors():
         loc = _clean_loc(err["loc"], system if model is not None else None)
         # a bad key of the observables table: pydantic reports (observables, name, [key])
@@ -647,6 +740,8 @@ def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: st
         elif err["type"] in ("union_tag_invalid", "union_tag_not_found"):
             got = (err.get("ctx") or {}).get("tag")
             msg = f"unknown system {got!r}" if got is not None else "system is required"
+        if any(q["key"] == ".".join(loc) for q in problems):
+            continue  # one problem per key: the first member of a union that failed
         problems.append({"key": ".".join(loc), "line": line, "message": msg, "allowed": allowed})
     return SceneError(problems, source)
 
@@ -711,6 +806,22 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
                 "allowed": [o for o, e in type(scene).OBSERVABLES.items()
                             if e is None or e in scene.effects],
             })  # fmt: skip
+    compare = getattr(scene, "compare", None)
+    gaps = [name for name in scene.observables if name.endswith("_gap")]
+    if gaps and compare is None:
+        problems.append({
+            "key": f"observables.{gaps[0]}",
+            "line": lines.get(("observables", gaps[0])) or lines.get(("observables",)),
+            "message": "needs a second run to compare with: add a [compare] table with its "
+                       "integrator", "allowed": None,
+        })  # fmt: skip
+    if compare is not None and not gaps:
+        problems.append({
+            "key": "compare", "line": lines.get(("compare",)),
+            "message": "a second run is used only by the *_gap observables; ask for one or drop "
+                       "[compare]", "allowed": [o for o in type(scene).OBSERVABLES
+                                                if o.endswith("_gap")],
+        })  # fmt: skip
     params = getattr(scene, "parameters", None)
     if params is not None and getattr(params, "samples", 1) > 1 and "samples" not in scene.effects:
         if isinstance(scene, RigidBodyScene | McLachlanScovelScene | DoubleBracketScene):
@@ -759,12 +870,25 @@ def load_scene(path_or_text: str | os.PathLike[str]) -> Scene:
     if isinstance(path_or_text, os.PathLike) or "\n" not in str(path_or_text):
         path = Path(path_or_text)
         try:
+            st = os.stat(path)
+            key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
+            if key in _LOADED:  # validated before, and unchanged since (scenes are frozen)
+                return _LOADED[key]
             text = path.read_text()
         except OSError as exc:
             raise InputError(f"scene file {str(path)!r} cannot be read: {exc}") from None
         source = path.name
-    else:
-        text, source = str(path_or_text), "scene"
+        scene = _load_text(text, source)
+        _LOADED[key] = scene
+        return scene
+    return _load_text(str(path_or_text), "scene")
+
+
+#: scene files validated in this process, by (path, modification time, size)
+_LOADED: dict[tuple[str, int, int], Any] = {}
+
+
+def _load_text(text: str, source: str) -> Scene:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -820,9 +944,12 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
         from .learning import toy_classification
 
         x0, targets, labels = toy_classification(p.samples, seed=p.seed)
+        shape = (p.layers, 2, 2)
+        K0 = (p.K0_scale * np.random.default_rng(p.K0_seed).standard_normal(shape)
+              if p.K0_scale > 0 else np.zeros(shape))  # fmt: skip
         return {
             "x0": x0, "targets": targets, "labels": labels,
-            "K0": np.zeros((p.layers, 2, 2)), "beta0": np.zeros((p.layers, 2)),
+            "K0": K0, "beta0": np.zeros((p.layers, 2)),
         }  # fmt: skip
     rng = np.random.default_rng(p.seed)
     n = p.n
@@ -931,6 +1058,11 @@ class Plan:
         Further remarks (e.g. what changes against a scene with more effects).
     modules : tuple of str
         The symrb modules the run uses (their source enters the cache key).
+    windows : dict
+        Observable -> (its reductions, the number of windows) for the windowed observables:
+        their records are reduced per window and the unreduced series is not kept.
+    compare : Plan or None
+        The plan of the second run of the ``*_gap`` observables.
 
     Examples
     --------
@@ -958,6 +1090,8 @@ class Plan:
     cost: dict[str, Any]
     notes: tuple[str, ...]
     modules: tuple[str, ...]
+    windows: dict[str, tuple[tuple[str, ...], int]] = dataclasses.field(default_factory=dict)
+    compare: Plan | None = None
 
     def explain(self) -> str:
         """The plan in words (what ``symrb run --explain`` prints)."""
@@ -970,6 +1104,16 @@ class Plan:
         out.append(f"save        {save}")
         for name, (when, count) in self.record.items():
             out.append(f"record      {name}: {when} ({count} record{'s' * (count != 1)})")
+        for name, (reds, w) in self.windows.items():
+            raw = len(self.index[name])
+            out.append(f"reduce      {name}: {raw} records -> {w} windows of ~{raw / w:.3g} "
+                       f"({', '.join(reds)}); the {raw} unreduced values are not kept")  # fmt: skip
+        if self.compare is not None:
+            c2 = self.compare
+            gaps = [n for n in self.record if n.endswith("_gap")]
+            out.append(f"compare     {', '.join(gaps)}: the largest entry of |X - X'| against a "
+                       f"second run on the same initial data:")  # fmt: skip
+            out += ["  " + line for line in c2.explain().splitlines()]
         c = self.cost
         out.append(
             f"cost        ~{c['flops']:.2g} flops, ~{_fmt_seconds(c['seconds'])} (estimate: "
@@ -1040,7 +1184,7 @@ def _continuous_save(scene: Any) -> tuple[Array, dict[str, tuple[int, ...]]]:
                 )
             per[name] = ts
     t_eval = np.unique(np.concatenate(list(per.values())))
-    index = {k: tuple(int(i) for i in np.searchsorted(t_eval, ts)) for k, ts in per.items()}
+    index = {k: tuple(np.searchsorted(t_eval, ts).tolist()) for k, ts in per.items()}
     return t_eval, index
 
 
@@ -1069,12 +1213,10 @@ def _fixed_step_save(scene: Any, h: float) -> tuple[int, int, dict[str, tuple[in
                     f"got {list(map(float, ts[bad] if np.any(bad) else ts))}",
                 )
         per[name] = ks
-    every = 0
-    for ks in per.values():
-        for k in ks:
-            every = math.gcd(every, int(k))
-    every = max(every, 1)
-    index = {name: tuple(int(k) // every for k in ks) for name, ks in per.items()}
+    every = max(int(np.gcd.reduce(np.concatenate([np.asarray(ks, dtype=np.int64)
+                                                  for ks in per.values()]))), 1)  # fmt: skip
+    index = {name: tuple((np.asarray(ks, dtype=np.int64) // every).tolist())
+             for name, ks in per.items()}  # fmt: skip
     return steps, every, index
 
 
@@ -1136,7 +1278,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     skipped: list[tuple[str, str]] = []
     notes: list[str] = []
     state_names = {"Q", "M", "P", "B", "x", "p", "states", "K", "beta"}
-    not_asked = sorted(allowed - asked - state_names)
+    not_asked = sorted(o for o in allowed - asked - state_names if not o.endswith("_gap"))
     if not_asked:
         skipped.append((", ".join(not_asked), "not asked for (no diagnostic is evaluated unless "
                         "it is an observable)"))  # fmt: skip
@@ -1210,6 +1352,21 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
                 cost = {"flops": steps * flops, "seconds": steps * per,
                         "formula": f"{steps} steps x ~{_fmt_seconds(per)} a step (n = 3: one "
                         "fused kernel call; else ~4 solver sweeps of two n^3 products)"}  # fmt: skip
+            elif isinstance(integ, MVAlgorithm2):
+                modules += ("discrete", "solvers", "_generated.discrete_rigid_body",
+                            "_progress")  # fmt: skip
+                route = (f"symrb.mv_algorithm2(Q0, h M0, lam, steps) with h={integ.h:g} (the "
+                         "paper's MV-Algorithm 2; its discrete momenta divided by h)")  # fmt: skip
+                propagated = ("Q", "M")
+                if not attitude:
+                    skipped.pop()
+                    notes.append("MV-Algorithm 2 steps Q_{k+1} = Q_k Omega_{k+1}^T itself, so Q "
+                                 "is propagated, though not recorded")  # fmt: skip
+                kernels = ("discrete_rigid_body.mv_transport",)
+                per = 40e-6 + 16.0 * n**3 / 1.5e9
+                cost = {"flops": steps * 16.0 * n**3, "seconds": steps * per,
+                        "formula": f"{steps} steps x ~{_fmt_seconds(per)} (one solve of "
+                        "J_D(Omega^T) = M a step)"}  # fmt: skip
             else:
                 modules += ("discrete", "solvers", "_generated.discrete_rigid_body",
                             "_generated.symmetric_rigid_body", "_progress")  # fmt: skip
@@ -1353,7 +1510,35 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
                 index[name] = tuple(range(0, steps + 1, when.every))
             else:
                 index[name] = (steps,)
-    record = {name: (obs[name].describe(), len(index[name])) for name in obs}
+    compare = None
+    if getattr(sc, "compare", None) is not None:
+        compare = plan_scene(_compare_scene(sc))
+        mine = "t_eval" in save
+        if mine != ("t_eval" in compare.save):
+            raise _problem("compare.integrator.kind",
+                           "the second run must record at the same times: an adaptive "
+                           "integrator compares with an adaptive one, a fixed step with a fixed "
+                           "step", ["continuous"] if mine else ["mv", "mv_algorithm2",
+                                                                "discrete"])  # fmt: skip
+        if not mine and sc.compare.integrator.h != integ.h:
+            raise _problem("compare.integrator.h",
+                           f"the second run must step as the first, h = {integ.h:g}, got "
+                           f"{sc.compare.integrator.h:g}", [integ.h])  # fmt: skip
+        modules += compare.modules
+        cost = {"flops": cost["flops"] + compare.cost["flops"],
+                "seconds": cost["seconds"] + compare.cost["seconds"],
+                "formula": f"this run ({cost['formula']}) plus the second run"}  # fmt: skip
+    windows: dict[str, tuple[tuple[str, ...], int]] = {}
+    for name, when in obs.items():
+        if when.windows is None:
+            continue
+        if when.windows > len(index[name]):
+            raise _problem(f"observables.{name}.windows",
+                           f"{when.windows} windows of {len(index[name])} records: give at most "
+                           "one window a record")  # fmt: skip
+        windows[name] = (when.reductions, when.windows)
+    record = {name: (obs[name].describe(), windows.get(name, ((), len(index[name])))[1])
+              for name in obs}  # fmt: skip
     return Plan(
         system=str(sc.system),
         route=route,
@@ -1366,7 +1551,37 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
         cost=cost,
         notes=tuple(notes),
         modules=tuple(dict.fromkeys(("scenes",) + modules)),
+        windows=windows,
+        compare=compare,
     )
+
+
+def _compare_scene(sc: Any) -> Any:
+    """The scene of the second run of the ``*_gap`` observables: the same parameters and
+    horizon, the integrator (and system) of ``[compare]``, recording the compared variables at
+    the gap observables' times."""
+    system = sc.compare.system or sc.system
+    gaps = {name: when for name, when in sc.observables.items() if name.endswith("_gap")}
+    observables = {
+        name.removesuffix("_gap"): when.model_dump(exclude={"windows", "reduce"},
+                                                   exclude_none=True, exclude_defaults=True)
+        for name, when in gaps.items()
+    }  # fmt: skip
+    data = {
+        "title": f"second run of {sc.title or sc.system}",
+        "system": system,
+        "effects": ["attitude"] if system == "rigid_body" and "Q_gap" in gaps else [],
+        "parameters": sc.parameters.model_dump(exclude_defaults=True),
+        "integrator": sc.compare.integrator.model_dump(),
+        "horizon": sc.horizon.model_dump(),
+        "observables": observables,
+    }
+    try:
+        return parse_scene(data, source="the [compare] run")
+    except SceneError as exc:
+        problems = [{**q, "key": f"compare.{q['key']}" if q["key"].startswith("integrator") else
+                     q["key"]} for q in exc.problems]  # fmt: skip
+        raise SceneError(problems, "scene ([compare])") from None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1453,6 +1668,15 @@ def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, 
             keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
             return dsol.t, {k: dsol.y[k] for k in keep}, "" if dsol.success else dsol.message
         return _mv_momentum(x["M0"], lam, integ.h, steps, every)
+    if isinstance(integ, MVAlgorithm2):
+        from .discrete import mv_algorithm2
+
+        dsol = mv_algorithm2(x["Q0"], integ.h * x["M0"], lam, steps, save_every=every)
+        keep = ("Q",) if "attitude" in sc.effects else ()
+        states = {k: dsol.y[k] for k in keep}
+        states["M"] = dsol.y.M / integ.h
+        return (np.asarray(dsol.k, dtype=float) * integ.h, states,
+                "" if dsol.success else dsol.message)  # fmt: skip
     if isinstance(sc, RigidBodyScene):
         from .discrete import discrete_rigid_body_flow
 
@@ -1563,8 +1787,40 @@ def _run_resnet(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
     return {"times": times, "data": data, "failure": ""}
 
 
+def _window_reduce(
+    t: Array, values: Array, windows: int, reductions: Sequence[str]
+) -> tuple[Array, Array]:
+    """Reduce a recorded series per window (see :class:`When`): (window times, values)."""
+    a = np.asarray(values)
+    blocks = np.array_split(np.arange(a.shape[0]), min(windows, a.shape[0]))
+    out = []
+    for r in reductions:
+        if r == "max_abs":
+            b = np.abs(a)
+        elif r == "max_abs_change":
+            b = np.abs(a - a[0])
+        elif r == "max_rel_change":
+            b = np.abs(a - a[0]) / np.abs(a[0])
+        else:
+            b = a
+        fn = np.min if r == "min" else np.max
+        out.append(np.stack([fn(b[i], axis=0) for i in blocks]))
+    ends = np.array([t[i[-1]] for i in blocks])
+    return ends, (out[0] if len(out) == 1 else np.stack(out, axis=1))
+
+
 def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
-    """Run a planned scene: (times per observable, data per observable, failure message)."""
+    """Run a planned scene: (times per observable, data per observable, failure message), the
+    windowed observables reduced."""
+    times, data, failure = _execute_raw(sc, plan)
+    for name, (reductions, windows) in plan.windows.items():
+        if data[name].shape[0] == 0:  # pragma: no cover - a run that failed at once
+            continue
+        times[name], data[name] = _window_reduce(times[name], data[name], windows, reductions)
+    return times, data, failure
+
+
+def _execute_raw(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
     x = scene_inputs(sc)
     if isinstance(sc, ResNetScene):
         r = _run_resnet(sc, plan, x)
@@ -1582,7 +1838,16 @@ def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], s
         whole = keep == list(range(t.shape[0]))
         y = states if whole else {k: a[keep] for k, a in states.items()}
         times[name] = t[keep]
-        data[name] = np.asarray(_body_observable(name, y, x["lam"]))
+        data[name] = np.asarray(_body_observable(name.removesuffix("_gap"), y, x["lam"]))
+    del states
+    if plan.compare is not None:
+        _, other, failed = _execute(_compare_scene(sc), plan.compare)
+        failure = failure or (f"the [compare] run: {failed}" if failed else "")
+        for name in [k for k in data if k.endswith("_gap")]:
+            mine, theirs = data[name], other[name.removesuffix("_gap")]
+            k = min(mine.shape[0], theirs.shape[0])
+            times[name] = times[name][:k]
+            data[name] = np.abs(mine[:k] - theirs[:k]).max(axis=(-2, -1))
     return times, data, failure
 
 

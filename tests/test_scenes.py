@@ -524,3 +524,165 @@ def test_killed_worker_loses_nothing(cluster_client, tmp_path) -> None:
     for a, b in zip(serial.results, res.results, strict=True):
         _same(a["M"], b["M"])
     cluster_client.wait_for_workers(2, timeout=60)
+
+
+# ---------------------------------------------------------------------------------------------
+# windowed reductions, a second run to compare with, MV-Algorithm 2
+
+
+def _windows(t, values, w, how):
+    """The reduction written out by hand: numpy.array_split blocks, the last time of each."""
+    a = np.asarray(values)
+    blocks = np.array_split(np.arange(len(a)), w)
+    if how == "max_abs":
+        ref = np.abs(a)
+    elif how == "max_abs_change":
+        ref = np.abs(a - a[0])
+    elif how == "max_rel_change":
+        ref = np.abs(a - a[0]) / np.abs(a[0])
+    else:
+        ref = a
+    fn = np.min if how == "min" else np.max
+    return np.array([t[b[-1]] for b in blocks]), np.stack([fn(ref[b], axis=0) for b in blocks])
+
+
+def test_windowed_reductions_equal_hand_written_calls() -> None:
+    obs = {
+        "manakov": {"points": 41, "windows": 6, "reduce": "max_rel_change"},
+        "energy": {"points": 41, "windows": 6, "reduce": "max_abs_change"},
+        "M": {"points": 41, "windows": 5, "reduce": ["min", "max"]},
+        "casimirs": {"points": 41, "windows": 4, "reduce": "max_abs"},
+    }
+    sc = _rb(n=4, observables=obs)
+    r = run_scene(sc, cache=False)
+    x = scene_inputs(sc)
+    t = np.linspace(0.0, 5.0, 41)
+    sol = symrb.integrate(RigidBodyMomentum, (0, 5.0), {"M": x["M0"]}, lam=x["lam"], rtol=1e-9,
+                          t_eval=t)  # fmt: skip
+    M = sol.y.M
+    for name, values, w, how in [
+        ("manakov", symrb.manakov_integrals(M, x["lam"]), 6, "max_rel_change"),
+        ("energy", symrb.kinetic_energy(M, x["lam"]), 6, "max_abs_change"),
+        ("casimirs", symrb.casimir_traces(M), 4, "max_abs"),
+    ]:
+        tw, ref = _windows(t, values, w, how)
+        _same(r.times[name], tw)
+        _same(r[name], ref)
+    tw, low = _windows(t, M, 5, "min")
+    _, high = _windows(t, M, 5, "max")
+    _same(r.times["M"], tw)
+    _same(r["M"], np.stack([low, high], axis=1))
+    plan = r.plan
+    assert plan.windows["M"] == (("min", "max"), 5) and plan.record["M"][1] == 5
+    text = plan.explain()
+    assert "reduce      M: 41 records -> 5 windows" in text and "not kept" in text
+
+
+def test_windowed_loss_and_initial_weights_equal_train() -> None:
+    sc = parse_scene(
+        {"system": "resnet", "effects": ["terminal_cost"],
+         "parameters": {"layers": 3, "samples": 30, "seed": 2, "K0_scale": 0.1, "K0_seed": 5},
+         "integrator": {"kind": "gradient_descent", "lr": 0.01}, "horizon": {"steps": 20},
+         "observables": {"loss": {"every": 1, "windows": 4, "reduce": ["min", "max"]}}}
+    )  # fmt: skip
+    r = run_scene(sc, cache=False)
+    x0, targets, _ = symrb.toy_classification(30, seed=2)
+    K0 = 0.1 * np.random.default_rng(5).standard_normal((3, 2, 2))
+    tr = symrb.train(x0, targets, K0, np.zeros((3, 2)), steps=20, lr=0.01)
+    steps = np.arange(21.0)
+    tw, low = _windows(steps, tr.losses, 4, "min")
+    _, high = _windows(steps, tr.losses, 4, "max")
+    _same(r.times["loss"], tw)
+    _same(r["loss"], np.stack([low, high], axis=1))
+
+
+def test_gap_equals_two_hand_written_runs() -> None:
+    sc = parse_scene(
+        {"system": "symmetric_rigid_body", "parameters": {"n": 4, "seed": 3, "Q0": "random"},
+         "integrator": {"kind": "continuous", "rtol": 1e-7, "atol": 1e-9},
+         "compare": {"system": "rigid_body",
+                     "integrator": {"kind": "continuous", "rtol": 1e-11, "atol": 1e-13}},
+         "horizon": {"T": 4.0},
+         "observables": {"M_gap": {"points": 21, "windows": 5, "reduce": "max"},
+                         "Q_gap": {"times": [1.0, 4.0]}}}
+    )  # fmt: skip
+    r = run_scene(sc, cache=False)
+    x = scene_inputs(sc)
+    t_eval = np.unique(np.r_[np.linspace(0, 4.0, 21), 1.0, 4.0])
+    sym = symrb.integrate(symrb.SymmetricRigidBody, (0, 4.0), {"Q": x["Q0"], "P": x["P0"]},
+                          lam=x["lam"], rtol=1e-7, atol=1e-9, t_eval=t_eval)  # fmt: skip
+    # the second run: the rigid body with its attitude (Q_gap asks for Q) at its own times
+    rb = symrb.integrate(symrb.RigidBody, (0, 4.0), {"Q": x["Q0"], "M": x["M0"]}, lam=x["lam"],
+                         rtol=1e-11, atol=1e-13, t_eval=t_eval)  # fmt: skip
+    gap = np.abs(sym.y.M - rb.y.M).max(axis=(-2, -1))
+    tw, ref = _windows(t_eval, gap, 5, "max")
+    _same(r.times["M_gap"], tw)
+    _same(r["M_gap"], ref)
+    pick = np.searchsorted(t_eval, [1.0, 4.0])
+    _same(r["Q_gap"], np.abs(sym.y.Q[pick] - rb.y.Q[pick]).max(axis=(-2, -1)))
+    assert 1e-9 < r["M_gap"].max() < 1e-5
+    text = r.plan.explain()
+    assert "compare     M_gap, Q_gap" in text and "  propagated  Q, M" in text
+    assert r.plan.compare is not None and "RigidBody," in r.plan.compare.route
+
+
+def test_mv_algorithm2_scene_equals_mv_algorithm2() -> None:
+    sc = _rb(n=3, effects=["attitude"], integrator={"kind": "mv_algorithm2", "h": 0.5}, T=20.0,
+             observables={"M": {"every": 5}, "orthogonality": {"every": 1, "windows": 4,
+                                                               "reduce": "max_abs"}})  # fmt: skip
+    r = run_scene(sc, cache=False)
+    x = scene_inputs(sc)
+    sol = symrb.mv_algorithm2(x["Q0"], 0.5 * x["M0"], x["lam"], 40)
+    _same(r["M"], sol.y.M[::5] / 0.5)
+    _same(r.times["M"], np.arange(0, 41, 5) * 0.5)
+    Q = sol.y.Q
+    orth = np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3)).max(axis=(-2, -1))
+    _same(r["orthogonality"], _windows(np.arange(41) * 0.5, orth, 4, "max_abs")[1])
+    assert "mv_algorithm2" in r.plan.route
+
+
+REDUCED = BASE.replace(
+    "energy = {points = 6}", "energy = {points = 6, windows = 2, reduce = 'max'}"
+)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "key", "allowed"),
+    [
+        ("reduce = 'max'", "reduce = 'mean'", "observables.energy.reduce", ["max", "min"]),
+        (", reduce = 'max'", "", "observables.energy", None),
+        ("windows = 2", "windows = 0", "observables.energy.windows", None),
+        ("reduce = 'max'", "reduce = ['max', 'max']", "observables.energy", None),
+    ],
+)
+def test_reduction_errors_name_key_and_line(old, new, key, allowed) -> None:
+    text = REDUCED.replace(old, new)
+    p = _problem(text)
+    assert p["key"] == key, p
+    assert p["line"] == 17
+    if allowed is not None:
+        assert set(allowed) <= set(p["allowed"]), p
+
+
+def test_reduction_and_compare_requests_the_run_cannot_meet() -> None:
+    with pytest.raises(SceneError, match=r"observables.energy.windows.*7 windows of 6 records"):
+        plan_scene(_rb(observables={"energy": {"points": 6, "windows": 7, "reduce": "max"}}))
+    with pytest.raises(SceneError, match=r"observables.M_gap.*\[compare\]"):
+        parse_scene(_rb().model_dump() | {"observables": {"M_gap": "end"}})
+    with pytest.raises(SceneError, match=r"compare.*_gap"):
+        parse_scene(_rb().model_dump() | {"compare": {"integrator": {"kind": "continuous"}}})
+    mv = {"kind": "mv", "h": 0.1}
+
+    def gap_scene(integrator, compare):
+        return {"system": "rigid_body", "parameters": {"n": 3}, "integrator": integrator,
+                "horizon": {"T": 1.0}, "observables": {"M_gap": "end"}, "compare": compare}  # fmt: skip
+
+    with pytest.raises(SceneError, match=r"compare.integrator.kind"):
+        plan_scene(gap_scene({"kind": "continuous"}, {"integrator": mv}))
+    with pytest.raises(SceneError, match=r"compare.integrator.h"):
+        plan_scene(gap_scene({"kind": "mv", "h": 0.5}, {"integrator": mv}))
+    with pytest.raises(SceneError, match=r"compare.integrator.kind"):
+        plan_scene(gap_scene(mv, {"system": "symmetric_rigid_body", "integrator": mv}))
+    assert plan_scene(gap_scene(mv, {"integrator": {"kind": "discrete", "h": 0.1}})).compare
+    with pytest.raises(SceneError, match=r"windowed reduction needs a series"):
+        _rb(observables={"energy": {"end": True, "windows": 2, "reduce": "max"}})
