@@ -139,7 +139,7 @@ class SceneError(InputError):
     ...     load_scene(text + '[observables]\\nM = "end"\\n')
     ... except SceneError as exc:
     ...     print(exc.problems[0]["key"], exc.problems[0]["line"], exc.problems[0]["allowed"])
-    integrator.kind 3 ['continuous', 'mv', 'discrete']
+    integrator.kind 3 ['continuous', 'mv', 'mv_algorithm2', 'discrete']
     """
 
     def __init__(self, problems: list[dict[str, Any]], source: str = "scene") -> None:
