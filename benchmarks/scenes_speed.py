@@ -11,8 +11,9 @@
 
 The in-process pairs (1 and 2) are timed in CPU seconds of this process (``time.process_time``),
 so that other work on a shared machine does not land in one side of a pair; they take 21
-interleaved repeats by default, and each reports the median of its per-pair ratios next to the
-ratio of medians.  The cached reruns and the Dask sweep (which runs in other processes) are
+interleaved repeats by default, and their ratio is the median of the per-pair ratios (a pair runs
+back to back, so a slow spell of the machine slows both of its halves), with the ratio of the
+medians reported next to it.  The cached reruns and the Dask sweep (which runs in other processes) are
 wall-clock (``time.perf_counter``).  BLAS is pinned to one thread (threadpoolctl) in this process
 and in the workers.  Only the ratios of one run mean anything.
 
@@ -120,7 +121,8 @@ def run(repeats: int = 5, sweep_repeats: int = 3, pair_repeats: int = 21) -> dic
             "scene": "rigid_body n = 10, T = 100, DOP853 rtol 1e-10, energy at 101 times, M at T",
             "momentum_only_seconds": a,
             "with_attitude_seconds": b,
-            "ratio": b["median"] / a["median"],
+            "ratio": b["pair_ratio_median"],
+            "ratio_of_medians": b["median"] / a["median"],
             "goal": ">= 2",
             "nfev": {
                 "momentum_only": _nfev(m_only),
@@ -135,7 +137,8 @@ def run(repeats: int = 5, sweep_repeats: int = 3, pair_repeats: int = 21) -> dic
             "scene": "rigid_body n = 10, T = 100, Moser-Veselov engine h = 0.1 (1000 steps)",
             "momentum_only_seconds": a,
             "with_attitude_seconds": b,
-            "ratio": b["median"] / a["median"],
+            "ratio": b["pair_ratio_median"],
+            "ratio_of_medians": b["median"] / a["median"],
             "note": "the momentum map skips only the product Q U of each step; the Newton solve "
             "of U Lambda - Lambda U^T = h M dominates",
         }
@@ -156,8 +159,8 @@ def run(repeats: int = 5, sweep_repeats: int = 3, pair_repeats: int = 21) -> dic
             "scene": "the attitude scene of 1 against symrb.integrate + symrb.kinetic_energy",
             "scene_seconds": a,
             "hand_written_seconds": b,
-            "ratio": a["median"] / b["median"],
-            "pair_ratio_median": a["pair_ratio_median"],
+            "ratio": a["pair_ratio_median"],
+            "ratio_of_medians": a["median"] / b["median"],
             "goal": "<= 1.1",
         }
 
