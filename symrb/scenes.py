@@ -2257,7 +2257,7 @@ def sweep(
     scheduler: str | None = None,
     local_cluster: int | None = None,
     client: Any = None,
-    chunk_seconds: float = 0.05,
+    chunk_seconds: float = 0.25,
     chunk_size: int | None = None,
     retries: int = 3,
     progress: bool = False,
@@ -2283,7 +2283,9 @@ def sweep(
         An existing client (instead of ``scheduler`` / ``local_cluster``).
     chunk_seconds : float, optional
         Points are grouped into tasks of at least this many estimated seconds (from the plan),
-        as long as every worker still gets several tasks.
+        as long as every worker still gets at least two tasks. A task costs the scheduler a few
+        milliseconds on top of its points: on two cores, 64 points of 30 ms each ran 1.4x faster
+        than serial in tasks of one point and 1.8x to 2.2x in tasks of four to eight.
     chunk_size : int, optional
         The points per task, overriding ``chunk_seconds``.
     retries : int, optional
@@ -2363,7 +2365,7 @@ def _dask_sweep(
         nworkers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})) or 1)
         est = max(plan_scene(points[0][1]).cost["seconds"], 1e-6)
         size = max(1, math.ceil(chunk_seconds / est))
-        size = min(size, max(1, len(points) // (4 * nworkers)))
+        size = min(size, max(1, len(points) // (2 * nworkers)))
         if chunk_size is not None:
             size = v.count(chunk_size, "chunk_size", 1)
         chunks = [list(range(i, min(i + size, len(points)))) for i in range(0, len(points), size)]
