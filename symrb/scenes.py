@@ -2178,7 +2178,9 @@ def expand_grid(
     """
     import itertools
 
-    base = parse_scene(scene).model_dump(mode="json")
+    # only the keys the scene sets: a default filled in for one integrator (the order of "mv")
+    # must not follow a grid point to another kind that has no such key
+    base = parse_scene(scene).model_dump(mode="json", exclude_unset=True)
     if not isinstance(grid, Mapping):
         parsed: dict[str, list[Any]] = {}
         for item in grid:

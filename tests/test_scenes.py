@@ -641,6 +641,21 @@ def test_mv_algorithm2_scene_equals_mv_algorithm2() -> None:
     assert "mv_algorithm2" in r.plan.route
 
 
+def test_sweep_over_the_integrator_kind() -> None:
+    # "mv" fills in its default order; a grid point of another kind must not inherit that key
+    sc = _rb(n=3, effects=["attitude"], integrator={"kind": "mv", "h": 0.5}, T=10.0,
+             observables={"energy": {"every": 4}})  # fmt: skip
+    out = sweep(sc, {"integrator.kind": ["mv", "mv_algorithm2"]}, cache=False, progress=False)
+    assert list(out.table["integrator.kind"]) == ["mv", "mv_algorithm2"]
+    x = scene_inputs(sc)
+    ref = symrb.mv_algorithm2(x["Q0"], 0.5 * x["M0"], x["lam"], 20, save_every=4)
+    _same(out.results[1]["energy"], symrb.kinetic_energy(ref.y.M / 0.5, x["lam"]))
+    assert "mv_algorithm2" in out.results[1].plan.route and "mv_flow" in out.results[0].plan.route
+    with pytest.raises(SceneError, match="integrator.order"):  # set by the user: named
+        sweep(_rb(n=3, integrator={"kind": "mv", "h": 0.5, "order": 4}),
+              {"integrator.kind": ["mv_algorithm2"]}, cache=False, progress=False)  # fmt: skip
+
+
 REDUCED = BASE.replace(
     "energy = {points = 6}", "energy = {points = 6, windows = 2, reduce = 'max'}"
 )
