@@ -44,7 +44,8 @@ system                 effects                         observables
 =====================  ==============================  =============================================
 rigid_body             attitude                        M, Q, Omega, energy, casimirs, manakov,
                                                        lax_spectrum, orthogonality, M_gap, Q_gap
-symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality, U,
+symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality,
+                                                       P_orthogonality, gram_spectrum, U,
                                                        M_gap, Q_gap
 mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
 double_bracket         (none)                          x, potential, pairing, casimirs
@@ -369,6 +370,27 @@ class BodyParameters(_Model):
     samples: int = Field(default=1, ge=1)
 
 
+class SymmetricBodyParameters(BodyParameters):
+    r"""A body for the symmetric rigid body, with ``start``: where :math:`(Q_0, P_0)` comes from.
+
+    ``"momentum"`` (the default): :math:`Q_0` as ``Q0`` says and :math:`P_0 = P(Q_0, M_0)`
+    (:func:`symrb.P_from_M`), so that :math:`Q_0^TP_0 - P_0^TQ_0 = M_0`. ``"rotations"``:
+    :math:`(Q_0, P_0)` = ``random_SO(n, (2,), seed=seed)``, a Haar-random pair in
+    :math:`SO(n)^2`. ``"general"``: :math:`(Q_0, P_0)` with standard normal entries from
+    ``numpy.random.default_rng(seed)``, a point of :math:`\mathfrak{gl}(n)^2` off
+    :math:`SO(n)^2`. The last two take neither ``M0``, ``momentum`` nor ``Q0``."""
+
+    start: Literal["momentum", "rotations", "general"] = "momentum"
+
+    @model_validator(mode="after")
+    def _start_alone(self) -> SymmetricBodyParameters:
+        if self.start != "momentum":
+            given = sorted({"M0", "momentum", "Q0", "samples"} & self.model_fields_set)
+            if given:
+                raise ValueError(f"start = {self.start!r} draws Q0 and P0 itself; remove {given}")
+        return self
+
+
 class OrbitParameters(_Model):
     """An adjoint orbit of so(n): ``x0`` (3-vector or matrix; with samples, a list of them) and
     the fixed element ``N``; default random from ``seed``."""
@@ -481,22 +503,29 @@ class SymmetricRigidBodyScene(_SceneBase):
     --------
     >>> from symrb.scenes import SymmetricRigidBodyScene
     >>> SymmetricRigidBodyScene.EFFECTS, sorted(SymmetricRigidBodyScene.OBSERVABLES)
-    (('samples',), ['H', 'M', 'M_gap', 'P', 'Q', 'Q_gap', 'U', 'energy', 'orthogonality'])
+    ... # doctest: +NORMALIZE_WHITESPACE
+    (('samples',), ['H', 'M', 'M_gap', 'P', 'P_orthogonality', 'Q', 'Q_gap', 'U', 'energy',
+     'gram_spectrum', 'orthogonality'])
     """
 
     EFFECTS = ("samples",)
     OBSERVABLES = {
         "Q": None, "P": None, "M": None, "H": None, "energy": None, "orthogonality": None,
-        "U": "samples", "M_gap": None, "Q_gap": None,
+        "P_orthogonality": None, "gram_spectrum": None, "U": "samples", "M_gap": None,
+        "Q_gap": None,
     }  # fmt: skip
     system: Literal["symmetric_rigid_body"]
-    parameters: BodyParameters = BodyParameters()
+    parameters: SymmetricBodyParameters = SymmetricBodyParameters()
     integrator: Annotated[Continuous | Discrete, Field(discriminator="kind")]
     horizon: TimeHorizon
     compare: Compare | None = None
     observables: dict[
-        Literal["Q", "P", "M", "H", "energy", "orthogonality", "U", "M_gap", "Q_gap"], When
-    ]
+        Literal[
+            "Q", "P", "M", "H", "energy", "orthogonality", "P_orthogonality", "gram_spectrum",
+            "U", "M_gap", "Q_gap",
+        ],
+        When,
+    ]  # fmt: skip
 
 
 class McLachlanScovelScene(_SceneBase):
@@ -979,9 +1008,16 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
         np.eye(n), batch + (n, n)).copy()  # fmt: skip
     out: dict[str, Any] = {"lam": lam, "Q0": Q0, "M0": M0}
     if isinstance(scene, SymmetricRigidBodyScene):
-        from .continuous import P_from_M
+        from .continuous import P_from_M, symmetric_momentum
 
-        out["P0"] = P_from_M(Q0, M0)
+        start = scene.parameters.start
+        if start == "momentum":
+            out["P0"] = P_from_M(Q0, M0)
+        else:
+            pair = (random_SO(n, (2,), seed=p.seed) if start == "rotations"
+                    else np.random.default_rng(p.seed).standard_normal((2, n, n)))  # fmt: skip
+            out["Q0"], out["P0"] = pair[0], pair[1]
+            out["M0"] = symmetric_momentum(pair[0], pair[1])
     if isinstance(scene, McLachlanScovelScene):
         out["B0"] = Q0 @ M0
     return out
@@ -1620,6 +1656,12 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
         return out
     if name == "orthogonality":
         return _orth_error(y["Q"])
+    if name == "P_orthogonality":
+        return _orth_error(y["P"])
+    if name == "gram_spectrum":  # conserved by the symmetric field on all of gl(n)^2 (S12)
+        Q = y["Q"]
+        spec: Array = np.asarray(np.linalg.eigvalsh(np.swapaxes(Q, -1, -2) @ Q), dtype=float)
+        return spec
     if name == "H":
         return gl_hamiltonian(y["Q"], y["P"], lam)
     if name == "U":

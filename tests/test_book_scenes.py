@@ -22,6 +22,7 @@ PAGES = {
     "section2/04_moser_veselov.md": ("mv_invariants", ("invariant_drift(",)),
     "section3/01_optimal_control.md": ("symmetric_vs_rigid_body", ("flow_agreement(",)),
     "scenes.md": ("rigid_body_momentum", ()),
+    "section3/03_hamiltonian.md": ("hamiltonian_on_gl", ("hamiltonian_drift(",)),
     "hard_cases.md": (
         "long_run_spread1e6_n3",
         ("symrb.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),

@@ -341,6 +341,39 @@ def test_double_bracket_and_symmetric_scenes_equal_their_functions() -> None:
     _same(r["H"], symrb.gl_hamiltonian(sol.y.Q, sol.y.P, x["lam"]))
 
 
+@pytest.mark.parametrize("start", ["rotations", "general"])
+def test_symmetric_body_start_and_gram_observables_equal_hand_written(start: str) -> None:
+    sc = parse_scene(
+        {"system": "symmetric_rigid_body",
+         "parameters": {"n": 4, "lam": [0.5, 1.0, 1.5, 2.0], "start": start, "seed": 12},
+         "integrator": {"kind": "continuous", "rtol": 1e-11, "atol": 1e-11},
+         "horizon": {"T": 3.0},
+         "observables": {"gram_spectrum": {"points": 7}, "P_orthogonality": {"points": 7},
+                         "H": {"points": 7, "windows": 3, "reduce": "max_rel_change"}}}
+    )  # fmt: skip
+    x = scene_inputs(sc)
+    if start == "rotations":
+        Q0, P0 = symrb.random_SO(4, (2,), seed=12)
+    else:
+        Q0, P0 = np.random.default_rng(12).standard_normal((2, 4, 4))
+    _same(x["Q0"], Q0)
+    _same(x["P0"], P0)
+    r = run_scene(sc, cache=False)
+    t = np.linspace(0.0, 3.0, 7)
+    sol = symrb.integrate(symrb.SymmetricRigidBody, (0.0, 3.0), {"Q": Q0, "P": P0},
+                          lam=x["lam"], rtol=1e-11, atol=1e-11, t_eval=t)  # fmt: skip
+    Q, P = sol.y.Q, sol.y.P
+    _same(r["gram_spectrum"], np.linalg.eigvalsh(np.swapaxes(Q, -1, -2) @ Q))
+    _same(r["P_orthogonality"], np.abs(np.swapaxes(P, -1, -2) @ P - np.eye(4)).max(axis=(1, 2)))
+    H = symrb.gl_hamiltonian(Q, P, x["lam"])
+    _same(r["H"], _windows(t, H, 3, "max_rel_change")[1])
+    on_so = start == "rotations"
+    assert (r["P_orthogonality"].max() < 1e-9) == on_so  # a general point is far from SO(4)
+    with pytest.raises(SceneError, match="remove"):
+        parse_scene({**sc.model_dump(mode="json", exclude_unset=True),
+                     "parameters": {"n": 4, "start": start, "M0": [1.0, 2.0, 3.0]}})  # fmt: skip
+
+
 def test_inputs_are_not_mutated_and_scenes_are_frozen() -> None:
     data = {"system": "rigid_body", "integrator": {"kind": "continuous"},
             "horizon": {"T": 1.0}, "observables": {"M": "end"}}  # fmt: skip
