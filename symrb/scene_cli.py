@@ -11,6 +11,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from .errors import InputError
+
 
 def _parser(cmd: str) -> argparse.ArgumentParser:
     if cmd == "run":
@@ -60,7 +62,7 @@ def main(cmd: str, argv: Sequence[str]) -> int:
     except scenes.SceneError as exc:
         print(exc, file=sys.stderr)
         return 2
-    except scenes.InputError as exc:
+    except InputError as exc:
         print(f"symrb {cmd}: {exc}", file=sys.stderr)
         return 2
     if cmd == "run":

@@ -1,58 +1,8 @@
-r"""Scenes: declared experiments that compute only what they ask for.
+r"""The core of :mod:`symrb.scenes`: the schema, the planner, the runner, the store and sweeps.
 
-A *scene* declares an experiment: the system, the effects switched on (an effect not named is
-not computed), the parameters, the integrator, the horizon, and the observables with the times
-at which to record them.  It is written in TOML (:func:`load_scene`) or built in Python
-(:func:`parse_scene`, or a model such as :class:`RigidBodyScene`), and validated by pydantic
-models; an error names the key, its line in the file and the allowed values
-(:class:`SceneError`, an :class:`~symrb.errors.InputError`).
-
->>> from symrb.scenes import load_scene, plan_scene
->>> scene = load_scene('''
-... system = "rigid_body"
-... [parameters]
-... n = 10
-... [integrator]
-... kind = "continuous"
-... [horizon]
-... T = 100.0
-... [observables]
-... energy = {points = 11}
-... ''')
->>> plan = plan_scene(scene)
->>> plan.propagated
-('M',)
-
-:func:`plan_scene` decides from the observables and the effects what state to propagate (no
-attitude when only momenta or energies are observed, no costate sweep without a terminal cost, no
-diagnostic that is not asked for), which public functions and generated kernels to call, and the
-times at which to save (as diffrax's ``SaveAt``: the union of the observables' times, each
-observable evaluated only at its own; a windowed observable reduced per window as
-:class:`When` describes, its unreduced series not kept; the ``*_gap`` observables compared with
-the second run of a ``[compare]`` table).  :meth:`Plan.explain` prints the plan with what is skipped
-and why, and an estimated cost.  :func:`run_scene` runs a scene and returns a
-:class:`SceneResult` (arrays, the scene, the plan, the versions), cached on disk by a SHA-256 of
-the canonical scene and of the source of the symrb modules it uses, so a rerun that changes
-nothing recomputes nothing.  :func:`sweep` runs a grid of scenes, in-process or on a Dask
-cluster (``dask.distributed``, imported only there), and returns one pandas table plus the
-results.
-
-The systems (``system = ...``) and what each offers:
-
-=====================  ==============================  =============================================
-system                 effects                         observables
-=====================  ==============================  =============================================
-rigid_body             attitude                        M, Q, Omega, energy, casimirs, manakov,
-                                                       lax_spectrum, orthogonality, M_gap, Q_gap
-symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality,
-                                                       P_orthogonality, gram_spectrum, U,
-                                                       M_gap, Q_gap
-mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
-double_bracket         (none)                          x, potential, pairing, casimirs
-orbit_extremal         terminal_cost, potential,       x, p, u
-                       samples, costates
-resnet                 terminal_cost, costates         loss, accuracy, states, K, beta, costates
-=====================  ==============================  =============================================
+The public names are re-exported by :mod:`symrb.scenes` (see its docstring); a system defined in
+a module of its own (``symrb/scenes/_<system>.py``) subclasses :class:`_SceneBase`, implements its
+three hooks and is registered with :func:`register_system`.
 """
 
 from __future__ import annotations
@@ -72,7 +22,7 @@ import time
 import tomllib
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Annotated, Any, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal, Union
 
 import numpy as np
 
@@ -92,13 +42,13 @@ except ImportError as exc:  # pragma: no cover - exercised in the clean-venv whe
         "pip install 'symrb[scenes]' (or pip install pydantic)"
     ) from exc
 
-from . import _validate as v
-from ._generated import rigid_body as _rb
-from ._validate import Array
-from .continuous import Flow
-from .errors import InputError
+from .. import _validate as v
+from .._generated import rigid_body as _rb
+from .._validate import Array
+from ..continuous import Flow
+from ..errors import InputError
 
-__all__ = [
+__all__ = [  # re-exported by symrb.scenes
     "SceneError",
     "When",
     "RigidBodyScene",
@@ -430,8 +380,26 @@ class _SceneBase(_Model):
     #: observable -> the effect it needs (or None)
     OBSERVABLES: ClassVar[dict[str, str | None]] = {}
 
+    #: the label of the record axis in plots ("t", or "step" for training)
+    RECORD_AXIS: ClassVar[str] = "t"
+
     title: str = ""
     effects: tuple[Effect, ...] = ()
+
+    # Hooks of a system defined in a module of its own (registered with register_system); the
+    # systems of this module are handled by the branches of scene_inputs, plan_scene and
+    # _execute_raw instead.
+    def _inputs(self) -> dict[str, Any]:
+        """The arrays the scene starts from (see :func:`scene_inputs`)."""
+        raise NotImplementedError
+
+    def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> SystemPlan:
+        """The system's part of the plan; append to ``skipped`` and ``notes``."""
+        raise NotImplementedError
+
+    def _run(self, plan: Plan, x: dict[str, Any]) -> tuple[dict[str, Array], dict[str, Array], str]:
+        """Run the plan from the inputs ``x``: (times and data per observable, failure or '')."""
+        raise NotImplementedError
 
     @field_validator("effects")
     @classmethod
@@ -596,6 +564,7 @@ class ResNetScene(_SceneBase):
     """
 
     EFFECTS = ("terminal_cost", "costates")
+    RECORD_AXIS = "step"
     OBSERVABLES = {
         "states": None, "K": None, "beta": None, "accuracy": None,
         "loss": "terminal_cost", "costates": "costates",
@@ -607,15 +576,20 @@ class ResNetScene(_SceneBase):
     observables: dict[Literal["states", "K", "beta", "accuracy", "loss", "costates"], When]
 
 
-_SCENES: tuple[type[_SceneBase], ...] = (
+_SCENES: list[type[_SceneBase]] = [
     RigidBodyScene,
     SymmetricRigidBodyScene,
     McLachlanScovelScene,
     DoubleBracketScene,
     OrbitExtremalScene,
     ResNetScene,
-)
-_SYSTEMS = {c.model_fields["system"].annotation.__args__[0]: c for c in _SCENES}  # type: ignore[union-attr]
+]
+#: system name -> its scene model
+_SYSTEMS: dict[str, type[_SceneBase]] = {
+    c.model_fields["system"].annotation.__args__[0]: c  # type: ignore[union-attr]
+    for c in _SCENES
+}
+#: every scene model (the systems of this module; the registered ones validate as well)
 Scene = (
     RigidBodyScene
     | SymmetricRigidBodyScene
@@ -623,8 +597,34 @@ Scene = (
     | DoubleBracketScene
     | OrbitExtremalScene
     | ResNetScene
+    | _SceneBase
 )
-_ADAPTER: TypeAdapter[Any] = TypeAdapter(Annotated[Scene, Field(discriminator="system")])
+_ADAPTERS: dict[tuple[type[_SceneBase], ...], TypeAdapter[Any]] = {}
+
+
+def register_system(cls: type[_SceneBase]) -> type[_SceneBase]:
+    """Register a scene model defined outside this module (a class decorator).
+
+    The model fixes ``system`` to one literal name and implements the hooks of
+    :class:`_SceneBase` (``_inputs``, ``_plan``, ``_run``); :func:`parse_scene` then validates
+    it, and :func:`plan_scene` and :func:`run_scene` call its hooks.
+    """
+    name = cls.model_fields["system"].annotation.__args__[0]  # type: ignore[union-attr]
+    if name in _SYSTEMS and _SYSTEMS[name] is not cls:
+        raise ValueError(f"system {name!r} is registered already")
+    if cls not in _SCENES:
+        _SCENES.append(cls)
+    _SYSTEMS[name] = cls
+    return cls
+
+
+def _adapter() -> TypeAdapter[Any]:
+    """The discriminated union of every registered scene model (built once per registry)."""
+    key = tuple(_SCENES)
+    if key not in _ADAPTERS:
+        union: Any = Union[key]  # type: ignore[valid-type]  # noqa: UP007 - runtime tuple
+        _ADAPTERS[key] = TypeAdapter(Annotated[union, Field(discriminator="system")])
+    return _ADAPTERS[key]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -820,7 +820,7 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
             [{"key": "", "line": None, "message": f"a scene is a table, got {type(data).__name__}",
               "allowed": None}], source)  # fmt: skip
     try:
-        scene: Any = _ADAPTER.validate_python(dict(data))
+        scene: Any = _adapter().validate_python(dict(data))
     except ValidationError as exc:
         raise _from_pydantic(exc, data, text, source) from None
     lines = _toml_lines(text) if text is not None else {}
@@ -933,7 +933,7 @@ def _load_text(text: str, source: str) -> Scene:
 
 
 def _skew_from(value: Any, n: int, name: str) -> Array:
-    from .algebra import hat
+    from ..algebra import hat
 
     a = np.asarray(value, dtype=float)
     if a.shape == (3,) and n == 3:
@@ -966,11 +966,13 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
     >>> x["lam"].shape, x["M0"].shape
     ((4,), (4, 4))
     """
-    from .algebra import pairing, random_lam, random_SO, random_so
+    from ..algebra import pairing, random_lam, random_SO, random_so
 
-    p: Any = scene.parameters
+    if type(scene)._inputs is not _SceneBase._inputs:
+        return scene._inputs()
+    p: Any = getattr(scene, "parameters")  # noqa: B009 - every system of this module has them
     if isinstance(scene, ResNetScene):
-        from .learning import toy_classification
+        from ..learning import toy_classification
 
         x0, targets, labels = toy_classification(p.samples, seed=p.seed)
         shape = (p.layers, 2, 2)
@@ -1008,7 +1010,7 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
         np.eye(n), batch + (n, n)).copy()  # fmt: skip
     out: dict[str, Any] = {"lam": lam, "Q0": Q0, "M0": M0}
     if isinstance(scene, SymmetricRigidBodyScene):
-        from .continuous import P_from_M, symmetric_momentum
+        from ..continuous import P_from_M, symmetric_momentum
 
         start = scene.parameters.start
         if start == "momentum":
@@ -1056,7 +1058,7 @@ class RigidBodyMomentum(Flow):
         v.skew(y["M"], "y0['M']")
 
     def derived(self, y, lam):
-        from .algebra import _Jinv_weights
+        from ..algebra import _Jinv_weights
 
         return {"Omega": _Jinv_weights(lam) * y["M"]}
 
@@ -1164,6 +1166,21 @@ class Plan:
         d["save"] = {k: (list(map(float, val)) if isinstance(val, list | tuple | np.ndarray)
                          else val) for k, val in self.save.items()}  # fmt: skip
         return json.loads(json.dumps(d, default=_json_default))
+
+
+@dataclasses.dataclass(frozen=True)
+class SystemPlan:
+    """A system's part of a :class:`Plan` (the hook ``_plan`` of a registered system returns it;
+    :func:`plan_scene` adds what is shared: the diagnostics not asked for, the windows, the
+    records and the modules of the scene machinery)."""
+
+    route: str
+    propagated: tuple[str, ...]
+    kernels: tuple[str, ...]
+    save: dict[str, Any]
+    index: dict[str, tuple[int, ...]]
+    cost: dict[str, Any]
+    modules: tuple[str, ...]
 
 
 def _brief_list(val: Any) -> str:
@@ -1336,7 +1353,11 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     save: dict[str, Any]
     cost: dict[str, Any]
     index: dict[str, tuple[int, ...]]
-    if isinstance(sc, RigidBodyScene):
+    if type(sc)._plan is not _SceneBase._plan:
+        part = sc._plan(skipped, notes)
+        route, propagated, kernels = part.route, part.propagated, part.kernels
+        save, index, cost, modules = part.save, part.index, part.cost, part.modules
+    elif isinstance(sc, RigidBodyScene):
         n = p.n
         rate = p.momentum / 0.5 if p.M0 is None else 2.0
         attitude = "attitude" in sc.effects
@@ -1586,7 +1607,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
         index=index,
         cost=cost,
         notes=tuple(notes),
-        modules=tuple(dict.fromkeys(("scenes",) + modules)),
+        modules=tuple(dict.fromkeys(("scenes._core",) + modules)),
         windows=windows,
         compare=compare,
     )
@@ -1631,9 +1652,9 @@ def _orth_error(Q: Array) -> Array:
 
 
 def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
-    from .algebra import J_inv
-    from .continuous import gl_hamiltonian, symmetric_momentum
-    from .rigid_body import casimir_traces, kinetic_energy, manakov_integrals
+    from ..algebra import J_inv
+    from ..continuous import gl_hamiltonian, symmetric_momentum
+    from ..rigid_body import casimir_traces, kinetic_energy, manakov_integrals
 
     if name in y:
         return y[name]
@@ -1665,7 +1686,7 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
     if name == "H":
         return gl_hamiltonian(y["Q"], y["P"], lam)
     if name == "U":
-        from .continuous import multi_sample_control
+        from ..continuous import multi_sample_control
 
         return multi_sample_control(y["Q"], y["P"], lam)
     raise KeyError(name)  # pragma: no cover - the schema lists the names
@@ -1673,7 +1694,7 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
 
 def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, Array], str]:
     """(times of the saved states, the saved states by name, a failure message or '')."""
-    from .continuous import (
+    from ..continuous import (
         McLachlanScovel,
         MultiSampleSymmetricRigidBody,
         RigidBody,
@@ -1702,7 +1723,7 @@ def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, 
         return sol.t, states, "" if sol.success else sol.message
     steps, every = plan.save["steps"], plan.save["save_every"]
     if isinstance(integ, MV):
-        from .engine import mv_flow
+        from ..engine import mv_flow
 
         if "Q" in plan.propagated:
             dsol = mv_flow(x["Q0"], x["M0"], lam, integ.h, steps, save_every=every,
@@ -1711,7 +1732,7 @@ def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, 
             return dsol.t, {k: dsol.y[k] for k in keep}, "" if dsol.success else dsol.message
         return _mv_momentum(x["M0"], lam, integ.h, steps, every)
     if isinstance(integ, MVAlgorithm2):
-        from .discrete import mv_algorithm2
+        from ..discrete import mv_algorithm2
 
         dsol = mv_algorithm2(x["Q0"], integ.h * x["M0"], lam, steps, save_every=every)
         keep = ("Q",) if "attitude" in sc.effects else ()
@@ -1720,12 +1741,12 @@ def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, 
         return (np.asarray(dsol.k, dtype=float) * integ.h, states,
                 "" if dsol.success else dsol.message)  # fmt: skip
     if isinstance(sc, RigidBodyScene):
-        from .discrete import discrete_rigid_body_flow
+        from ..discrete import discrete_rigid_body_flow
 
         dsol = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, steps, save_every=every)
         keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
     else:
-        from .discrete import symmetric_flow
+        from ..discrete import symmetric_flow
 
         dsol = symmetric_flow(x["Q0"], x["P0"], lam, integ.h, steps, save_every=every)
         keep = ("Q", "P", "M")
@@ -1738,8 +1759,8 @@ def _mv_momentum(
     """The Moser-Veselov momentum map M -> U^T M U alone (general n): ``MVStepper.step`` with an
     empty attitude (shape (0, n, n)), so the product Q U is skipped; the M it returns is the M
     of ``mv_flow`` bit for bit (the same stepper, the same operations on M)."""
-    from .engine import MVStepper
-    from .errors import NotConvergedError, OutOfDomainError
+    from ..engine import MVStepper
+    from ..errors import NotConvergedError, OutOfDomainError
 
     L = v.inertia(lam, positive=True)
     Mk = v.skew(M0, "M0", L.shape[-1])
@@ -1761,9 +1782,9 @@ def _mv_momentum(
 
 
 def _run_orbit(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
-    from .algebra import commutator, pairing
-    from .orbits import brockett_potential, double_bracket_flow, solve_orbit_bvp
-    from .rigid_body import casimir_traces
+    from ..algebra import commutator, pairing
+    from ..orbits import brockett_potential, double_bracket_flow, solve_orbit_bvp
+    from ..rigid_body import casimir_traces
 
     t_eval = np.asarray(plan.save["t_eval"])
     x0, N = x["x0"], x["N"]
@@ -1797,7 +1818,7 @@ def _run_orbit(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
 
 
 def _run_resnet(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
-    from .learning import costate_sweep, resnet_forward, squared_error, train
+    from ..learning import costate_sweep, resnet_forward, squared_error, train
 
     integ = sc.integrator
     act, res = integ.activation, integ.residual
@@ -1864,6 +1885,8 @@ def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], s
 
 def _execute_raw(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
     x = scene_inputs(sc)
+    if type(sc)._run is not _SceneBase._run:
+        return sc._run(plan, x)  # type: ignore[no-any-return]
     if isinstance(sc, ResNetScene):
         r = _run_resnet(sc, plan, x)
         return r["times"], r["data"], r["failure"]
@@ -1900,7 +1923,7 @@ def _execute_raw(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array
 def _versions() -> dict[str, str]:
     import scipy
 
-    from . import __version__
+    from .. import __version__
 
     return {"symrb": __version__, "numpy": np.__version__, "scipy": scipy.__version__,
             "python": platform.python_version()}  # fmt: skip
@@ -2028,7 +2051,7 @@ class SceneResult:
                 y = y.imag
             ax.plot(t, y[:, : min(y.shape[1], 12)], ".-" if len(t) < 30 else "-", lw=1)
             ax.set_ylabel(name)
-        axes[-1, 0].set_xlabel("step" if isinstance(self.scene, ResNetScene) else "t")
+        axes[-1, 0].set_xlabel(type(self.scene).RECORD_AXIS)
         fig.suptitle(self.scene.title or self.scene.system)
         fig.tight_layout()
         return fig
@@ -2354,7 +2377,7 @@ def sweep(
     """
     import pandas as pd
 
-    from ._progress import _Bar
+    from .._progress import _Bar
 
     base = load_scene(scene) if isinstance(scene, str | os.PathLike) else parse_scene(scene)
     points = expand_grid(base, grid)
@@ -2394,7 +2417,7 @@ def _dask_sweep(
         raise ImportError(
             "sweeps on Dask need dask.distributed: pip install 'dask[distributed]'"
         ) from None
-    from ._progress import _Bar
+    from .._progress import _Bar
 
     with contextlib.ExitStack() as stack:
         if client is None:

@@ -1,0 +1,120 @@
+r"""Scenes: declared experiments that compute only what they ask for.
+
+A *scene* declares an experiment: the system, the effects switched on (an effect not named is
+not computed), the parameters, the integrator, the horizon, and the observables with the times
+at which to record them.  It is written in TOML (:func:`load_scene`) or built in Python
+(:func:`parse_scene`, or a model such as :class:`RigidBodyScene`), and validated by pydantic
+models; an error names the key, its line in the file and the allowed values
+(:class:`SceneError`, an :class:`~symrb.errors.InputError`).
+
+>>> from symrb.scenes import load_scene, plan_scene
+>>> scene = load_scene('''
+... system = "rigid_body"
+... [parameters]
+... n = 10
+... [integrator]
+... kind = "continuous"
+... [horizon]
+... T = 100.0
+... [observables]
+... energy = {points = 11}
+... ''')
+>>> plan = plan_scene(scene)
+>>> plan.propagated
+('M',)
+
+:func:`plan_scene` decides from the observables and the effects what state to propagate (no
+attitude when only momenta or energies are observed, no costate sweep without a terminal cost, no
+diagnostic that is not asked for), which public functions and generated kernels to call, and the
+times at which to save (as diffrax's ``SaveAt``: the union of the observables' times, each
+observable evaluated only at its own; a windowed observable reduced per window as
+:class:`When` describes, its unreduced series not kept; the ``*_gap`` observables compared with
+the second run of a ``[compare]`` table).  :meth:`Plan.explain` prints the plan with what is skipped
+and why, and an estimated cost.  :func:`run_scene` runs a scene and returns a
+:class:`SceneResult` (arrays, the scene, the plan, the versions), cached on disk by a SHA-256 of
+the canonical scene and of the source of the symrb modules it uses, so a rerun that changes
+nothing recomputes nothing.  :func:`sweep` runs a grid of scenes, in-process or on a Dask
+cluster (``dask.distributed``, imported only there), and returns one pandas table plus the
+results.
+
+The systems (``system = ...``) and what each offers:
+
+=====================  ==============================  =============================================
+system                 effects                         observables
+=====================  ==============================  =============================================
+rigid_body             attitude                        M, Q, Omega, energy, casimirs, manakov,
+                                                       lax_spectrum, orthogonality, M_gap, Q_gap
+symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality,
+                                                       P_orthogonality, gram_spectrum, U,
+                                                       M_gap, Q_gap
+mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
+double_bracket         (none)                          x, potential, pairing, casimirs
+orbit_extremal         terminal_cost, potential,       x, p, u
+                       samples, costates
+resnet                 terminal_cost, costates         loss, accuracy, states, K, beta, costates
+=====================  ==============================  =============================================
+"""
+
+from __future__ import annotations
+
+from ._core import (
+    DoubleBracketScene,
+    McLachlanScovelScene,
+    OrbitExtremalScene,
+    Plan,
+    ResNetScene,
+    RigidBodyMomentum,
+    RigidBodyScene,
+    SceneError,
+    SceneResult,
+    SceneStore,
+    SweepResult,
+    SymmetricRigidBodyScene,
+    When,
+    expand_grid,
+    load_scene,
+    parse_scene,
+    plan_scene,
+    run_scene,
+    scene_inputs,
+    sweep,
+)
+from ._core import (
+    Scene as Scene,
+)
+from ._core import (
+    register_system as register_system,
+)
+from ._core import (
+    scene_key as scene_key,
+)
+
+__all__ = [
+    "SceneError",
+    "When",
+    "RigidBodyScene",
+    "SymmetricRigidBodyScene",
+    "McLachlanScovelScene",
+    "DoubleBracketScene",
+    "OrbitExtremalScene",
+    "ResNetScene",
+    "parse_scene",
+    "load_scene",
+    "scene_inputs",
+    "RigidBodyMomentum",
+    "Plan",
+    "plan_scene",
+    "SceneResult",
+    "SceneStore",
+    "run_scene",
+    "expand_grid",
+    "SweepResult",
+    "sweep",
+]
+
+# the public classes name this package as their home (in reprs, tracebacks and pickles)
+for _name in __all__:
+    _obj = globals()[_name]
+    if isinstance(_obj, type) and _obj.__module__ == f"{__name__}._core":
+        _obj.__module__ = __name__
+del _name, _obj
