@@ -380,6 +380,8 @@ class _SceneBase(_Model):
     #: observable -> the effect it needs (or None)
     OBSERVABLES: ClassVar[dict[str, str | None]] = {}
 
+    #: observables that are state variables, not diagnostics (a registered system lists its own)
+    STATE_OBSERVABLES: ClassVar[tuple[str, ...]] = ()
     #: the label of the record axis in plots ("t", or "step" for training)
     RECORD_AXIS: ClassVar[str] = "t"
 
@@ -1331,6 +1333,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     skipped: list[tuple[str, str]] = []
     notes: list[str] = []
     state_names = {"Q", "M", "P", "B", "x", "p", "states", "K", "beta"}
+    state_names |= set(type(sc).STATE_OBSERVABLES)
     not_asked = sorted(o for o in allowed - asked - state_names if not o.endswith("_gap"))
     if not_asked:
         skipped.append((", ".join(not_asked), "not asked for (no diagnostic is evaluated unless "
@@ -1344,7 +1347,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     if isinstance(sc, SymmetricRigidBodyScene) and "energy" in asked:
         extra = tuple(k for k in extra if k != "rigid_body.kinetic_energy")
         extra += ("rigid_body.kinetic_energy",)
-    p: Any = sc.parameters
+    p: Any = getattr(sc, "parameters", None)
     integ: Any = sc.integrator
     modules: tuple[str, ...] = _RB_MODULES
     propagated: tuple[str, ...]
