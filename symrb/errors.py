@@ -70,13 +70,18 @@ class NotConvergedError(SymrbError, RuntimeError):
 
     Examples
     --------
+    An exactly zero residual (``tol=0``) within one Newton iteration: for n = 8 the 64 entries
+    of the residual do not all round to zero (for n = 3 they can, and then it converges).
+
     >>> import symrb
-    >>> M = symrb.hat([0.5, 1.0, 1.5])
+    >>> lam = symrb.random_lam(8, seed=6)
+    >>> M = symrb.random_so(8, seed=7)
+    >>> M = 0.5 * symrb.fold_scale(M, lam) * M
     >>> try:
-    ...     symrb.solve_moser_veselov(M, [0.7, 1.1, 1.6], tol=0.0, maxiter=2)
+    ...     symrb.solve_moser_veselov(M, lam, tol=0.0, maxiter=1)
     ... except symrb.NotConvergedError as exc:
     ...     print(exc.iterations, exc.residual > 0)
-    2 True
+    1 True
     """
 
     def __init__(self, message: str, residual: float, iterations: int) -> None:
