@@ -310,6 +310,8 @@ class SONetworkScene(_core._SceneBase):
             extra.append("Q: a forward sweep")
         if extra:
             notes.append("at the final controls, " + "; ".join(extra))
+        if not {"Q", "costates"} & asked:
+            skipped.append(("Q (the final layers)", "not asked for: no forward sweep at the end"))
         if "running_cost" not in self.effects:
             skipped.append(("running cost alpha tr(Lambda (I - U_k))", "effect 'running_cost' "
                             "not named: alpha = 0, the loss is the data term alone and fixes "
