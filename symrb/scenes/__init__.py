@@ -102,7 +102,6 @@ __all__ = [
     "DoubleBracketScene",
     "OrbitExtremalScene",
     "ResNetScene",
-    "SONetworkScene",
     "parse_scene",
     "load_scene",
     "scene_inputs",
@@ -115,6 +114,7 @@ __all__ = [
     "expand_grid",
     "SweepResult",
     "sweep",
+    "SONetworkScene",
 ]
 
 # the public classes name this package as their home (in reprs, tracebacks and pickles)

@@ -934,17 +934,20 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
                                                 if o.endswith("_gap")],
         })  # fmt: skip
     params = getattr(scene, "parameters", None)
-    if params is not None and getattr(params, "samples", 1) > 1 and "samples" not in scene.effects:
-        if isinstance(scene, RigidBodyScene | McLachlanScovelScene | DoubleBracketScene):
-            message = "this system has a single sample"
-        else:
-            message = "samples > 1 needs the effect 'samples'"
-        # the networks' samples are their data, not an effect
-        if "samples" in type(scene).EFFECTS or message.startswith("this system"):
-            problems.append({
-                "key": "parameters.samples", "line": lines.get(("parameters", "samples")),
-                "message": f"{message}, got {params.samples}", "allowed": [1],
-            })  # fmt: skip
+    single = isinstance(scene, RigidBodyScene | McLachlanScovelScene | DoubleBracketScene)
+    samples = getattr(params, "samples", 1) if params is not None else 1
+    # checked for one-sample systems and those with the effect; a network's samples are its data
+    if (
+        (single or "samples" in type(scene).EFFECTS)
+        and samples > 1
+        and ("samples" not in scene.effects)
+    ):
+        message = ("this system has a single sample" if single
+                   else "samples > 1 needs the effect 'samples'")  # fmt: skip
+        problems.append({
+            "key": "parameters.samples", "line": lines.get(("parameters", "samples")),
+            "message": f"{message}, got {samples}", "allowed": [1],
+        })  # fmt: skip
     if problems:
         raise SceneError(problems, source)
     return scene  # type: ignore[no-any-return]
@@ -1037,7 +1040,9 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
     dict
         For the bodies ``lam``, ``Q0``, ``M0`` (and ``P0`` for the symmetric rigid body, ``B0``
         for McLachlan-Scovel); for the orbits ``x0``, ``N``; for the ResNet ``x0``, ``targets``,
-        ``labels``, ``K0``, ``beta0``.
+        ``labels``, ``K0``, ``beta0`` (on the digits also ``x_test``, ``labels_test`` and
+        ``classes``); a system of its own module says in its ``_inputs`` (the SO(n) network:
+        ``Q0``, ``targets``, ``lam``, ``alpha``, ``U0``).
 
     Examples
     --------
