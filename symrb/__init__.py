@@ -55,6 +55,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
         "McLachlanScovelScene", "DoubleBracketScene", "OrbitExtremalScene", "ResNetScene",
         "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan", "plan_scene",
         "SceneResult", "SceneStore", "run_scene", "expand_grid", "SweepResult", "sweep",
+        "SONetworkScene",
     ),
     "rigid_body": (
         "rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals",

@@ -27,6 +27,16 @@ PAGES = {
         "long_run_spread1e6_n3",
         ("symrb.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),
     ),
+    "learning.md": (
+        "so_training_gradient",
+        (
+            "train_so_gradient(",
+            "train_so_msa(",
+            "train_so_shooting(",
+            "learning.train(",
+            "train_msa(",
+        ),
+    ),
 }
 
 

@@ -51,7 +51,10 @@ mclachlan_scovel       (none)                          Q, B, M, energy, orthogon
 double_bracket         (none)                          x, potential, pairing, casimirs
 orbit_extremal         terminal_cost, potential,       x, p, u
                        samples, costates
-resnet                 terminal_cost, costates         loss, accuracy, states, K, beta, costates
+resnet                 terminal_cost, costates         loss, accuracy, test_accuracy, states, K,
+                                                       beta, costates
+so_network             terminal_cost, running_cost,    loss, residual, U, Q, costates,
+                       costates                        extremal_residual, iterations, converged
 =====================  ==============================  =============================================
 """
 
@@ -88,6 +91,7 @@ from ._core import (
 from ._core import (
     scene_key as scene_key,
 )
+from ._so_network import SONetworkScene
 
 __all__ = [
     "SceneError",
@@ -110,11 +114,12 @@ __all__ = [
     "expand_grid",
     "SweepResult",
     "sweep",
+    "SONetworkScene",
 ]
 
 # the public classes name this package as their home (in reprs, tracebacks and pickles)
 for _name in __all__:
     _obj = globals()[_name]
-    if isinstance(_obj, type) and _obj.__module__ == f"{__name__}._core":
+    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}._"):
         _obj.__module__ = __name__
 del _name, _obj
