@@ -52,6 +52,7 @@ double_bracket         (none)                          x, potential, pairing, ca
 orbit_extremal         terminal_cost, potential,       x, p, u
                        samples, costates
 resnet                 terminal_cost, costates         loss, accuracy, states, K, beta, costates
+toda                   (none)                          L, a, b, spectrum, off_band
 =====================  ==============================  =============================================
 """
 
@@ -88,6 +89,7 @@ from ._core import (
 from ._core import (
     scene_key as scene_key,
 )
+from ._toda import TodaScene
 
 __all__ = [
     "SceneError",
@@ -98,6 +100,7 @@ __all__ = [
     "DoubleBracketScene",
     "OrbitExtremalScene",
     "ResNetScene",
+    "TodaScene",
     "parse_scene",
     "load_scene",
     "scene_inputs",
@@ -115,6 +118,6 @@ __all__ = [
 # the public classes name this package as their home (in reprs, tracebacks and pickles)
 for _name in __all__:
     _obj = globals()[_name]
-    if isinstance(_obj, type) and _obj.__module__ == f"{__name__}._core":
+    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}._"):
         _obj.__module__ = __name__
 del _name, _obj
