@@ -33,6 +33,7 @@ try:
         Field,
         TypeAdapter,
         ValidationError,
+        ValidationInfo,
         field_validator,
         model_validator,
     )
@@ -360,11 +361,12 @@ class OrbitParameters(_Model):
     samples: int = Field(default=1, ge=1)
     scale: float = Field(default=1.0, gt=0)
 
-    @model_validator(mode="after")
-    def _scale_draws(self) -> OrbitParameters:
-        if self.x0 is not None and self.N is not None and "scale" in self.model_fields_set:
-            raise ValueError("x0 and N given: scale draws nothing; remove scale")
-        return self
+    @field_validator("scale")
+    @classmethod
+    def _scale_draws(cls, value: float, info: ValidationInfo) -> float:
+        if info.data.get("x0") is not None and info.data.get("N") is not None:
+            raise ValueError("x0 and N are given: scale draws nothing; remove scale")
+        return value
 
 
 class NetworkParameters(_Model):

@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from .._validate import Array
 from . import _core
@@ -23,21 +23,38 @@ class TodaParameters(_core._Model):
     does not split into blocks)."""
 
     k: int = Field(default=5, ge=2)
-    seed: int = 0
     a: tuple[float, ...] | None = None
     b: tuple[float, ...] | None = None
+    seed: int = 0
+
+    @field_validator("a")
+    @classmethod
+    def _a_has_k(cls, value: tuple[float, ...] | None, info: ValidationInfo) -> Any:
+        k = info.data.get("k")
+        if value is not None and k is not None and len(value) != k:
+            raise ValueError(f"the diagonal needs k = {k} entries, got {len(value)}")
+        return value
+
+    @field_validator("b")
+    @classmethod
+    def _b_has_k_minus_1(cls, value: tuple[float, ...] | None, info: ValidationInfo) -> Any:
+        k = info.data.get("k")
+        if value is not None and k is not None and len(value) != k - 1:
+            raise ValueError(f"the off-diagonal needs k - 1 = {k - 1} entries, got {len(value)}")
+        return value
+
+    @field_validator("seed")
+    @classmethod
+    def _seed_draws(cls, value: int, info: ValidationInfo) -> int:
+        if info.data.get("a") is not None or info.data.get("b") is not None:
+            raise ValueError("a and b give L(0): seed draws nothing; remove seed")
+        return value
 
     @model_validator(mode="after")
-    def _given_or_drawn(self) -> TodaParameters:
+    def _both_or_neither(self) -> TodaParameters:
         if (self.a is None) != (self.b is None):
             raise ValueError("give both a and b (the diagonal and the off-diagonal of L(0)), "
                              "or neither (a random draw from seed)")  # fmt: skip
-        if self.a is not None and self.b is not None:
-            if "seed" in self.model_fields_set:
-                raise ValueError("a and b given: seed draws nothing; remove seed")
-            if len(self.a) != self.k or len(self.b) != self.k - 1:
-                raise ValueError(f"a needs k = {self.k} entries and b k - 1 = {self.k - 1}, got "
-                                 f"{len(self.a)} and {len(self.b)}")  # fmt: skip
         return self
 
 
