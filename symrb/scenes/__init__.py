@@ -49,8 +49,8 @@ symmetric_rigid_body   samples                         Q, P, M, H, energy, ortho
                                                        M_gap, Q_gap
 mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
 double_bracket         (none)                          x, potential, pairing, casimirs
-orbit_extremal         terminal_cost, potential,       x, p, u
-                       samples, costates
+orbit_extremal         terminal_cost, potential,       x, p, u, pairing, second_term, db_distance,
+                       samples, costates               db_second_term, sample_pairings
 resnet                 terminal_cost, costates         loss, accuracy, states, K, beta, costates
 toda                   (none)                          L, a, b, spectrum, off_band
 =====================  ==============================  =============================================

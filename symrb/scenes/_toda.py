@@ -76,7 +76,7 @@ class TodaScene(_core._SceneBase):
     :math:`L_{i,i+1}`), ``spectrum`` (the eigenvalues of :math:`L(t)`,
     ``numpy.linalg.eigvalsh``, largest first: kept by the flow) and ``off_band`` (the largest
     :math:`|L_{ij}|` with :math:`|i - j| \ge 2`: zero for the exact flow, which keeps :math:`L`
-    tridiagonal).
+    tridiagonal).  :func:`~symrb.scenes.scene_inputs` gives ``a0``, ``b0`` and ``L0``.
 
     Examples
     --------
