@@ -48,12 +48,13 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "orbits": (
         "orbit_extremal_rhs", "orbit_hamiltonian", "brockett_potential", "double_bracket_rhs",
-        "double_bracket_flow", "DoubleBracketInfo", "OrbitBVPResult", "solve_orbit_bvp",
+        "double_bracket_flow", "DoubleBracketInfo", "toda_flow", "OrbitBVPResult",
+        "solve_orbit_bvp",
     ),
     "scenes": (
         "SceneError", "When", "RigidBodyScene", "SymmetricRigidBodyScene",
         "McLachlanScovelScene", "DoubleBracketScene", "OrbitExtremalScene", "ResNetScene",
-        "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan", "plan_scene",
+        "TodaScene", "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan", "plan_scene",
         "SceneResult", "SceneStore", "run_scene", "expand_grid", "SweepResult", "sweep",
         "SONetworkScene",
     ),

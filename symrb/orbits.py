@@ -49,6 +49,7 @@ __all__ = [
     "double_bracket_rhs",
     "double_bracket_flow",
     "DoubleBracketInfo",
+    "toda_flow",
     "OrbitBVPResult",
     "solve_orbit_bvp",
 ]
@@ -299,12 +300,7 @@ def double_bracket_flow(
             f"x0 and N must be single (n, n) matrices, got {xx.shape} and {nn.shape}; pass one "
             "matrix each (loop over a batch)"
         )
-    ts = v.as_float_array(t, "t")
-    if ts.ndim != 1 or ts.size == 0 or np.any(np.diff(ts) <= 0) or ts[0] < 0:
-        raise InputError(
-            f"t must be a non-empty increasing 1-D array of times >= 0, got {ts}; pass sorted "
-            "distinct times"
-        )
+    ts = _output_times(t)
     if not isinstance(return_info, bool | np.bool_):
         raise InputError(f"return_info must be True or False, got {return_info!r}; pass a bool")
     k = xx.shape[-1]
@@ -332,6 +328,17 @@ def double_bracket_flow(
     return xs, DoubleBracketInfo(condition=kappa, error_estimate=err, nfev=int(sol.nfev))
 
 
+def _output_times(t: ArrayLike) -> Array:
+    """The output times of a flow started at time 0: a non-empty increasing 1-D array >= 0."""
+    ts = v.as_float_array(t, "t")
+    if ts.ndim != 1 or ts.size == 0 or np.any(np.diff(ts) <= 0) or ts[0] < 0:
+        raise InputError(
+            f"t must be a non-empty increasing 1-D array of times >= 0, got {ts}; pass sorted "
+            "distinct times"
+        )
+    return ts
+
+
 def _db_solve(X0: Array, nn: Array, ts: Array, rtol: float, atol: float) -> Any:
     """``solve_ivp`` (DOP853) of the double bracket flow for the batch ``X0`` of shape (b, k k),
     one step-size sequence for the batch; the result's ``y`` has shape (b k k, len(ts))."""
@@ -346,6 +353,88 @@ def _db_solve(X0: Array, nn: Array, ts: Array, rtol: float, atol: float) -> Any:
         rtol=rtol,
         atol=atol,
     )
+
+
+def toda_flow(
+    a0: ArrayLike, b0: ArrayLike, t: ArrayLike, rtol: float = 1e-11, atol: float = 1e-12
+) -> Array:
+    r"""The Toda lattice, integrated as the double bracket flow :math:`\dot L = -[L, [L, D]]`.
+
+    :math:`L` is the real symmetric tridiagonal matrix with the diagonal :math:`a` and the
+    off-diagonal :math:`b` (Flaschka's variables), :math:`D = \operatorname{diag}(1, \dots, k)`.
+    With :math:`x = iL`, :math:`N = iD` this is the double bracket flow
+    :math:`\dot x = [x, [x, N]]` on :math:`\mathfrak{su}(k)` (claim S14), and on the band it
+    is Flaschka's form of the Toda lattice,
+
+    .. math:: \dot a_i = 2(b_i^2 - b_{i-1}^2),\qquad \dot b_i = b_i(a_{i+1} - a_i)
+
+    (:math:`b_0 = b_k = 0`).  The whole matrix is integrated, with the generated field of
+    :func:`double_bracket_rhs` evaluated on :math:`(L, D)` (real symmetric, so not accepted by
+    :func:`double_bracket_flow`, whose states are skew) and ``scipy.integrate.solve_ivp``
+    (DOP853): the entries off the band stay zero, and the spectrum of :math:`L` is kept, up to
+    the integration error.  As :math:`t\to\infty` the off-diagonal decays and the diagonal
+    tends to the eigenvalues of :math:`L(0)`, sorted in decreasing order.
+
+    Parameters
+    ----------
+    a0 : array_like, shape (k,)
+        The diagonal of :math:`L(0)`, k >= 2.
+    b0 : array_like, shape (k - 1,)
+        The off-diagonal of :math:`L(0)`.
+    t : array_like, shape (m,)
+        Increasing output times, >= 0 (the flow starts at time 0).
+    rtol, atol : float, optional
+        The tolerances of ``solve_ivp``.
+
+    Returns
+    -------
+    ndarray, shape (m, k, k)
+        :math:`L` at the times ``t``.
+
+    Raises
+    ------
+    InputError
+        If ``a0``, ``b0`` are not real 1-D arrays of k >= 2 and k - 1 entries, or ``t`` is not
+        increasing and >= 0.
+    NotConvergedError
+        If the integrator fails.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> a0, b0 = np.array([0.5, -1.0, 0.2]), np.array([0.8, 0.6])
+    >>> L = symrb.toda_flow(a0, b0, [0.0, 40.0])
+    >>> print(np.diagonal(L[-1]).round(6))  # the eigenvalues of L(0), largest first
+    [ 0.940208  0.284592 -1.5248  ]
+    >>> print(np.sort(np.linalg.eigvalsh(L[0]))[::-1].round(6))
+    [ 0.940208  0.284592 -1.5248  ]
+    """
+    a = v.as_float_array(a0, "a0")
+    b = v.as_float_array(b0, "b0")
+    if a.ndim != 1 or a.size < 2 or b.shape != (a.size - 1,):
+        raise InputError(
+            f"a0 must have shape (k,) with k >= 2 and b0 shape (k - 1,), got {a.shape} and "
+            f"{b.shape}; pass the diagonal and the off-diagonal of L(0)"
+        )
+    ts = _output_times(t)
+    k = a.size
+    L0 = np.diag(a) + np.diag(b, 1) + np.diag(b, -1)
+    D = np.diag(np.arange(1.0, k + 1))
+    if ts[-1] == 0.0:  # t = [0]: solve_ivp returns no output on an empty interval
+        return L0[None].copy()
+    sol = solve_ivp(
+        lambda _t, y: -_gen.double_bracket_rhs(y.reshape(k, k), D).ravel(),
+        (0.0, float(ts[-1])),
+        L0.ravel(),
+        t_eval=ts,
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+    )
+    if not sol.success:
+        raise NotConvergedError(f"toda_flow: {sol.message}", float("nan"), sol.nfev)
+    return np.asarray(sol.y.T.reshape(-1, k, k))
 
 
 @dataclass(frozen=True)

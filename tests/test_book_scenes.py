@@ -23,6 +23,11 @@ PAGES = {
     "section3/01_optimal_control.md": ("symmetric_vs_rigid_body", ("flow_agreement(",)),
     "scenes.md": ("rigid_body_momentum", ()),
     "section3/03_hamiltonian.md": ("hamiltonian_on_gl", ("hamiltonian_drift(",)),
+    "section3/04_adjoint_orbits.md": ("toda_lattice", ("toda_lattice(",)),
+    "section3/05_double_bracket_learning.md": (
+        "orbit_one_sample",
+        ("one_sample_learning(", "two_sample_learning("),
+    ),
     "hard_cases.md": (
         "long_run_spread1e6_n3",
         ("symrb.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),

@@ -821,9 +821,9 @@ def toda_lattice(k: int = 5, T: float = 12.0, seed: int = 7, samples: int = 241)
     With :math:`x = iL` (L real symmetric tridiagonal), :math:`N = iD`,
     :math:`D = \operatorname{diag}(1, \dots, k)`, the double bracket flow
     :math:`\dot x = [x, [x, N]]` reads :math:`\dot L = -[L, [L, D]]`, Flaschka's form of the
-    Toda lattice.  It is integrated with ``scipy.integrate.solve_ivp`` (DOP853, rtol 1e-10) and
-    :func:`symrb.commutator`, from a random L (diagonal normal, off-diagonal uniform in
-    [0.4, 1]).
+    Toda lattice.  It is integrated by :func:`symrb.toda_flow` (DOP853, rtol 1e-10), from a
+    random L (diagonal normal, off-diagonal uniform in [0.4, 1]); the scene
+    ``book/scenes/toda_lattice.toml`` runs the same.
 
     Parameters
     ----------
@@ -848,24 +848,13 @@ def toda_lattice(k: int = 5, T: float = 12.0, seed: int = 7, samples: int = 241)
     >>> print((run.a[-1] - run.eigenvalues).round(6) + 0.0)  # sorted to the eigenvalues
     [0. 0. 0.]
     """
-    from scipy.integrate import solve_ivp
-
     k = _count(k, "k", 2)
     T = _positive(T, "T")
     rng = np.random.default_rng(seed)
     a0, b0 = rng.standard_normal(k), rng.uniform(0.4, 1.0, k - 1)
     L0 = np.diag(a0) + np.diag(b0, 1) + np.diag(b0, -1)
-    D = np.diag(np.arange(1.0, k + 1))
     ts = np.linspace(0.0, T, _count(samples, "samples", 2))
-
-    def field(_t: float, y: Array) -> Array:
-        L = y.reshape(k, k)
-        return -symrb.commutator(L, symrb.commutator(L, D)).ravel()
-
-    sol = solve_ivp(field, (0.0, T), L0.ravel(), t_eval=ts, method="DOP853", rtol=1e-10, atol=1e-12)
-    if not sol.success:
-        raise RuntimeError(f"integration failed: {sol.message}")
-    Ls = sol.y.T.reshape(-1, k, k)
+    Ls = symrb.toda_flow(a0, b0, ts, rtol=1e-10, atol=1e-12)
     eig0 = np.sort(np.linalg.eigvalsh(L0))[::-1]
     spectra = np.sort(np.linalg.eigvalsh(Ls), axis=-1)[:, ::-1]
     return TodaLattice(

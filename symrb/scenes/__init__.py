@@ -49,12 +49,13 @@ symmetric_rigid_body   samples                         Q, P, M, H, energy, ortho
                                                        M_gap, Q_gap
 mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
 double_bracket         (none)                          x, potential, pairing, casimirs
-orbit_extremal         terminal_cost, potential,       x, p, u
-                       samples, costates
+orbit_extremal         terminal_cost, potential,       x, p, u, pairing, second_term, db_distance,
+                       samples, costates               db_second_term, sample_pairings
 resnet                 terminal_cost, costates         loss, accuracy, test_accuracy, states, K,
                                                        beta, costates
 so_network             terminal_cost, running_cost,    loss, residual, U, Q, costates,
                        costates                        extremal_residual, iterations, converged
+toda                   (none)                          L, a, b, spectrum, off_band
 =====================  ==============================  =============================================
 """
 
@@ -92,6 +93,7 @@ from ._core import (
     scene_key as scene_key,
 )
 from ._so_network import SONetworkScene
+from ._toda import TodaScene
 
 __all__ = [
     "SceneError",
@@ -102,6 +104,7 @@ __all__ = [
     "DoubleBracketScene",
     "OrbitExtremalScene",
     "ResNetScene",
+    "TodaScene",
     "parse_scene",
     "load_scene",
     "scene_inputs",

@@ -33,6 +33,7 @@ try:
         Field,
         TypeAdapter,
         ValidationError,
+        ValidationInfo,
         field_validator,
         model_validator,
     )
@@ -297,12 +298,19 @@ class DoubleBracketIVP(_Model):
 
 
 class BVP(_Model):
-    """``symrb.solve_orbit_bvp`` (``scipy.integrate.solve_bvp``)."""
+    r"""``symrb.solve_orbit_bvp`` (``scipy.integrate.solve_bvp``) with ``nodes``, ``tol``, the
+    endpoint ``costate`` (``"corrected"``: :math:`p_T = -N`; ``"printed"``: the paper's
+    :math:`+N`) and the costate guess ``p_guess`` (``"terminal"``: the endpoint value, the
+    default of ``solve_orbit_bvp``; ``"zero"``: :math:`p \equiv 0`).  With one sample and the
+    corrected sign the extremal is known (:math:`p \equiv -N`, x the double bracket flow; claim
+    S15) and the initial value problem is run instead, unless ``one_sample_ivp = false``."""
 
     kind: Literal["bvp"]
     nodes: int = Field(default=41, ge=3)
     tol: float = Field(default=1e-6, gt=0)
     costate: Literal["corrected", "printed"] = "corrected"
+    p_guess: Literal["terminal", "zero"] = "terminal"
+    one_sample_ivp: bool = True
 
 
 class GradientDescent(_Model):
@@ -369,13 +377,22 @@ class SymmetricBodyParameters(BodyParameters):
 
 class OrbitParameters(_Model):
     """An adjoint orbit of so(n): ``x0`` (3-vector or matrix; with samples, a list of them) and
-    the fixed element ``N``; default random from ``seed``."""
+    the fixed element ``N``; default random from ``seed`` (``symrb.random_so`` with entries of
+    standard deviation ``scale``, N drawn first)."""
 
     n: int = Field(default=3, ge=2)
     seed: int = 0
     x0: Vector | Matrix | tuple[Matrix, ...] | None = None
     N: Vector | Matrix | None = None
     samples: int = Field(default=1, ge=1)
+    scale: float = Field(default=1.0, gt=0)
+
+    @field_validator("scale")
+    @classmethod
+    def _scale_draws(cls, value: float, info: ValidationInfo) -> float:
+        if info.data.get("x0") is not None and info.data.get("N") is not None:
+            raise ValueError("x0 and N are given: scale draws nothing; remove scale")
+        return value
 
 
 class NetworkParameters(_Model):
@@ -581,24 +598,44 @@ class DoubleBracketScene(_SceneBase):
 
 
 class OrbitExtremalScene(_SceneBase):
-    """Extremals of the adjoint-orbit problem with Brockett's potential and the terminal cost
+    r"""Extremals of the adjoint-orbit problem with Brockett's potential and the terminal cost
     <x_T, N> (Section 3.5; ``symrb.solve_orbit_bvp``).
+
+    Observables, per record and sample a (norms :math:`\|y\| = \langle y, y\rangle^{1/2}` of
+    :func:`symrb.pairing`): ``x``, ``p`` (effect ``costates``), the shared control ``u``;
+    ``pairing`` :math:`\langle x^a, N\rangle` (the terminal cost along the extremal);
+    ``second_term`` :math:`\|[N, [N, x^a]]\|` (the costate equation's second term);
+    ``db_distance`` :math:`\|x^a - x^a_{db}\|` and ``db_second_term``
+    :math:`\|[N, [N, x^a_{db}]]\|`, :math:`x^a_{db}` the double bracket flow
+    (``symrb.double_bracket_flow``) from :math:`x^a_0` alone: one extra run per sample, made
+    only when one of them is asked for (none on the one-sample initial value route, whose state
+    is that flow); ``sample_pairings`` :math:`\langle x^a, x^b\rangle` (effect ``samples``;
+    conserved by the shared control).
 
     Examples
     --------
     >>> from symrb.scenes import OrbitExtremalScene
     >>> OrbitExtremalScene.EFFECTS, sorted(OrbitExtremalScene.OBSERVABLES)
-    (('terminal_cost', 'potential', 'samples', 'costates'), ['p', 'u', 'x'])
+    ... # doctest: +NORMALIZE_WHITESPACE
+    (('terminal_cost', 'potential', 'samples', 'costates'), ['db_distance', 'db_second_term',
+     'p', 'pairing', 'sample_pairings', 'second_term', 'u', 'x'])
     """
 
     EFFECTS = ("terminal_cost", "potential", "samples", "costates")
     REQUIRED = ("terminal_cost", "potential")
-    OBSERVABLES = {"x": None, "u": None, "p": "costates"}
+    OBSERVABLES = {
+        "x": None, "u": None, "p": "costates", "pairing": None, "second_term": None,
+        "db_distance": None, "db_second_term": None, "sample_pairings": "samples",
+    }  # fmt: skip
     system: Literal["orbit_extremal"]
     parameters: OrbitParameters = OrbitParameters()
     integrator: BVP
     horizon: TimeHorizon
-    observables: dict[Literal["x", "u", "p"], When]
+    observables: dict[
+        Literal["x", "u", "p", "pairing", "second_term", "db_distance", "db_second_term",
+                "sample_pairings"],
+        When,
+    ]  # fmt: skip
 
 
 class ResNetScene(_SceneBase):
@@ -1081,10 +1118,11 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
     rng = np.random.default_rng(p.seed)
     n = p.n
     if isinstance(scene, DoubleBracketScene | OrbitExtremalScene):
-        N = _skew_from(p.N, n, "parameters.N") if p.N is not None else random_so(n, seed=rng)
+        N = (_skew_from(p.N, n, "parameters.N") if p.N is not None
+             else random_so(n, scale=p.scale, seed=rng))  # fmt: skip
         m = p.samples
         if p.x0 is None:
-            x0 = random_so(n, (m,) if m > 1 else (), seed=rng)
+            x0 = random_so(n, (m,) if m > 1 else (), scale=p.scale, seed=rng)
         else:
             x0 = np.asarray(p.x0, dtype=float)
             x0 = _skew_from(x0, n, "parameters.x0") if x0.ndim < 3 else v.skew(x0, "x0", n)
@@ -1597,25 +1635,61 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
         save = {"t_eval": [float(t) for t in t_eval]}
         m = p.samples
         modules = ("orbits", "algebra", "_validate", "_generated.adjoint_orbits")
-        if m == 1 and integ.costate == "corrected":
+        db_asked = [o for o in ("db_distance", "db_second_term") if o in asked]
+        if _orbit_ivp(sc):
+            if integ.p_guess != "terminal":
+                raise _problem("integrator.p_guess",
+                               "one sample with the corrected sign runs as the initial value "
+                               "problem of the double bracket flow, which takes no costate "
+                               "guess; set integrator.one_sample_ivp = false to solve the BVP "
+                               "from this guess", ["terminal"])  # fmt: skip
             route = ("symrb.double_bracket_flow (one sample: the extremal with p_T = -N is "
                      "x' = [x, [x, N]] with p = -N constant, claim S15)")  # fmt: skip
             propagated = ("x",)
             skipped.append(("costate sweep (two-point boundary value problem)",
                             "one sample: p = -N along the extremal, an initial value problem "
-                            "replaces the BVP"))  # fmt: skip
+                            "replaces the BVP (integrator.one_sample_ivp = false solves the "
+                            "BVP)"))  # fmt: skip
+            unused = sorted({"nodes", "tol"} & integ.model_fields_set)
+            if unused:
+                notes.append(f"integrator.{', '.join(unused)}: settings of the BVP, not used "
+                             "on this route")  # fmt: skip
+            if db_asked:
+                notes.append(f"{', '.join(db_asked)}: the state is the double bracket flow "
+                             "from x0 itself, so no extra run (db_distance is 0)")  # fmt: skip
             kernels = ("adjoint_orbits.double_bracket_rhs",)
             cost = _est_continuous(sc.horizon.T, 1e-11, 1.0, 8.0 * p.n**3)
         else:
+            guess = ", p_guess=0" if integ.p_guess == "zero" else ""
             route = (f"symrb.solve_orbit_bvp(nodes={integ.nodes}, tol={integ.tol:g}, "
-                     f"costate={integ.costate!r}), evaluated at the save times")  # fmt: skip
-            propagated = (f"x ({m} samples)", f"p ({m} samples)")
+                     f"costate={integ.costate!r}{guess}), evaluated at the save "
+                     "times")  # fmt: skip
+            sm = f"{m} sample{'s' * (m > 1)}"
+            propagated = (f"x ({sm})", f"p ({sm})")
             kernels = ("adjoint_orbits (the extremal field, inside solve_orbit_bvp)",)
             T = sc.horizon.T
             secs = 0.2 * m * max(1.0, math.log(T) / math.log(1.5) + 1)
             cost = {"flops": secs * 1.5e9, "seconds": secs,
                     "formula": "~0.2 s per sample per continuation stage (horizons grow by 1.5 "
                     "from 1 to T)"}  # fmt: skip
+            if m == 1 and integ.costate == "corrected":
+                notes.append("integrator.one_sample_ivp = false: the BVP is solved although "
+                             "its solution is known (p = -N, x the double bracket flow; claim "
+                             "S15), to check that the solver finds it")  # fmt: skip
+            if db_asked:
+                last = max(max(index[o]) for o in db_asked)
+                propagated += (f"x_db ({m} own double bracket flow{'s' * (m > 1)})",)
+                kernels += ("adjoint_orbits.double_bracket_rhs",)
+                notes.append(f"{', '.join(db_asked)}: {m} extra run{'s' * (m > 1)} of "
+                             "symrb.double_bracket_flow (default tolerances), from each "
+                             f"sample's x0 to t = {t_eval[last]:g}")  # fmt: skip
+                db = _est_continuous(float(t_eval[last]), 1e-11, 1.0, 8.0 * p.n**3)
+                cost = {"flops": cost["flops"] + m * db["flops"],
+                        "seconds": cost["seconds"] + m * db["seconds"],
+                        "formula": f"{cost['formula']}; plus {m} x ({db['formula']})"}  # fmt: skip
+            else:
+                skipped.append(("each sample's own double bracket flow", "db_distance, "
+                                "db_second_term not asked for"))  # fmt: skip
         if "samples" not in sc.effects:
             skipped.append(("samples", "effect 'samples' not named: one sample"))
         if "costates" not in sc.effects:
@@ -1903,6 +1977,29 @@ def _mv_momentum(
     return np.asarray(ks, dtype=float) * h, {"M": np.stack(Ms)}, failure
 
 
+def _orbit_ivp(sc: Any) -> bool:
+    """Whether an orbit extremal scene runs as the initial value problem of the double bracket
+    flow (one sample, the corrected sign, ``integrator.one_sample_ivp``)."""
+    integ = sc.integrator
+    return bool(sc.parameters.samples == 1 and integ.costate == "corrected"
+                and integ.one_sample_ivp)  # fmt: skip
+
+
+def _pairing_norm(a: Array) -> Array:
+    r""":math:`\|a\| = \langle a, a\rangle^{1/2}` (:func:`symrb.pairing`), over the last two axes."""
+    from ..algebra import pairing
+
+    out: Array = np.sqrt(np.maximum(pairing(a, a), 0.0))
+    return out
+
+
+def _second_term(x: Array, N: Array) -> Array:
+    r""":math:`\|[N, [N, x]]\|`, the second term of the costate equation (its norm)."""
+    from ..algebra import commutator
+
+    return _pairing_norm(commutator(N, commutator(N, x)))
+
+
 def _run_orbit(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
     from ..algebra import commutator, pairing
     from ..orbits import brockett_potential, double_bracket_flow, solve_orbit_bvp
@@ -1923,19 +2020,46 @@ def _run_orbit(sc: Any, plan: Plan, x: dict[str, Any]) -> dict[str, Any]:
             out[name] = fns[name](xs[list(idx)])
         return {"t": t_eval, "data": out, "failure": failure, "states": states}
     integ = sc.integrator
-    if plan.propagated == ("x",):
+    ivp = _orbit_ivp(sc)
+    if ivp:
         xs = double_bracket_flow(x0, N, t_eval)[:, None]
         ps = np.broadcast_to(-N, xs.shape).copy()
     else:
+        guess = np.zeros_like(N) if integ.p_guess == "zero" else None
         res = solve_orbit_bvp(x0, N, float(sc.horizon.T), costate=integ.costate,
-                              nodes=integ.nodes, tol=integ.tol)  # fmt: skip
+                              nodes=integ.nodes, tol=integ.tol, p_guess=guess)  # fmt: skip
         if not res.success:
             failure = f"solve_orbit_bvp: {res.message}"
         xs, ps = res.at(t_eval)
-    us = np.sum(commutator(ps, xs), axis=1)
-    vals = {"x": xs, "p": ps, "u": us}
+    # each sample's own double bracket flow, at the times of the db_* observables (the state
+    # itself on the initial value route)
+    db_idx = sorted({i for o in ("db_distance", "db_second_term") for i in plan.index.get(o, ())})
+    xdb: Array | None = None
+    if db_idx and ivp:
+        xdb = xs[db_idx]
+    elif db_idx:
+        x0s = x0 if x0.ndim == 3 else x0[None]
+        ts = t_eval[db_idx]
+        xdb = np.stack([double_bracket_flow(a, N, ts) for a in x0s], axis=1)
     for name, idx in plan.index.items():
-        out[name] = vals[name][list(idx)]
+        sel = list(idx)
+        if name == "x":
+            out[name] = xs[sel]
+        elif name == "p":
+            out[name] = ps[sel]
+        elif name == "u":
+            out[name] = np.sum(commutator(ps[sel], xs[sel]), axis=1)
+        elif name == "pairing":
+            out[name] = pairing(xs[sel], N)
+        elif name == "second_term":
+            out[name] = _second_term(xs[sel], N)
+        elif name == "sample_pairings":
+            out[name] = pairing(xs[sel][:, :, None], xs[sel][:, None, :])
+        else:
+            assert xdb is not None
+            own = xdb[np.searchsorted(db_idx, sel)]
+            out[name] = (_pairing_norm(xs[sel] - own) if name == "db_distance"
+                         else _second_term(own, N))  # fmt: skip
     return {"t": t_eval, "data": out, "failure": failure}
 
 
