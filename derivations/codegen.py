@@ -575,7 +575,17 @@ class MatrixPrinter(NumPyPrinter):
     def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
         if expr.exp == -1:
             return f"1.0 / {self.parenthesize(expr.base, precedence(expr), strict=True)}"
+        if expr.exp.is_Integer and 3 <= int(expr.exp) <= _MAX_PRODUCT_POWER:
+            # a product, not ``**``: Python floats (C pow), NumPy arrays (its own, vectorised
+            # pow) and numba (LLVM) round x**3 differently, while x * x * x is the same IEEE
+            # products in all three, so a scalar kernel gives the same bits however it is called
+            base = self._factor_str(self._print(expr.base))
+            return "(" + " * ".join([base] * int(expr.exp)) + ")"
         return super()._print_Pow(expr, rational=rational)
+
+
+#: integer powers x**3 .. x**8 of a scalar are printed as products (see _print_Pow)
+_MAX_PRODUCT_POWER = 8
 
 
 def _atomic(s: str) -> bool:
