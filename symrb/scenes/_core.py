@@ -1813,12 +1813,26 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
             if cmp.rotation is not None:
                 how = (f"R = symrb.random_SO({p.n}, seed={cmp.rotation})"
                        if isinstance(cmp.rotation, int) else "R as given")  # fmt: skip
-                notes.append(f"{who}: in a rotated frame, {how}: it starts from the rotated "
-                             "initial state (R Q0, R P0, R Q1) and its attitudes are rotated "
-                             "back, R^T Q, before the gaps")  # fmt: skip
+                notes.append(f"{who}: in the frame rotated by {how}")
                 if c2.propagated == ("M",):
                     notes.append(f"{who}: propagates only M, which the rotation leaves as it "
                                  "is")  # fmt: skip
+                elif (cmp.system or sc.system) == "rigid_body" and isinstance(
+                    cmp.integrator, Discrete
+                ):
+                    route2 = (f"symrb.symmetric_flow(R Q0, R P0, h={cmp.integrator.h:g}) with "
+                              "P0 = Q0 M0 / 2 (the symmetric algorithm's state, rotated), then "
+                              "R^T Q")  # fmt: skip
+                else:
+                    ci = cmp.integrator
+                    state = ("(R Q0, R P0)" if (cmp.system or sc.system) != "rigid_body"
+                             else "(R Q0, R Q1)" if isinstance(ci, MVAlgorithm1)
+                             else "(R Q1, M1)" if getattr(ci, "start", "") == "Q1_M1"
+                             else "(R Q0, M0)")  # fmt: skip
+                    back = "R^T Q" if "P0" not in state else "R^T Q, R^T P"
+                    route2 = f"{c2.route}; from the rotated state {state}, then {back}"
+                if c2.propagated != ("M",):
+                    plans = plans[:i] + (dataclasses.replace(c2, route=route2),) + plans[i + 1 :]
             if cmp.shift:
                 notes.append(f"{who}: shifted by {cmp.shift} step{'s' * (cmp.shift > 1)}: its "
                              f"step k is compared "
