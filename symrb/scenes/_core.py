@@ -384,9 +384,15 @@ class BodyParameters(_Model):
     Q0: Literal["identity", "random"] = "identity"
     samples: int = Field(default=1, ge=1)
 
+    def _given(self, keys: Iterable[str]) -> list[str]:
+        """The keys among ``keys`` given a value other than their default (so that a scene
+        dumped with every default re-validates)."""
+        fields = type(self).model_fields
+        return sorted(k for k in keys if getattr(self, k) != fields[k].default)
+
     @model_validator(mode="after")
     def _one_size(self) -> BodyParameters:
-        if self.op_norm is not None and "momentum" in self.model_fields_set:
+        if self.op_norm is not None and self._given(["momentum"]):
             raise ValueError("give the size of M0 once: momentum (the pairing norm) or op_norm "
                              "(the operator norm), not both")  # fmt: skip
         return self
@@ -415,7 +421,7 @@ class SymmetricBodyParameters(BodyParameters):
         if self.start != "momentum":
             keys = {"M0", "momentum", "op_norm", "samples"}
             keys |= set() if self.start == "boundary" else {"Q0"}
-            given = sorted(keys & self.model_fields_set)
+            given = self._given(keys)
             if given:
                 what = "P0 from Q0" if self.start == "boundary" else "Q0 and P0"
                 raise ValueError(f"start = {self.start!r} draws {what} itself; remove {given}")
@@ -1962,6 +1968,8 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
 
     if name in y:
         return y[name]
+    if name == "orthogonality":  # the attitude alone (MV-Algorithm 1 has no momenta)
+        return _orth_error(y["Q"])
     M = y["M"] if "M" in y else (
         symmetric_momentum(y["Q"], y["P"]) if "P" in y else np.swapaxes(y["Q"], -1, -2) @ y["B"]
     )  # fmt: skip
@@ -1979,8 +1987,6 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
         # the Lax matrix M + mu Lambda^2 at mu = i, times i: Hermitian, with a conserved spectrum
         out: Array = np.asarray(np.linalg.eigvalsh(1j * M - np.diag(lam**2)), dtype=float)
         return out
-    if name == "orthogonality":
-        return _orth_error(y["Q"])
     if name == "P_orthogonality":
         return _orth_error(y["P"])
     if name == "op_norm":  # the largest singular value, a Casimir (S11)
