@@ -21,8 +21,13 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
     "rigid_body.md": ("manakov_drift", ("manakov_drift(",)),
     "section2/02_backprop.md": ("toy_training", ("train_toy_classifier(",)),
     "section2/04_moser_veselov.md": (
-        ("mv_invariants", "agreement_symmetric", "agreement_mv1", "agreement_discretisation",
-         "second_order"),
+        (
+            "mv_invariants",
+            "agreement_symmetric",
+            "agreement_mv1",
+            "agreement_discretisation",
+            "second_order",
+        ),
         ("invariant_drift(", "algorithm_agreement(", "second_order("),
     ),  # fmt: skip
     "section3/02_local_equivalence.md": (

@@ -270,7 +270,7 @@ class MVAlgorithm2(_Model):
 
     ``start = "Q0_M0"`` (the default) starts it from :math:`(Q_0, hM_0)`, read as the pair
     :math:`(Q_0, M_0)`, and records :math:`M_k/h` at :math:`t_k`.  ``start = "Q1_M1"`` follows the
-    paper's indices, :math:`M_{k+1} pprox hM(t_k)` (the momentum of the step that leaves
+    paper's indices, :math:`M_{k+1} \approx hM(t_k)` (the momentum of the step that leaves
     :math:`Q_k`): the first step is the symmetric algorithm's,
     ``symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1)``, which gives :math:`Q_1` and
     :math:`M_1 = h(Q_0^TP_0 - P_0^TQ_0)` (claim D12), and MV-Algorithm 2 runs from
@@ -1364,7 +1364,7 @@ class Plan:
                        f"{what} on the same initial data:")  # fmt: skip
             for i, c2 in enumerate(runs):
                 if many:
-                    out.append(f"  [{i + 1}] {c2.title}" if c2.title else f"  [{i + 1}]")
+                    out.append(f"  [compare.{i}] {c2.title}".rstrip())
                 out += ["  " + line for line in c2.explain().splitlines()]
         c = self.cost
         out.append(
@@ -1815,7 +1815,8 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
             raise SceneError(problems)
         plans = tuple(_plan_compare(sc, cmp, i) for i, cmp in enumerate(cmps))
         for i, (cmp, c2) in enumerate(zip(cmps, plans, strict=True)):
-            who = f"compare {i + 1}" + (f" ({cmp.label})" if cmp.label else "")
+            who = ("compare" if len(cmps) == 1 and not isinstance(sc.compare, tuple)
+                   else f"compare.{i}") + (f" ({cmp.label})" if cmp.label else "")  # fmt: skip
             if cmp.rotation is not None:
                 how = (f"R = symrb.random_SO({p.n}, seed={cmp.rotation})"
                        if isinstance(cmp.rotation, int) else "R as given")  # fmt: skip
@@ -2299,7 +2300,7 @@ def _execute_raw(
         for i, (cmp, c2) in enumerate(zip(cmps, plans, strict=True)):
             _, other, failed = _execute(_compare_scene(sc, cmp), c2, _rotation(sc, cmp))
             if failed and not failure:
-                failure = f"the [compare] run{f' {i + 1}' * (len(cmps) > 1)}: {failed}"
+                failure = f"the [compare] run{f' compare.{i}' * (len(cmps) > 1)}: {failed}"
             for name in gaps:
                 # the first record of the gap is the one every run can be paired with; this
                 # run's record j is paired with the first run's record j + (its offset)
