@@ -29,7 +29,7 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
             "second_order",
         ),
         ("invariant_drift(", "algorithm_agreement(", "second_order("),
-    ),  # fmt: skip
+    ),
     "section3/02_local_equivalence.md": (
         ("norm_conservation", "norm_conservation_boundary"),
         ("norm_conservation(",),
