@@ -29,7 +29,8 @@ diagnostic that is not asked for), which public functions and generated kernels 
 times at which to save (as diffrax's ``SaveAt``: the union of the observables' times, each
 observable evaluated only at its own; a windowed observable reduced per window as
 :class:`When` describes, its unreduced series not kept; the ``*_gap`` observables compared with
-the second run of a ``[compare]`` table).  :meth:`Plan.explain` prints the plan with what is skipped
+the second run of a ``[compare]`` table, or with each run of an array of ``[[compare]]`` tables,
+one column each; a second run may run in a rotated frame, or be compared some steps later).  :meth:`Plan.explain` prints the plan with what is skipped
 and why, and an estimated cost.  :func:`run_scene` runs a scene and returns a
 :class:`SceneResult` (arrays, the scene, the plan, the versions), cached on disk by a SHA-256 of
 the canonical scene and of the source of the symrb modules it uses, so a rerun that changes
@@ -45,8 +46,8 @@ system                 effects                         observables
 rigid_body             attitude                        M, Q, Omega, energy, casimirs, manakov,
                                                        lax_spectrum, orthogonality, M_gap, Q_gap
 symmetric_rigid_body   samples                         Q, P, M, H, energy, orthogonality,
-                                                       P_orthogonality, gram_spectrum, U,
-                                                       M_gap, Q_gap
+                                                       P_orthogonality, gram_spectrum, op_norm,
+                                                       U, M_gap, Q_gap
 mclachlan_scovel       (none)                          Q, B, M, energy, orthogonality
 double_bracket         (none)                          x, potential, pairing, casimirs
 orbit_extremal         terminal_cost, potential,       x, p, u, pairing, second_term, db_distance,

@@ -30,7 +30,9 @@ try:
     from pydantic import (
         BaseModel,
         ConfigDict,
+        Discriminator,
         Field,
+        Tag,
         TypeAdapter,
         ValidationError,
         ValidationInfo,
@@ -91,7 +93,7 @@ class SceneError(InputError):
     ...     load_scene(text + '[observables]\\nM = "end"\\n')
     ... except SceneError as exc:
     ...     print(exc.problems[0]["key"], exc.problems[0]["line"], exc.problems[0]["allowed"])
-    integrator.kind 3 ['continuous', 'mv', 'mv_algorithm2', 'discrete']
+    integrator.kind 3 ['continuous', 'mv', 'mv_algorithm2', 'mv_algorithm1', 'discrete']
     """
 
     def __init__(self, problems: list[dict[str, Any]], source: str = "scene") -> None:
@@ -234,6 +236,10 @@ class When(_Model):
         return what
 
 
+Matrix = tuple[tuple[float, ...], ...]
+Vector = tuple[float, ...]
+
+
 class TimeHorizon(_Model):
     """The final time ``T`` (> 0)."""
 
@@ -273,20 +279,80 @@ class Discrete(_Model):
 
 
 class MVAlgorithm2(_Model):
-    """The paper's MV-Algorithm 2 (``symrb.mv_algorithm2``) at step ``h``: started from
-    :math:`(Q_0, hM_0)`, its discrete momenta divided by ``h`` are recorded as ``M``."""
+    r"""The paper's MV-Algorithm 2 (``symrb.mv_algorithm2``) at step ``h``; its discrete momenta
+    divided by ``h`` are recorded as ``M``.
+
+    ``start = "Q0_M0"`` (the default) starts it from :math:`(Q_0, hM_0)`, read as the pair
+    :math:`(Q_0, M_0)`, and records :math:`M_k/h` at :math:`t_k`.  ``start = "Q1_M1"`` follows the
+    paper's indices, :math:`M_{k+1} \approx hM(t_k)` (the momentum of the step that leaves
+    :math:`Q_k`): the first step is the symmetric algorithm's,
+    ``symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1)``, which gives :math:`Q_1` and
+    :math:`M_1 = h(Q_0^TP_0 - P_0^TQ_0)` (claim D12), and MV-Algorithm 2 runs from
+    :math:`(Q_1, M_1)`; it records :math:`Q_k` and :math:`M_{k+1}/h` at :math:`t_k`.  Against
+    the symmetric algorithm, ``"Q0_M0"`` is one index off."""
 
     kind: Literal["mv_algorithm2"]
+    h: float = Field(gt=0)
+    start: Literal["Q0_M0", "Q1_M1"] = "Q0_M0"
+
+
+class MVAlgorithm1(_Model):
+    r"""The paper's MV-Algorithm 1 (``symrb.mv_algorithm1``) at step ``h``, on configurations
+    only: :math:`Q_1` is the first step of the symmetric algorithm,
+    ``symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1)`` (the step with
+    :math:`M_1 = h(Q_0^TP_0 - P_0^TQ_0)`, claim D12), then
+    :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})`.  It records :math:`Q_k` at :math:`t_k`
+    (observables ``Q``, ``orthogonality``, ``Q_gap``; the effect ``attitude``)."""
+
+    kind: Literal["mv_algorithm1"]
     h: float = Field(gt=0)
 
 
 class Compare(_Model):
-    """A second run on the same parameters (the same initial data), for the ``*_gap``
+    r"""A second run on the same parameters (the same initial data), for the ``*_gap``
     observables: ``integrator`` (required) and ``system`` (default: the scene's own; the rigid
-    body and the symmetric rigid body describe the same motion)."""
+    body and the symmetric rigid body describe the same motion).
+
+    ``rotation`` (a seed of ``symrb.random_SO(n, seed=rotation)``, or a rotation matrix R) runs
+    the second run in a rotated frame: its initial state (every attitude and costate in it:
+    :math:`Q_0`, :math:`P_0`, and :math:`Q_1` of MV-Algorithm 1 or of ``start = "Q1_M1"``) is
+    multiplied by R on the left, and its attitudes (and costates) are rotated back,
+    :math:`R^TQ'`, before the gaps; the body momenta are its own.  The equations are invariant,
+    so the gap is the rounding of the algorithm.  ``shift = s`` (fixed steps) compares the
+    second run's k-th step with the first run's (k + s)-th: a run started one index off is
+    read as if it had started at step s; the second run is s steps shorter and the gaps start
+    at step s.  ``label`` names the run in the plan.
+
+    Several second runs: an array of tables ``[[compare]]``; each ``*_gap`` observable then has
+    one column per run, in their order (the records that every run can be compared with)."""
 
     system: Literal["rigid_body", "symmetric_rigid_body"] | None = None
-    integrator: Annotated[Continuous | MV | MVAlgorithm2 | Discrete, Field(discriminator="kind")]
+    integrator: Annotated[
+        Continuous | MV | MVAlgorithm2 | MVAlgorithm1 | Discrete, Field(discriminator="kind")
+    ]
+    rotation: int | Matrix | None = None
+    shift: int = Field(default=0, ge=0)
+    label: str = ""
+
+    @field_validator("rotation")
+    @classmethod
+    def _a_rotation(cls, value: Any) -> Any:
+        if isinstance(value, tuple):
+            R = np.asarray(value, dtype=float)
+            if R.ndim != 2 or R.shape[0] != R.shape[1]:
+                raise ValueError(f"a rotation is a square matrix, got shape {R.shape}")
+            dev = float(np.abs(R.T @ R - np.eye(R.shape[0])).max())
+            if dev > 1e-12 or np.linalg.det(R) < 0:
+                raise ValueError(f"not a rotation: max |R^T R - I| = {dev:.2e}, "
+                                 f"det R = {np.linalg.det(R):.3g}")  # fmt: skip
+        return value
+
+
+#: one [compare] table, or an array of tables [[compare]] (one column per run in each gap)
+Compares = Annotated[
+    Annotated[Compare, Tag("[compare]")] | Annotated[tuple[Compare, ...], Tag("[[compare]]")],
+    Discriminator(lambda v: "[[compare]]" if isinstance(v, list | tuple) else "[compare]"),
+]
 
 
 class DoubleBracketIVP(_Model):
@@ -335,23 +401,35 @@ class ExtendedMSA(_Model):
     residual: bool = True
 
 
-Matrix = tuple[tuple[float, ...], ...]
-Vector = tuple[float, ...]
-
-
 class BodyParameters(_Model):
     """A body: ``n``, the diagonal ``lam`` of Lambda (default: ``random_lam(n, seed=seed)``), the
     initial momentum ``M0`` (a 3-vector for n = 3 or an n x n skew matrix; default:
     ``random_so(n, seed=seed)`` scaled to the size ``momentum``, measured by the pairing norm
-    :math:`\\sqrt{\\langle M, M\\rangle}`), the attitude ``Q0`` and the number of ``samples``."""
+    :math:`\\sqrt{\\langle M, M\\rangle}`), the attitude ``Q0`` and the number of ``samples``.
+    ``op_norm`` instead scales ``M0`` (given or drawn) to that operator norm
+    :math:`\\|M_0\\|_{op}` (the largest singular value): ``M0 * (op_norm / ||M0||_2)``."""
 
     n: int = Field(default=3, ge=2)
     lam: Vector | None = None
     seed: int = 0
     M0: Vector | Matrix | None = None
     momentum: float = Field(default=1.0, gt=0)
+    op_norm: float | None = Field(default=None, gt=0)
     Q0: Literal["identity", "random"] = "identity"
     samples: int = Field(default=1, ge=1)
+
+    def _given(self, keys: Iterable[str]) -> list[str]:
+        """The keys among ``keys`` given a value other than their default (so that a scene
+        dumped with every default re-validates)."""
+        fields = type(self).model_fields
+        return sorted(k for k in keys if getattr(self, k) != fields[k].default)
+
+    @model_validator(mode="after")
+    def _one_size(self) -> BodyParameters:
+        if self.op_norm is not None and self._given(["momentum"]):
+            raise ValueError("give the size of M0 once: momentum (the pairing norm) or op_norm "
+                             "(the operator norm), not both")  # fmt: skip
+        return self
 
 
 class SymmetricBodyParameters(BodyParameters):
@@ -362,16 +440,29 @@ class SymmetricBodyParameters(BodyParameters):
     :math:`(Q_0, P_0)` = ``random_SO(n, (2,), seed=seed)``, a Haar-random pair in
     :math:`SO(n)^2`. ``"general"``: :math:`(Q_0, P_0)` with standard normal entries from
     ``numpy.random.default_rng(seed)``, a point of :math:`\mathfrak{gl}(n)^2` off
-    :math:`SO(n)^2`. The last two take neither ``M0``, ``momentum`` nor ``Q0``."""
+    :math:`SO(n)^2`. The last two take neither ``M0``, ``momentum``, ``op_norm`` nor ``Q0``.
+    ``"boundary"``: a start on the set C of claim S11, :math:`\|M_0\|_{op} = 2`:
+    :math:`Q_0` as ``Q0`` says (no momentum is drawn before it) and :math:`P_0 = Q_0A`, A the
+    rotation by :math:`\pi/2` in the plane of the first two axes and, for n >= 4, by
+    :math:`\arccos 0.6` in the plane of the next two; it takes neither ``M0``, ``momentum``
+    nor ``op_norm``.  With ``start = "momentum"``, ``op_norm`` must be below 2 (S9: no
+    :math:`P_0` in SO(n) beyond)."""
 
-    start: Literal["momentum", "rotations", "general"] = "momentum"
+    start: Literal["momentum", "rotations", "general", "boundary"] = "momentum"
 
     @model_validator(mode="after")
     def _start_alone(self) -> SymmetricBodyParameters:
         if self.start != "momentum":
-            given = sorted({"M0", "momentum", "Q0", "samples"} & self.model_fields_set)
+            keys = {"M0", "momentum", "op_norm", "samples"}
+            keys |= set() if self.start == "boundary" else {"Q0"}
+            given = self._given(keys)
             if given:
-                raise ValueError(f"start = {self.start!r} draws Q0 and P0 itself; remove {given}")
+                what = "P0 from Q0" if self.start == "boundary" else "Q0 and P0"
+                raise ValueError(f"start = {self.start!r} draws {what} itself; remove {given}")
+        elif self.op_norm is not None and self.op_norm >= 2:
+            raise ValueError(f"op_norm = {self.op_norm:g} >= 2 has no costate P0 in SO(n) (claim "
+                             "S9): give op_norm < 2, or start = 'boundary' for a start on "
+                             "||M||_op = 2")  # fmt: skip
         return self
 
 
@@ -508,9 +599,11 @@ class RigidBodyScene(_SceneBase):
     }  # fmt: skip
     system: Literal["rigid_body"]
     parameters: BodyParameters = BodyParameters()
-    integrator: Annotated[Continuous | MV | MVAlgorithm2 | Discrete, Field(discriminator="kind")]
+    integrator: Annotated[
+        Continuous | MV | MVAlgorithm2 | MVAlgorithm1 | Discrete, Field(discriminator="kind")
+    ]
     horizon: TimeHorizon
-    compare: Compare | None = None
+    compare: Compares | None = None
     observables: dict[
         Literal[
             "M",
@@ -538,24 +631,24 @@ class SymmetricRigidBodyScene(_SceneBase):
     >>> SymmetricRigidBodyScene.EFFECTS, sorted(SymmetricRigidBodyScene.OBSERVABLES)
     ... # doctest: +NORMALIZE_WHITESPACE
     (('samples',), ['H', 'M', 'M_gap', 'P', 'P_orthogonality', 'Q', 'Q_gap', 'U', 'energy',
-     'gram_spectrum', 'orthogonality'])
+     'gram_spectrum', 'op_norm', 'orthogonality'])
     """
 
     EFFECTS = ("samples",)
     OBSERVABLES = {
         "Q": None, "P": None, "M": None, "H": None, "energy": None, "orthogonality": None,
-        "P_orthogonality": None, "gram_spectrum": None, "U": "samples", "M_gap": None,
-        "Q_gap": None,
+        "P_orthogonality": None, "gram_spectrum": None, "op_norm": None, "U": "samples",
+        "M_gap": None, "Q_gap": None,
     }  # fmt: skip
     system: Literal["symmetric_rigid_body"]
     parameters: SymmetricBodyParameters = SymmetricBodyParameters()
     integrator: Annotated[Continuous | Discrete, Field(discriminator="kind")]
     horizon: TimeHorizon
-    compare: Compare | None = None
+    compare: Compares | None = None
     observables: dict[
         Literal[
             "Q", "P", "M", "H", "energy", "orthogonality", "P_orthogonality", "gram_spectrum",
-            "U", "M_gap", "Q_gap",
+            "op_norm", "U", "M_gap", "Q_gap",
         ],
         When,
     ]  # fmt: skip
@@ -817,30 +910,35 @@ def _model_at(model: Any, loc: Sequence[Any]) -> Any:
             continue
         if not (isinstance(cur, type) and issubclass(cur, BaseModel)):
             return None
+        if str(part).isdigit():  # an entry of an array of tables
+            continue
         field = cur.model_fields.get(str(part))
         if field is None:
             return None
         ann = field.annotation
         cands = [ann]
-        for _ in range(3):
+        for _ in range(6):
             nxt: list[Any] = []
             for c in cands:
                 args = typing.get_args(c)
                 nxt.extend(args if args else [c])
             cands = nxt
-        models = [c for c in cands if isinstance(c, type) and issubclass(c, BaseModel)]
+        models = list(dict.fromkeys(c for c in cands
+                                    if isinstance(c, type) and issubclass(c, BaseModel)))  # fmt: skip
         cur = models[0] if len(models) == 1 else None
         members = models if len(models) > 1 else []
     return cur
 
 
-_KIND_TAGS = ("continuous", "mv", "mv_algorithm2", "discrete", "bvp", "gradient_descent", "msa",
-              "gradient", "shooting")  # fmt: skip
+_KIND_TAGS = ("continuous", "mv", "mv_algorithm2", "mv_algorithm1", "discrete", "bvp",
+              "gradient_descent", "msa", "gradient", "shooting")  # fmt: skip
 
 
 def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
-    # the members of a union (a reduction or a list of them) are not keys
-    out = [str(x) for x in loc if not re.match(r"^(literal|tuple)\[", str(x))]
+    # the members of a union (a reduction or a list of them; a seed or a matrix; one [compare]
+    # table or an array of them) are not keys
+    out = [str(x) for x in loc if not re.match(r"^(literal|tuple)\[", str(x))
+           and str(x) not in ("int", "[compare]", "[[compare]]")]  # fmt: skip
     if out and system is not None and out[0] == system:
         out = out[1:]
     for i in range(len(out) - 1):
@@ -985,9 +1083,84 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
             "key": "parameters.samples", "line": lines.get(("parameters", "samples")),
             "message": f"{message}, got {samples}", "allowed": [1],
         })  # fmt: skip
+    problems += _route_problems(scene, lines)
     if problems:
         raise SceneError(problems, source)
     return scene  # type: ignore[no-any-return]
+
+
+#: observables of the rigid body that need only its attitude (MV-Algorithm 1 has no momenta)
+_Q_ONLY = ("Q", "orthogonality", "Q_gap")
+
+
+def _compares(sc: Any) -> list[Compare]:
+    """The scene's second runs, in order (none, one [compare] table, or [[compare]] tables)."""
+    cmp = getattr(sc, "compare", None)
+    if cmp is None:
+        return []
+    return list(cmp) if isinstance(cmp, tuple) else [cmp]
+
+
+def _route_problems(sc: Any, lines: Mapping[tuple[str, ...], int]) -> list[dict[str, Any]]:
+    """What the chosen integrators cannot record: observables MV-Algorithm 1 has no momenta
+    for, and second runs whose records cannot be paired with the first run's (adaptive against
+    fixed steps with ``every``; a shift without fixed steps or between times)."""
+    out: list[dict[str, Any]] = []
+
+    def add(key: tuple[str, ...], message: str, allowed: list[Any] | None) -> None:
+        line = next((lines[key[:i]] for i in range(len(key), 0, -1) if key[:i] in lines), None)
+        out.append({"key": ".".join(key), "line": line, "message": message, "allowed": allowed})
+
+    if isinstance(getattr(sc, "integrator", None), MVAlgorithm1):
+        for name in sc.observables:
+            if name not in _Q_ONLY:
+                add(("observables", name), "MV-Algorithm 1 steps configurations only "
+                    "(Q_k, Q_{k+1}) -> (Q_{k+1}, Q_{k+2}); it has no momentum", list(_Q_ONLY))  # fmt: skip
+    cmps = _compares(sc)
+    gaps = {name: when for name, when in sc.observables.items() if name.endswith("_gap")}
+    fixed = not isinstance(getattr(sc, "integrator", None), Continuous)
+    for i, cmp in enumerate(cmps):
+        at = ("compare",) if not isinstance(sc.compare, tuple) else ("compare", str(i))
+        theirs = cmp.integrator
+        if isinstance(theirs, MVAlgorithm1):
+            for name in gaps:
+                if name != "Q_gap":
+                    add(("observables", name), "the second run (MV-Algorithm 1) steps "
+                        "configurations only; it has no momentum", ["Q_gap"])  # fmt: skip
+        if fixed and not isinstance(theirs, Continuous) and theirs.h != sc.integrator.h:
+            add(at + ("integrator", "h"), f"the second run must step as the first, h = "
+                f"{sc.integrator.h:g}, got {theirs.h:g}", [sc.integrator.h])  # fmt: skip
+        if fixed != (not isinstance(theirs, Continuous)):
+            h = sc.integrator.h if isinstance(theirs, Continuous) else theirs.h
+            for name, when in gaps.items():
+                if when.every is not None:
+                    add(("observables", name, "every"),
+                        "'every' counts the steps of a fixed-step run, and the other run of the "
+                        "comparison (an adaptive integrator) chooses its own steps: record the "
+                        f"gap at the end, at times or at points that are multiples of h = {h:g}",
+                        ["end", "times", "points"])  # fmt: skip
+        if cmp.shift:
+            if not fixed or isinstance(theirs, Continuous):
+                add(at + ("shift",), "a shift counts steps: both runs need a fixed step", [0])
+                continue
+            T, h = float(sc.horizon.T), sc.integrator.h
+            if cmp.shift * h >= T * (1 - 1e-12):
+                add(at + ("shift",), f"a shift of {cmp.shift} steps of h = {h:g} leaves nothing "
+                    f"of T = {T:g} to compare: give fewer than {round(T / h)}", None)  # fmt: skip
+            for name, when in gaps.items():
+                if when.every is None and not when.end:
+                    add(("observables", name), "a shifted comparison pairs steps: record the gap "
+                        "at the end or every k steps", ["end", "every"])  # fmt: skip
+                elif when.every is not None and cmp.shift % when.every:
+                    add(at + ("shift",), f"the shift must be a multiple of observables.{name}'s "
+                        f"every = {when.every}, got {cmp.shift}",
+                        [when.every * j for j in range(1, 4)])  # fmt: skip
+        if isinstance(cmp.rotation, tuple):
+            n = sc.parameters.n
+            if np.shape(cmp.rotation) != (n, n):
+                add(at + ("rotation",), f"a rotation of R^{n} is {n} x {n}, got shape "
+                    f"{np.shape(cmp.rotation)}", None)  # fmt: skip
+    return out
 
 
 def load_scene(path_or_text: str | os.PathLike[str]) -> Scene:
@@ -1134,12 +1307,20 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
                            "message": f"must have n = {n} entries, got shape {lam.shape}"}])  # fmt: skip
     m = p.samples
     batch = (m,) if m > 1 else ()
-    if p.M0 is None:
+    # a start on C (||M0||_op = 2) takes P0 = Q0 A: no momentum is drawn
+    boundary = isinstance(scene, SymmetricRigidBodyScene) and p.start == "boundary"
+    M0: Any = None
+    if boundary:
+        pass
+    elif p.M0 is None:
         M0 = random_so(n, batch, seed=rng)
-        M0 = M0 * (p.momentum / np.sqrt(pairing(M0, M0)))[..., None, None]
+        if p.op_norm is None:
+            M0 = M0 * (p.momentum / np.sqrt(pairing(M0, M0)))[..., None, None]
     else:
         M0 = _skew_from(p.M0, n, "parameters.M0")
         M0 = np.broadcast_to(M0, batch + (n, n)).copy()
+    if p.op_norm is not None and M0 is not None:
+        M0 = M0 * (p.op_norm / np.linalg.norm(M0, 2, axis=(-2, -1)))[..., None, None]
     Q0 = random_SO(n, batch, seed=rng) if p.Q0 == "random" else np.broadcast_to(
         np.eye(n), batch + (n, n)).copy()  # fmt: skip
     out: dict[str, Any] = {"lam": lam, "Q0": Q0, "M0": M0}
@@ -1149,6 +1330,9 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
         start = scene.parameters.start
         if start == "momentum":
             out["P0"] = P_from_M(Q0, M0)
+        elif start == "boundary":
+            out["P0"] = Q0 @ _boundary_rotation(n)
+            out["M0"] = symmetric_momentum(Q0, out["P0"])
         else:
             pair = (random_SO(n, (2,), seed=p.seed) if start == "rotations"
                     else np.random.default_rng(p.seed).standard_normal((2, n, n)))  # fmt: skip
@@ -1157,6 +1341,17 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
     if isinstance(scene, McLachlanScovelScene):
         out["B0"] = Q0 @ M0
     return out
+
+
+def _boundary_rotation(n: int) -> Array:
+    """A = Q0^T P0 of ``start = "boundary"``: the rotation by pi/2 in the plane of the first
+    two axes (so ||A - A^T||_op = 2, the set C of claim S11) and, for n >= 4, by arccos 0.6 in
+    the plane of the next two."""
+    A = np.eye(n)
+    A[:2, :2] = [[0.0, -1.0], [1.0, 0.0]]
+    if n >= 4:
+        A[2:4, 2:4] = [[0.6, -0.8], [0.8, 0.6]]
+    return A
 
 
 class RigidBodyMomentum(Flow):
@@ -1233,8 +1428,11 @@ class Plan:
     windows : dict
         Observable -> (its reductions, the number of windows) for the windowed observables:
         their records are reduced per window and the unreduced series is not kept.
-    compare : Plan or None
-        The plan of the second run of the ``*_gap`` observables.
+    compare : Plan, tuple of Plan, or None
+        The plan of the second run of the ``*_gap`` observables (a tuple for an array of
+        ``[[compare]]`` tables, in their order).
+    title : str
+        The scene's title (a second run's: its ``label``).
 
     Examples
     --------
@@ -1263,7 +1461,8 @@ class Plan:
     notes: tuple[str, ...]
     modules: tuple[str, ...]
     windows: dict[str, tuple[tuple[str, ...], int]] = dataclasses.field(default_factory=dict)
-    compare: Plan | None = None
+    compare: Plan | tuple[Plan, ...] | None = None
+    title: str = ""
 
     def explain(self) -> str:
         """The plan in words (what ``symrb run --explain`` prints)."""
@@ -1281,11 +1480,16 @@ class Plan:
             out.append(f"reduce      {name}: {raw} records -> {w} windows of ~{raw / w:.3g} "
                        f"({', '.join(reds)}); the {raw} unreduced values are not kept")  # fmt: skip
         if self.compare is not None:
-            c2 = self.compare
+            many = isinstance(self.compare, tuple)
+            runs = self.compare if isinstance(self.compare, tuple) else (self.compare,)
             gaps = [n for n in self.record if n.endswith("_gap")]
-            out.append(f"compare     {', '.join(gaps)}: the largest entry of |X - X'| against a "
-                       f"second run on the same initial data:")  # fmt: skip
-            out += ["  " + line for line in c2.explain().splitlines()]
+            what = f"{len(runs)} second runs (one column each)" if many else "a second run"
+            out.append(f"compare     {', '.join(gaps)}: the largest entry of |X - X'| against "
+                       f"{what} on the same initial data:")  # fmt: skip
+            for i, c2 in enumerate(runs):
+                if many:
+                    out.append(f"  [compare.{i}] {c2.title}".rstrip())
+                out += ["  " + line for line in c2.explain().splitlines()]
         c = self.cost
         out.append(
             f"cost        ~{c['flops']:.2g} flops, ~{_fmt_seconds(c['seconds'])} (estimate: "
@@ -1548,17 +1752,42 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
                 cost = {"flops": steps * flops, "seconds": steps * per,
                         "formula": f"{steps} steps x ~{_fmt_seconds(per)} a step (n = 3: one "
                         "fused kernel call; else ~4 solver sweeps of two n^3 products)"}  # fmt: skip
-            elif isinstance(integ, MVAlgorithm2):
+            elif isinstance(integ, MVAlgorithm2 | MVAlgorithm1):
                 modules += ("discrete", "solvers", "_generated.discrete_rigid_body",
                             "_progress")  # fmt: skip
-                route = (f"symrb.mv_algorithm2(Q0, h M0, lam, steps) with h={integ.h:g} (the "
-                         "paper's MV-Algorithm 2; its discrete momenta divided by h)")  # fmt: skip
-                propagated = ("Q", "M")
-                if not attitude:
+                first = ("symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1) for Q_1 and M_1 = "
+                         "h (Q0^T P0 - P0^T Q0) (the first step, D12), then ")  # fmt: skip
+                if isinstance(integ, MVAlgorithm1):
+                    route = (first + f"symrb.mv_algorithm1(Q0, Q1, lam, steps - 1) with "
+                             f"h={integ.h:g} (the paper's MV-Algorithm 1)")  # fmt: skip
+                    propagated = ("Q",)
+                    skipped.append(("M", "MV-Algorithm 1 carries configurations only"))
+                    kernels = ("discrete_rigid_body.mv_momentum",
+                               "discrete_rigid_body.mv_transport")  # fmt: skip
+                elif integ.start == "Q1_M1":
+                    need_M = any(o not in _Q_ONLY for o in obs)
+                    more = "steps" if need_M else "steps - 1"
+                    route = (first + f"symrb.mv_algorithm2(Q1, M1, lam, {more}) with "
+                             f"h={integ.h:g} (the paper's MV-Algorithm 2 and indices; Q_k and "
+                             "M_{k+1}/h recorded at t_k)")  # fmt: skip
+                    propagated = ("Q", "M")
+                    kernels = ("discrete_rigid_body.mv_transport",)
+                    if any(o in _Q_ONLY for o in obs) and every > 1:
+                        notes.append(f"start Q1_M1: the run from Q_1 saves every step (Q_k is "
+                                     f"its (k - 1)-th), and every {every}-th is kept")  # fmt: skip
+                else:
+                    route = (f"symrb.mv_algorithm2(Q0, h M0, lam, steps) with h={integ.h:g} "
+                             "(the paper's MV-Algorithm 2; its discrete momenta divided by "
+                             "h)")  # fmt: skip
+                    propagated = ("Q", "M")
+                    kernels = ("discrete_rigid_body.mv_transport",)
+                if not attitude and "Q" in propagated:
                     skipped.pop()
                     notes.append("MV-Algorithm 2 steps Q_{k+1} = Q_k Omega_{k+1}^T itself, so Q "
                                  "is propagated, though not recorded")  # fmt: skip
-                kernels = ("discrete_rigid_body.mv_transport",)
+                if not isinstance(integ, MVAlgorithm2) or integ.start == "Q1_M1":
+                    modules += ("_generated.symmetric_rigid_body",)
+                    kernels += ("symmetric_rigid_body.symmetric_momentum",)
                 per = 40e-6 + 16.0 * n**3 / 1.5e9
                 cost = {"flops": steps * 16.0 * n**3, "seconds": steps * per,
                         "formula": f"{steps} steps x ~{_fmt_seconds(per)} (one solve of "
@@ -1763,24 +1992,56 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
                 index[name] = tuple(range(0, steps + 1, when.every))
             else:
                 index[name] = (steps,)
-    compare = None
-    if getattr(sc, "compare", None) is not None:
-        compare = plan_scene(_compare_scene(sc))
-        mine = "t_eval" in save
-        if mine != ("t_eval" in compare.save):
-            raise _problem("compare.integrator.kind",
-                           "the second run must record at the same times: an adaptive "
-                           "integrator compares with an adaptive one, a fixed step with a fixed "
-                           "step", ["continuous"] if mine else ["mv", "mv_algorithm2",
-                                                                "discrete"])  # fmt: skip
-        if not mine and sc.compare.integrator.h != integ.h:
-            raise _problem("compare.integrator.h",
-                           f"the second run must step as the first, h = {integ.h:g}, got "
-                           f"{sc.compare.integrator.h:g}", [integ.h])  # fmt: skip
-        modules += compare.modules
-        cost = {"flops": cost["flops"] + compare.cost["flops"],
-                "seconds": cost["seconds"] + compare.cost["seconds"],
-                "formula": f"this run ({cost['formula']}) plus the second run"}  # fmt: skip
+    compare: Plan | tuple[Plan, ...] | None = None
+    cmps = _compares(sc)
+    if cmps:
+        problems = _route_problems(sc, {})
+        if problems:
+            raise SceneError(problems)
+        plans = tuple(_plan_compare(sc, cmp, i) for i, cmp in enumerate(cmps))
+        for i, (cmp, c2) in enumerate(zip(cmps, plans, strict=True)):
+            who = ("compare" if len(cmps) == 1 and not isinstance(sc.compare, tuple)
+                   else f"compare.{i}") + (f" ({cmp.label})" if cmp.label else "")  # fmt: skip
+            if cmp.rotation is not None:
+                how = (f"R = symrb.random_SO({p.n}, seed={cmp.rotation})"
+                       if isinstance(cmp.rotation, int) else "R as given")  # fmt: skip
+                notes.append(f"{who}: in the frame rotated by {how}")
+                if c2.propagated == ("M",):
+                    notes.append(f"{who}: propagates only M, which the rotation leaves as it "
+                                 "is")  # fmt: skip
+                elif (cmp.system or sc.system) == "rigid_body" and isinstance(
+                    cmp.integrator, Discrete
+                ):
+                    route2 = (f"symrb.symmetric_flow(R Q0, R P0, h={cmp.integrator.h:g}) with "
+                              "P0 = Q0 M0 / 2 (the symmetric algorithm's state, rotated), then "
+                              "R^T Q")  # fmt: skip
+                else:
+                    ci = cmp.integrator
+                    state = ("(R Q0, R P0)" if (cmp.system or sc.system) != "rigid_body"
+                             else "(R Q0, R Q1)" if isinstance(ci, MVAlgorithm1)
+                             else "(R Q1, M1)" if getattr(ci, "start", "") == "Q1_M1"
+                             else "(R Q0, M0)")  # fmt: skip
+                    back = "R^T Q" if "P0" not in state else "R^T Q, R^T P"
+                    route2 = f"{c2.route}; from the rotated state {state}, then {back}"
+                if c2.propagated != ("M",):
+                    plans = plans[:i] + (dataclasses.replace(c2, route=route2),) + plans[i + 1 :]
+            if cmp.shift:
+                notes.append(f"{who}: shifted by {cmp.shift} step{'s' * (cmp.shift > 1)}: its "
+                             f"step k is compared "
+                             f"with step k + {cmp.shift} of this run; it runs "
+                             f"{c2.save['steps']} steps")  # fmt: skip
+            modules += c2.modules
+        runs = "the second run" if len(plans) == 1 else f"{len(plans)} second runs"
+        cost = {"flops": cost["flops"] + sum(c2.cost["flops"] for c2 in plans),
+                "seconds": cost["seconds"] + sum(c2.cost["seconds"] for c2 in plans),
+                "formula": f"this run ({cost['formula']}) plus {runs}"}  # fmt: skip
+        for name, when in obs.items():
+            skip = max(_gap_offset(cmp, when) for cmp in cmps) if name.endswith("_gap") else 0
+            if skip:
+                index[name] = index[name][skip:]
+                notes.append(f"{name}: recorded from step {skip * (when.every or 0)} on, where "
+                             "every second run has a step to compare with")  # fmt: skip
+        compare = plans if isinstance(sc.compare, tuple) else plans[0]
     windows: dict[str, tuple[tuple[str, ...], int]] = {}
     for name, when in obs.items():
         if when.windows is None:
@@ -1806,35 +2067,74 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
         modules=tuple(dict.fromkeys(("scenes._core",) + modules)),
         windows=windows,
         compare=compare,
+        title=str(getattr(sc, "title", "")),
     )
 
 
-def _compare_scene(sc: Any) -> Any:
-    """The scene of the second run of the ``*_gap`` observables: the same parameters and
-    horizon, the integrator (and system) of ``[compare]``, recording the compared variables at
-    the gap observables' times."""
-    system = sc.compare.system or sc.system
+def _gap_offset(cmp: Compare, when: When) -> int:
+    """The first record of a gap observable that the (shifted) second run can be paired with."""
+    return cmp.shift // when.every if cmp.shift and when.every is not None else 0
+
+
+def _compare_scene(sc: Any, cmp: Compare) -> Any:
+    """The scene of a second run of the ``*_gap`` observables: the same parameters and horizon
+    (``shift`` steps shorter), the integrator (and system) of ``cmp``, recording the compared
+    variables at the gap observables' times."""
+    system = cmp.system or sc.system
     gaps = {name: when for name, when in sc.observables.items() if name.endswith("_gap")}
     observables = {
         name.removesuffix("_gap"): when.model_dump(exclude={"windows", "reduce"},
                                                    exclude_none=True, exclude_defaults=True)
         for name, when in gaps.items()
     }  # fmt: skip
+    horizon = sc.horizon.model_dump()
+    if cmp.shift:
+        horizon["T"] = float(sc.horizon.T) - cmp.shift * sc.integrator.h
     data = {
-        "title": f"second run of {sc.title or sc.system}",
+        "title": cmp.label or f"second run of {sc.title or sc.system}",
         "system": system,
         "effects": ["attitude"] if system == "rigid_body" and "Q_gap" in gaps else [],
         "parameters": sc.parameters.model_dump(exclude_defaults=True),
-        "integrator": sc.compare.integrator.model_dump(),
-        "horizon": sc.horizon.model_dump(),
+        "integrator": cmp.integrator.model_dump(),
+        "horizon": horizon,
         "observables": observables,
     }
+    return parse_scene(data, source="the [compare] run")
+
+
+def _compare_error(sc: Any, exc: SceneError, i: int | None = None) -> SceneError:
+    """A problem of a second run, keyed as in the scene: ``compare[.i].integrator...`` and the
+    gap observables (``observables.M`` of the second run is ``observables.M_gap``)."""
+    at = "compare" if i is None or not isinstance(sc.compare, tuple) else f"compare.{i}"
+    problems = []
+    for q in exc.problems:
+        key = q["key"]
+        if key.startswith("integrator"):
+            key = f"{at}.{key}"
+        elif key.startswith("observables."):
+            parts = key.split(".")
+            parts[1] += "_gap"
+            key = ".".join(parts)
+        problems.append({**q, "key": key})
+    return SceneError(problems, "scene ([compare])")
+
+
+def _plan_compare(sc: Any, cmp: Compare, i: int) -> Plan:
     try:
-        return parse_scene(data, source="the [compare] run")
+        return plan_scene(_compare_scene(sc, cmp))
     except SceneError as exc:
-        problems = [{**q, "key": f"compare.{q['key']}" if q["key"].startswith("integrator") else
-                     q["key"]} for q in exc.problems]  # fmt: skip
-        raise SceneError(problems, "scene ([compare])") from None
+        raise _compare_error(sc, exc, i) from None
+
+
+def _rotation(sc: Any, cmp: Compare) -> Array | None:
+    """The rotation R of a second run in a rotated frame (None without one)."""
+    if cmp.rotation is None:
+        return None
+    if isinstance(cmp.rotation, int):
+        from ..algebra import random_SO
+
+        return random_SO(sc.parameters.n, seed=cmp.rotation)
+    return np.asarray(cmp.rotation, dtype=float)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1854,6 +2154,8 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
 
     if name in y:
         return y[name]
+    if name == "orthogonality":  # the attitude alone (MV-Algorithm 1 has no momenta)
+        return _orth_error(y["Q"])
     M = y["M"] if "M" in y else (
         symmetric_momentum(y["Q"], y["P"]) if "P" in y else np.swapaxes(y["Q"], -1, -2) @ y["B"]
     )  # fmt: skip
@@ -1871,10 +2173,11 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
         # the Lax matrix M + mu Lambda^2 at mu = i, times i: Hermitian, with a conserved spectrum
         out: Array = np.asarray(np.linalg.eigvalsh(1j * M - np.diag(lam**2)), dtype=float)
         return out
-    if name == "orthogonality":
-        return _orth_error(y["Q"])
     if name == "P_orthogonality":
         return _orth_error(y["P"])
+    if name == "op_norm":  # the largest singular value, a Casimir (S11)
+        norm: Array = np.linalg.norm(M, 2, axis=(-2, -1))
+        return norm
     if name == "gram_spectrum":  # conserved by the symmetric field on all of gl(n)^2 (S12)
         Q = y["Q"]
         spec: Array = np.asarray(np.linalg.eigvalsh(np.swapaxes(Q, -1, -2) @ Q), dtype=float)
@@ -1888,8 +2191,12 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
     raise KeyError(name)  # pragma: no cover - the schema lists the names
 
 
-def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, Array], str]:
-    """(times of the saved states, the saved states by name, a failure message or '')."""
+def _run_body(
+    sc: Any, plan: Plan, x: dict[str, Any], rotation: Array | None = None
+) -> tuple[Array, dict[str, Array], str]:
+    """(times of the saved states, the saved states by name, a failure message or ''); with a
+    ``rotation`` R, the run starts from its initial state rotated by R and its attitudes (and
+    costates) are rotated back (see :class:`Compare`)."""
     from ..continuous import (
         McLachlanScovel,
         MultiSampleSymmetricRigidBody,
@@ -1897,6 +2204,9 @@ def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, 
         SymmetricRigidBody,
         integrate,
     )
+
+    def rot(a: Array) -> Array:
+        return a if rotation is None else rotation @ a
 
     integ = sc.integrator
     lam = x["lam"]
@@ -1907,46 +2217,108 @@ def _run_body(sc: Any, plan: Plan, x: dict[str, Any]) -> tuple[Array, dict[str, 
         T = (0.0, float(sc.horizon.T))
         if isinstance(sc, RigidBodyScene):
             if "Q" in plan.propagated:
-                sol = integrate(RigidBody, T, {"Q": x["Q0"], "M": x["M0"]}, **kw)
+                sol = integrate(RigidBody, T, {"Q": rot(x["Q0"]), "M": x["M0"]}, **kw)
             else:
                 sol = integrate(RigidBodyMomentum, T, {"M": x["M0"]}, **kw)
         elif isinstance(sc, McLachlanScovelScene):
-            sol = integrate(McLachlanScovel, T, {"Q": x["Q0"], "B": x["B0"]}, **kw)
+            sol = integrate(McLachlanScovel, T, {"Q": rot(x["Q0"]), "B": rot(x["B0"])}, **kw)
         else:
             flow = MultiSampleSymmetricRigidBody if "samples" in sc.effects else SymmetricRigidBody
-            sol = integrate(flow, T, {"Q": x["Q0"], "P": x["P0"]}, **kw)
+            sol = integrate(flow, T, {"Q": rot(x["Q0"]), "P": rot(x["P0"])}, **kw)
         states = {k: sol.y[k] for k in sol.flow.state}
-        return sol.t, states, "" if sol.success else sol.message
+        return sol.t, _rotate_back(states, rotation), "" if sol.success else sol.message
     steps, every = plan.save["steps"], plan.save["save_every"]
     if isinstance(integ, MV):
         from ..engine import mv_flow
 
         if "Q" in plan.propagated:
-            dsol = mv_flow(x["Q0"], x["M0"], lam, integ.h, steps, save_every=every,
+            dsol = mv_flow(rot(x["Q0"]), x["M0"], lam, integ.h, steps, save_every=every,
                            order=integ.order)  # fmt: skip
             keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
-            return dsol.t, {k: dsol.y[k] for k in keep}, "" if dsol.success else dsol.message
+            states = _rotate_back({k: dsol.y[k] for k in keep}, rotation)
+            return dsol.t, states, "" if dsol.success else dsol.message
         return _mv_momentum(x["M0"], lam, integ.h, steps, every)
+    if isinstance(integ, MVAlgorithm1) or getattr(integ, "start", "") == "Q1_M1":
+        return _mv_from_first_step(sc, plan, x, rot, rotation)
     if isinstance(integ, MVAlgorithm2):
         from ..discrete import mv_algorithm2
 
-        dsol = mv_algorithm2(x["Q0"], integ.h * x["M0"], lam, steps, save_every=every)
+        dsol = mv_algorithm2(rot(x["Q0"]), integ.h * x["M0"], lam, steps, save_every=every)
         keep = ("Q",) if "attitude" in sc.effects else ()
         states = {k: dsol.y[k] for k in keep}
         states["M"] = dsol.y.M / integ.h
-        return (np.asarray(dsol.k, dtype=float) * integ.h, states,
+        return (np.asarray(dsol.k, dtype=float) * integ.h, _rotate_back(states, rotation),
                 "" if dsol.success else dsol.message)  # fmt: skip
     if isinstance(sc, RigidBodyScene):
-        from ..discrete import discrete_rigid_body_flow
+        from ..discrete import discrete_rigid_body_flow, symmetric_flow
 
-        dsol = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, steps, save_every=every)
+        if rotation is None:
+            dsol = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, steps,
+                                            save_every=every)  # fmt: skip
+        else:  # the state of the symmetric algorithm, (Q0, P0 = Q0 M0 / 2), rotated
+            P0 = x["Q0"] @ (0.5 * x["M0"])
+            dsol = symmetric_flow(rot(x["Q0"]), rot(P0), lam, integ.h, steps, save_every=every)
         keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
     else:
         from ..discrete import symmetric_flow
 
-        dsol = symmetric_flow(x["Q0"], x["P0"], lam, integ.h, steps, save_every=every)
+        dsol = symmetric_flow(rot(x["Q0"]), rot(x["P0"]), lam, integ.h, steps, save_every=every)
         keep = ("Q", "P", "M")
-    return dsol.t, {k: dsol.y[k] for k in keep}, "" if dsol.success else dsol.message
+    states = _rotate_back({k: dsol.y[k] for k in keep}, rotation)
+    return dsol.t, states, "" if dsol.success else dsol.message
+
+
+def _rotate_back(states: dict[str, Array], rotation: Array | None) -> dict[str, Array]:
+    """R^T X for the attitudes and costates of a run in a rotated frame; the body momentum is
+    the run's own (computed from its rotated Q and P first, when it is not a state)."""
+    if rotation is None:
+        return states
+    if "P" in states and "M" not in states:
+        from ..continuous import symmetric_momentum
+
+        states["M"] = symmetric_momentum(states["Q"], states["P"])
+    for name in ("Q", "P", "B"):
+        if name in states:
+            states[name] = rotation.T @ states[name]
+    return states
+
+
+def _mv_from_first_step(
+    sc: Any, plan: Plan, x: dict[str, Any], rot: Callable[[Array], Array],
+    rotation: Array | None,
+) -> tuple[Array, dict[str, Array], str]:  # fmt: skip
+    """MV-Algorithm 1 from (Q_0, Q_1), or MV-Algorithm 2 from (Q_1, M_1) (``start = "Q1_M1"``),
+    Q_1 and M_1 from the symmetric algorithm's first step; Q_k and M_{k+1}/h at t_k."""
+    from ..discrete import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2
+
+    integ, lam, h = sc.integrator, x["lam"], sc.integrator.h
+    steps, every = plan.save["steps"], plan.save["save_every"]
+    first = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, h, 1)
+    if not first.success:
+        empty = np.zeros((0,) + x["Q0"].shape)
+        return np.zeros(0), {"Q": empty, "M": empty}, first.message
+    Q1, M1 = first.y.Q[1], h * first.y.M[0]
+    if isinstance(integ, MVAlgorithm1):
+        dsol = mv_algorithm1(rot(x["Q0"]), rot(Q1), lam, steps - 1, save_every=every)
+        return (np.asarray(dsol.k, dtype=float) * h, _rotate_back({"Q": dsol.y.Q}, rotation),
+                "" if dsol.success else dsol.message)  # fmt: skip
+    need_Q = any(o.removesuffix("_gap") in ("Q", "orthogonality") for o in plan.index)
+    need_M = any(o.removesuffix("_gap") not in ("Q", "orthogonality") for o in plan.index)
+    # Q_k is the (k - 1)-th state of the run from Q_1: with Q asked for every e > 1 steps the
+    # run saves every step; M_{k+1}, its k-th momentum, is saved at the steps asked for
+    save = every if every == 1 or not need_Q else 1
+    dsol = mv_algorithm2(rot(Q1), M1, lam, steps if need_M else steps - 1, save_every=save)
+    states: dict[str, Array] = {}
+    if need_Q:
+        Qs = np.concatenate([rot(x["Q0"])[None], dsol.y.Q])[: steps + 1]
+        states["Q"] = Qs[::every] if save == 1 else Qs
+    if need_M:
+        Ms = dsol.y.M / h
+        states["M"] = Ms[::every] if save != every else Ms
+    count = min(len(a) for a in states.values())
+    states = {k: a[:count] for k, a in states.items()}
+    times = (np.arange(count) * every).astype(float) * h
+    return times, _rotate_back(states, rotation), "" if dsol.success else dsol.message
 
 
 def _mv_momentum(
@@ -2145,10 +2517,12 @@ def _window_reduce(
     return ends, (out[0] if len(out) == 1 else np.stack(out, axis=1))
 
 
-def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
+def _execute(
+    sc: Any, plan: Plan, rotation: Array | None = None
+) -> tuple[dict[str, Array], dict[str, Array], str]:
     """Run a planned scene: (times per observable, data per observable, failure message), the
-    windowed observables reduced."""
-    times, data, failure = _execute_raw(sc, plan)
+    windowed observables reduced (``rotation``: a second run in a rotated frame)."""
+    times, data, failure = _execute_raw(sc, plan, rotation)
     for name, (reductions, windows) in plan.windows.items():
         if data[name].shape[0] == 0:  # pragma: no cover - a run that failed at once
             continue
@@ -2156,7 +2530,9 @@ def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], s
     return times, data, failure
 
 
-def _execute_raw(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
+def _execute_raw(
+    sc: Any, plan: Plan, rotation: Array | None = None
+) -> tuple[dict[str, Array], dict[str, Array], str]:
     x = scene_inputs(sc)
     if type(sc)._run is not _SceneBase._run:
         return sc._run(plan, x)  # type: ignore[no-any-return]
@@ -2167,7 +2543,7 @@ def _execute_raw(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array
         r = _run_orbit(sc, plan, x)
         t = r["t"]
         return ({k: t[list(i)] for k, i in plan.index.items()}, r["data"], r["failure"])
-    t, states, failure = _run_body(sc, plan, x)
+    t, states, failure = _run_body(sc, plan, x, rotation)
     times, data = {}, {}
     for name, idx in plan.index.items():
         keep = [i for i in idx if i < t.shape[0]]  # a failed run stops early
@@ -2179,13 +2555,27 @@ def _execute_raw(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array
         data[name] = np.asarray(_body_observable(name.removesuffix("_gap"), y, x["lam"]))
     del states
     if plan.compare is not None:
-        _, other, failed = _execute(_compare_scene(sc), plan.compare)
-        failure = failure or (f"the [compare] run: {failed}" if failed else "")
-        for name in [k for k in data if k.endswith("_gap")]:
-            mine, theirs = data[name], other[name.removesuffix("_gap")]
-            k = min(mine.shape[0], theirs.shape[0])
+        cmps = _compares(sc)
+        plans = plan.compare if isinstance(plan.compare, tuple) else (plan.compare,)
+        gaps = [k for k in data if k.endswith("_gap")]
+        columns: dict[str, list[Array]] = {name: [] for name in gaps}
+        for i, (cmp, c2) in enumerate(zip(cmps, plans, strict=True)):
+            _, other, failed = _execute(_compare_scene(sc, cmp), c2, _rotation(sc, cmp))
+            if failed and not failure:
+                failure = f"the [compare] run{f' compare.{i}' * (len(cmps) > 1)}: {failed}"
+            for name in gaps:
+                # the first record of the gap is the one every run can be paired with; this
+                # run's record j is paired with the first run's record j + (its offset)
+                when = sc.observables[name]
+                skip = max(_gap_offset(c, when) for c in cmps) - _gap_offset(cmp, when)
+                mine, theirs = data[name], other[name.removesuffix("_gap")][skip:]
+                k = min(mine.shape[0], theirs.shape[0])
+                columns[name].append(np.abs(mine[:k] - theirs[:k]).max(axis=(-2, -1)))
+        for name, cols in columns.items():
+            k = min(c.shape[0] for c in cols)
             times[name] = times[name][:k]
-            data[name] = np.abs(mine[:k] - theirs[:k]).max(axis=(-2, -1))
+            data[name] = (np.stack([c[:k] for c in cols], axis=1)
+                          if isinstance(plan.compare, tuple) else cols[0])  # fmt: skip
     return times, data, failure
 
 
