@@ -51,28 +51,7 @@ from .._validate import Array
 from ..continuous import Flow
 from ..errors import InputError
 
-__all__ = [  # re-exported by symrb.scenes
-    "SceneError",
-    "When",
-    "RigidBodyScene",
-    "SymmetricRigidBodyScene",
-    "McLachlanScovelScene",
-    "DoubleBracketScene",
-    "OrbitExtremalScene",
-    "ResNetScene",
-    "parse_scene",
-    "load_scene",
-    "scene_inputs",
-    "RigidBodyMomentum",
-    "Plan",
-    "plan_scene",
-    "SceneResult",
-    "SceneStore",
-    "run_scene",
-    "expand_grid",
-    "SweepResult",
-    "sweep",
-]
+# the public names are listed (and re-exported) by symrb.scenes.__all__
 
 
 class SceneError(InputError):
