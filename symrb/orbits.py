@@ -35,6 +35,7 @@ from typing import Any, Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_bvp, solve_ivp
+from scipy.optimize import OptimizeResult
 
 from . import _conditioning as _cond
 from . import _validate as v
@@ -344,6 +345,9 @@ def _db_solve(X0: Array, nn: Array, ts: Array, rtol: float, atol: float) -> Any:
     one step-size sequence for the batch; the result's ``y`` has shape (b k k, len(ts))."""
     b, kk = X0.shape
     k = nn.shape[-1]
+    if ts[-1] == 0.0:  # t = [0]: solve_ivp returns no output on an empty interval
+        return OptimizeResult(y=X0.reshape(-1, 1).copy(), t=ts, success=True, message="t = [0]",
+                              nfev=0)  # fmt: skip
     return solve_ivp(
         lambda _t, y: _gen.double_bracket_rhs(y.reshape(b, k, k), nn).ravel(),
         (0.0, float(ts[-1])),

@@ -332,3 +332,14 @@ def test_one_sample_second_term_decreases_with_T():
     _, decay = ao._exact_so3(x0, N, np.array(ao.ONE_SAMPLE_HORIZONS))
     assert np.all(np.diff(decay) < 0) and decay[-1] < 1e-3
     assert decay[-1] / decay[-2] == pytest.approx(np.exp(-0.5 * 8), rel=0.02)
+
+
+def test_double_bracket_flow_at_time_zero_only_returns_x0():
+    # solve_ivp gives no output on the empty interval [0, 0]; the flow returns x0 itself
+    x0, N = symrb.random_so(4, seed=11), symrb.random_so(4, seed=12)
+    xs = orbits.double_bracket_flow(x0, N, [0.0])
+    assert xs.shape == (1, 4, 4)
+    np.testing.assert_array_equal(xs[0], x0)
+    xs, info = orbits.double_bracket_flow(x0, N, [0.0], return_info=True)
+    np.testing.assert_array_equal(xs[0], x0)
+    assert info.nfev == 0 and abs(info.condition[0] - 1.0) < 1e-8  # the identity map
