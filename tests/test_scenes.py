@@ -139,6 +139,27 @@ def test_python_built_scene_errors_are_symrb_errors() -> None:
         )
 
 
+def test_a_model_built_in_python_gets_the_checks_across_keys() -> None:
+    # pydantic validates the fields of a model; the checks that span keys (an observable's
+    # effect, what MV-Algorithm 1 can record) run in parse_scene, for a model as for a table
+    base = {"system": "rigid_body", "horizon": {"T": 2.0}}
+    no_attitude = scenes.RigidBodyScene.model_validate(
+        {**base, "integrator": {"kind": "continuous"}, "observables": {"Q": "end"}}
+    )
+    with pytest.raises(SceneError, match=r"observables.Q: needs the effect 'attitude'"):
+        plan_scene(no_attitude)
+    no_momentum = scenes.RigidBodyScene.model_validate(
+        {
+            **base,
+            "effects": ["attitude"],
+            "integrator": {"kind": "mv_algorithm1", "h": 0.5},
+            "observables": {"energy": "end"},
+        }  # fmt: skip
+    )
+    with pytest.raises(SceneError, match=r"observables.energy: MV-Algorithm 1"):
+        run_scene(no_momentum, cache=False)
+
+
 def test_toml_and_python_give_the_same_scene_and_key() -> None:
     a = load_scene(BASE)
     b = _rb(effects=["attitude"], observables={"energy": {"points": 6}, "Q": "end"})

@@ -979,7 +979,8 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
     ----------
     data : mapping or scene model
         The scene; ``data["system"]`` selects the model (:class:`RigidBodyScene`, ...).  A model
-        is returned as it is.
+        built in Python is returned as it is, after the checks across its keys (effects of the
+        observables, second runs, samples) that a table gets.
     text : str, optional
         The TOML text ``data`` was read from, so errors can name lines.
     source : str, optional
@@ -1009,16 +1010,19 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
     symrb.scenes.SceneError: invalid scene:
       observables.Q: needs the effect 'attitude', which is not switched on; allowed: ...
     """
-    if isinstance(data, _SceneBase):
-        return data  # type: ignore[return-value]
-    if not isinstance(data, Mapping):
+    scene: Any
+    if isinstance(data, _SceneBase):  # built in Python: pydantic validated its fields
+        scene = data
+    elif not isinstance(data, Mapping):
         raise SceneError(
             [{"key": "", "line": None, "message": f"a scene is a table, got {type(data).__name__}",
               "allowed": None}], source)  # fmt: skip
-    try:
-        scene: Any = _adapter().validate_python(dict(data))
-    except ValidationError as exc:
-        raise _from_pydantic(exc, data, text, source) from None
+    else:
+        try:
+            scene = _adapter().validate_python(dict(data))
+        except ValidationError as exc:
+            raise _from_pydantic(exc, data, text, source) from None
+    # the checks across keys, for a model built in Python as for a table
     lines = _toml_lines(text) if text is not None else {}
     problems = []
     for name in scene.observables:
@@ -1973,10 +1977,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
                 index[name] = (steps,)
     compare: Plan | tuple[Plan, ...] | None = None
     cmps = _compares(sc)
-    if cmps:
-        problems = _route_problems(sc, {})
-        if problems:
-            raise SceneError(problems)
+    if cmps:  # parse_scene has checked that the runs can be paired (_route_problems)
         plans = tuple(_plan_compare(sc, cmp, i) for i, cmp in enumerate(cmps))
         for i, (cmp, c2) in enumerate(zip(cmps, plans, strict=True)):
             who = ("compare" if len(cmps) == 1 and not isinstance(sc.compare, tuple)
