@@ -372,11 +372,12 @@ def toda_flow(
 
     .. math:: \dot a_i = 2(b_i^2 - b_{i-1}^2),\qquad \dot b_i = b_i(a_{i+1} - a_i)
 
-    (:math:`b_0 = b_k = 0`).  The whole matrix is integrated, with the generated field of
-    :func:`double_bracket_rhs` evaluated on :math:`(L, D)` (real symmetric, so not accepted by
-    :func:`double_bracket_flow`, whose states are skew) and ``scipy.integrate.solve_ivp``
-    (DOP853): the entries off the band stay zero, and the spectrum of :math:`L` is kept, up to
-    the integration error.  As :math:`t\to\infty` the off-diagonal decays and the diagonal
+    (:math:`b_0 = b_k = 0`).  The whole matrix is integrated by the solver of
+    :func:`double_bracket_flow` with :math:`N = -D` (the field is linear in N), the generated
+    :func:`double_bracket_rhs` and ``scipy.integrate.solve_ivp`` (DOP853); L is real symmetric,
+    so :func:`double_bracket_flow` itself, whose states are skew, does not accept it.  The
+    entries off the band stay zero, and the spectrum of :math:`L` is kept, up to the integration
+    error.  As :math:`t\to\infty` the off-diagonal decays and the diagonal
     tends to the eigenvalues of :math:`L(0)`, sorted in decreasing order.
 
     Parameters
@@ -424,18 +425,8 @@ def toda_flow(
     ts = _output_times(t)
     k = a.size
     L0 = np.diag(a) + np.diag(b, 1) + np.diag(b, -1)
-    D = np.diag(np.arange(1.0, k + 1))
-    if ts[-1] == 0.0:  # t = [0]: solve_ivp returns no output on an empty interval
-        return L0[None].copy()
-    sol = solve_ivp(
-        lambda _t, y: -_gen.double_bracket_rhs(y.reshape(k, k), D).ravel(),
-        (0.0, float(ts[-1])),
-        L0.ravel(),
-        t_eval=ts,
-        method="DOP853",
-        rtol=rtol,
-        atol=atol,
-    )
+    # the field is linear in N: -[L, [L, D]] = [L, [L, -D]], the double bracket solve with -D
+    sol = _db_solve(L0.reshape(1, k * k), -np.diag(np.arange(1.0, k + 1)), ts, rtol, atol)
     if not sol.success:
         raise NotConvergedError(f"toda_flow: {sol.message}", float("nan"), sol.nfev)
     return np.asarray(sol.y.T.reshape(-1, k, k))
