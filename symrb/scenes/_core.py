@@ -2235,8 +2235,8 @@ def _run_body(
         if rotation is None:
             dsol = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, steps,
                                             save_every=every)  # fmt: skip
-        else:  # the state of the symmetric algorithm, (Q0, P0 = Q0 M0 / 2), rotated
-            P0 = x["Q0"] @ (0.5 * x["M0"])
+        else:  # the state (Q0, P0) of the symmetric algorithm, rotated: P0 as the flow sets it
+            P0 = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, 1).y.P[0]
             dsol = symmetric_flow(rot(x["Q0"]), rot(P0), lam, integ.h, steps, save_every=every)
         keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
     else:
