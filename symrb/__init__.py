@@ -54,9 +54,9 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "scenes": (
         "SceneError", "When", "RigidBodyScene", "SymmetricRigidBodyScene",
         "McLachlanScovelScene", "DoubleBracketScene", "OrbitExtremalScene", "ResNetScene",
-        "TodaScene", "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan", "plan_scene",
-        "SceneResult", "SceneStore", "run_scene", "expand_grid", "SweepResult", "sweep",
-        "SONetworkScene",
+        "TodaScene", "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan",
+        "plan_scene", "SceneResult", "SceneStore", "run_scene", "expand_grid", "SweepResult",
+        "sweep", "SONetworkScene",
     ),
     "rigid_body": (
         "rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals",
