@@ -455,6 +455,18 @@ class MatrixPrinter(NumPyPrinter):
     def _print_Symbol(self, expr: sp.Symbol) -> str:
         return str(expr.name)
 
+    def _print_Min(self, expr: sp.Min) -> str:
+        return self._nested("numpy.minimum", expr.args)
+
+    def _print_Max(self, expr: sp.Max) -> str:
+        return self._nested("numpy.maximum", expr.args)
+
+    def _nested(self, fn: str, args: Sequence[sp.Basic]) -> str:
+        """``fn(a, fn(b, c))``, elementwise over broadcast arguments (no functools import)."""
+        first, *rest = sorted(args, key=sp.default_sort_key)
+        inner = self._print(rest[0]) if len(rest) == 1 else self._nested(fn, rest)
+        return f"{fn}({self._print(first)}, {inner})"
+
     def _print_Rational(self, expr: sp.Rational) -> str:
         return f"({expr.p} / {expr.q})"
 

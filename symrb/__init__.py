@@ -48,8 +48,8 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "orbits": (
         "orbit_extremal_rhs", "orbit_hamiltonian", "brockett_potential", "double_bracket_rhs",
-        "double_bracket_flow", "DoubleBracketInfo", "toda_flow", "OrbitBVPResult",
-        "solve_orbit_bvp",
+        "double_bracket_flow", "DoubleBracketInfo", "toda_flow", "one_sample_second_term",
+        "two_sample_bound", "OrbitBVPResult", "solve_orbit_bvp",
     ),
     "scenes": (
         "SceneError", "When", "RigidBodyScene", "SymmetricRigidBodyScene",

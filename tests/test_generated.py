@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import io
@@ -64,7 +65,8 @@ class _LambdifyPrinter(NumPyPrinter):
 
 def _lambdify(args: list[sp.Basic], exprs: list[sp.Basic]) -> object:
     printer = _LambdifyPrinter({"fully_qualified_modules": True, "strict": True})
-    return sp.lambdify(args, exprs, modules="numpy", printer=printer)
+    # SymPy prints Min and Max with functools.reduce
+    return sp.lambdify(args, exprs, modules=["numpy", {"functools": functools}], printer=printer)
 
 
 def _auxiliaries(lam: np.ndarray) -> dict[str, np.ndarray]:
@@ -116,16 +118,25 @@ def _check_scalar_kernel(kernel: Kernel, gen: object, rng: np.random.Generator) 
     called with Python floats (kernels with ``convert=False`` must accept them) equal to the
     array result."""
     names = [a.name for a in kernel.args]
+    # the symbols of the expressions, with their assumptions (a positive one gets positive data)
+    syms = {str(x): x for e in kernel.outputs.values() for x in e.free_symbols}
+    args = [syms.get(a, sp.Symbol(a, real=True)) for a in names]
     data = {
-        a: rng.uniform(0.4, 1.6, 3) if a.startswith("l") else 0.3 * rng.standard_normal(3)
-        for a in names
+        a.name: rng.uniform(0.4, 1.6, 3)
+        if a.name.startswith("l") or a.is_positive
+        else 0.3 * rng.standard_normal(3)
+        for a in args
     }
-    fn = _lambdify([sp.Symbol(a, real=True) for a in names], list(kernel.outputs.values()))
+    fn = _lambdify(args, list(kernel.outputs.values()))
+    one = len(kernel.outputs) == 1  # one output comes back as an array, not a tuple
     got = np.asarray(gen(*[data[a] for a in names]), dtype=float)  # type: ignore[operator]
+    got = got[None] if one else got
+    assert np.all(np.isfinite(got)), f"{kernel.name}: the test data leave its domain"
     for b in range(3):
         want = np.asarray(fn(*[data[a][b] for a in names]), dtype=float)
         np.testing.assert_allclose(got[:, b], want, rtol=1e-12, atol=1e-12)
         floats = gen(*[float(data[a][b]) for a in names])  # type: ignore[operator]
+        floats = (floats,) if one else floats
         assert all(type(x) is float for x in floats) or kernel.convert
         np.testing.assert_allclose(np.asarray(floats, dtype=float), got[:, b], rtol=0, atol=0)
 

@@ -326,12 +326,44 @@ def test_wrong_decay_rate_fails_the_check(monkeypatch):
 
 
 def test_one_sample_second_term_decreases_with_T():
-    """The exact one-sample values ||[N,[N,x_T]]|| at T = 1, 2, 4, 8, 16 decrease to 0, the last
-    ratio close to exp(-||x_0|| ||N|| 8)."""
+    """The closed form ||[N,[N,x_T]]|| at T = 1, 2, 4, 8, 16 decreases to 0, the last ratio close
+    to exp(-||x_0|| ||N|| 8)."""
     x0, N = ao.one_sample_data()
-    _, decay = ao._exact_so3(x0, N, np.array(ao.ONE_SAMPLE_HORIZONS))
+    decay = symrb.one_sample_second_term(x0, N, ao.ONE_SAMPLE_HORIZONS)
     assert np.all(np.diff(decay) < 0) and decay[-1] < 1e-3
     assert decay[-1] / decay[-2] == pytest.approx(np.exp(-0.5 * 8), rel=0.02)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_one_sample_second_term_is_the_norm_along_the_double_bracket_flow(seed):
+    # the closed form against ||[N, [N, x(t)]]|| of a numerical double bracket flow from the
+    # same x0 (catches an angle measured from +N, or a wrong rate)
+    rng = np.random.default_rng(seed)
+    x0, N = symrb.random_so(3, seed=rng), symrb.random_so(3, seed=rng)
+    t = np.array([0.0, 0.5, 2.0, 6.0])
+    x = orbits.double_bracket_flow(x0, N, t, rtol=1e-12, atol=1e-14)
+    c = symrb.commutator(N, symrb.commutator(N, x))
+    flow = np.sqrt(symrb.pairing(c, c))
+    scale = symrb.pairing(N, N) * np.sqrt(symrb.pairing(x0, x0))
+    np.testing.assert_allclose(orbits.one_sample_second_term(x0, N, t), flow,
+                               atol=1e-8 * scale)  # fmt: skip
+
+
+def test_two_sample_bound_and_the_errors():
+    # samples of norms 2 and 0.5 at the angle beta: the bound is ||N||^2 0.5 sin(beta / 2)
+    beta = 1.1
+    x0 = [symrb.hat([2.0, 0.0, 0.0]), symrb.hat([0.5 * np.cos(beta), 0.5 * np.sin(beta), 0.0])]
+    got = orbits.two_sample_bound(x0, symrb.hat([0.3, -1.2, 1.6]))  # ||N||^2 = 4.09
+    assert got == pytest.approx(4.09 * 0.5 * np.sin(beta / 2), rel=1e-14)
+    with pytest.raises(symrb.InputError, match="two 3 x 3 samples"):
+        orbits.two_sample_bound(x0[0], symrb.hat([0.0, 0.0, 1.0]))
+    with pytest.raises(symrb.InputError, match="nonzero"):
+        orbits.two_sample_bound([x0[0], np.zeros((3, 3))], symrb.hat([0.0, 0.0, 1.0]))
+    with pytest.raises(symrb.InputError, match="so\\(3\\)"):
+        orbits.one_sample_second_term(symrb.random_so(4, seed=1), symrb.random_so(4, seed=2), [1])
+    with pytest.raises(symrb.InputError, match="times >= 0"):
+        orbits.one_sample_second_term(x0[0], symrb.hat([0.0, 0.0, 1.0]), [-1.0])
 
 
 def test_double_bracket_flow_at_time_zero_only_returns_x0():

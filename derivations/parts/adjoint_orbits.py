@@ -26,8 +26,9 @@ How the checks work:
 
 Emitted (``symrb/_generated/adjoint_orbits.py``): the optimal control (S13), the optimal
 Hamiltonian with Brockett's potential (S13, S14), Brockett's potential, the extremal field and the
-double bracket field (S14), and the state-costate field for a given (shared) control (S15).  Each
-kernel is the right side of a displayed formula.
+double bracket field (S14), the state-costate field for a given (shared) control, the closed form
+of the one-sample second term and the two-sample bound (S15).  Each kernel is the right side of a
+displayed formula.
 """
 
 from __future__ import annotations
@@ -1164,6 +1165,31 @@ def _phase_tau() -> sp.Expr:
     return PHASE.rhs.xreplace(norms).subs(sp.tan(_phi_0 / 2), _tau0)
 
 
+def _decay_closed_form() -> sp.Expr:
+    """The displayed decay ||N||^2 ||x_0|| sin(phi_T) with sin(phi_T) = 2 tau / (1 + tau^2),
+    tau = tan(phi_T / 2) from the displayed phase (||x_0|| = r, ||N|| = s, tan(phi_0 / 2) =
+    tau_0)."""
+    sin_T, _ = _half_angle(_phase_tau())
+    return DECAY.rhs.xreplace({_Norm(x_0): _r, _Norm(N): _s}).subs(sp.sin(_phi_T), sin_T)
+
+
+ONE_SAMPLE_SECOND_TERM = Kernel(
+    name="one_sample_second_term",
+    target="adjoint_orbits",
+    args=[
+        Arg("r", "(...)", "||x_0||, the norm of the sample"),
+        Arg("s", "(...)", "||N||"),
+        Arg("tau_0", "(...)", "tan(phi_0 / 2), phi_0 the angle of x_0 from -N"),
+        Arg("T", "(...)", "the time, >= 0"),
+    ],
+    outputs={"second_term": _decay_closed_form()},
+    doc="||[N, [N, x(T)]]|| along the one-sample extremal on so(3), in closed form.\n\n"
+    "The displayed decay ||N||^2 ||x_0|| sin(phi_T), with the displayed phase\n"
+    "tan(phi_T / 2) = tan(phi_0 / 2) exp(-||x_0|| ||N|| T): x(T) is the double bracket flow.",
+    claims=("S15",),
+)
+
+
 def _rational_residual(values: sp.Matrix | sp.Expr) -> sp.Integer:
     """The number of entries that are not identically zero as rational functions."""
     items = list(values) if isinstance(values, sp.MatrixBase) else [values]
@@ -1192,13 +1218,16 @@ def s15_decay_exact_so3() -> sp.Expr:
     r += _rational_residual(decay**2 - rhs_sq)
     limit = sp.cancel(decay / _tau).subs(_tau, 0)
     r += _rational_residual(rate + _r * _s) + _rational_residual(limit - 2 * _s**2 * _r)
+    # the emitted closed form is this decay at tau = tau(T) of the displayed phase
+    emitted = ONE_SAMPLE_SECOND_TERM["second_term"]
+    r += _rational_residual(sp.simplify(emitted - decay.subs(_tau, tau_T)))
     return r
 
 
-def _exact_so3(x0: np.ndarray, N_: np.ndarray, Ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _exact_so3(x0: np.ndarray, N_: np.ndarray, Ts: np.ndarray) -> np.ndarray:
     """The exact so(3) double bracket flow at the times Ts from x0 (NumPy, from the displayed
     phase): x(T) = r (sin phi_T e - cos phi_T nu/|nu|) in the plane of x0 and N, with e the unit
-    vector of x0's component orthogonal to N.  Returns (x(T), the displayed decay at T)."""
+    vector of x0's component orthogonal to N."""
     xi, nu = ref.vee(x0), ref.vee(N_)
     r, s = np.linalg.norm(xi), np.linalg.norm(nu)
     axis = nu / s
@@ -1206,13 +1235,9 @@ def _exact_so3(x0: np.ndarray, N_: np.ndarray, Ts: np.ndarray) -> tuple[np.ndarr
     perp = xi + r * np.cos(phi0) * axis
     e = perp / np.linalg.norm(perp)
     tau_fn = sp.lambdify((_r, _s, _tau0, T), _phase_tau(), "numpy")
-    decay_fn = sp.lambdify(
-        (_r, _s, _phi_T), DECAY.rhs.xreplace({_Norm(x_0): _r, _Norm(N): _s}), "numpy"
-    )
     tau = tau_fn(r, s, np.tan(phi0 / 2), Ts)
     sin_t, cos_t = 2 * tau / (1 + tau**2), (1 - tau**2) / (1 + tau**2)
-    vecs = r * (sin_t[:, None] * e - cos_t[:, None] * axis)
-    return ref.hat(vecs), decay_fn(r, s, np.arctan2(sin_t, cos_t))
+    return ref.hat(r * (sin_t[:, None] * e - cos_t[:, None] * axis))
 
 
 ONE_SAMPLE_HORIZONS = (1.0, 2.0, 4.0, 8.0, 16.0)
@@ -1251,10 +1276,14 @@ def s15_one_sample_bvp() -> float:
     """One sample on so(3), T = 1, 2, 4, 8, 16: symrb.solve_orbit_bvp from the guess p = 0 against
     the exact solution (p = -N, x the double bracket flow in closed form from the displayed
     phase): max of |x_T - exact| / ||x_0||, |p + N| / ||N|| over the mesh and the difference of
-    ||[N, [N, x_T]]|| from the displayed decay relative to ||N||^2 ||x_0||."""
+    ||[N, [N, x_T]]|| from the emitted closed form (symrb.one_sample_second_term) relative to
+    ||N||^2 ||x_0||."""
+    import symrb
+
     x0, N_ = one_sample_data()
     r, s = np.sqrt(_np_norm2(x0)), np.sqrt(_np_norm2(N_))
-    xs, decay = _exact_so3(x0, N_, np.array(ONE_SAMPLE_HORIZONS))
+    xs = _exact_so3(x0, N_, np.array(ONE_SAMPLE_HORIZONS))
+    decay = symrb.one_sample_second_term(x0, N_, ONE_SAMPLE_HORIZONS)
     errs = []
     for i, Tk in enumerate(ONE_SAMPLE_HORIZONS):
         res = one_sample_runs()[Tk]
@@ -1319,6 +1348,35 @@ def two_sample_data() -> tuple[np.ndarray, np.ndarray]:
     return np.stack([ref.random_skew(3, rng, 0.5) for _ in range(2)]), N_
 
 
+_r1, _r2 = sp.symbols("r_1 r_2", positive=True)
+_p12 = sp.Symbol("p_12", real=True)
+
+
+def _bound_closed_form() -> sp.Expr:
+    """The displayed bound ||N||^2 min_a ||x^a_0|| sin(beta / 2) with the displayed beta, in the
+    norms r_1, r_2, s and the pairing p_12 = <x^1_0, x^2_0>."""
+    norms = {_Norm(x10): _r1, _Norm(x20): _r2}
+    cos_beta = BETA.rhs.xreplace({**norms, sp.Abs(Pair(x10, x20)): sp.Abs(_p12)})
+    return BOUND.rhs.xreplace({**norms, _Norm(N): _s}).subs(_beta, sp.acos(cos_beta))
+
+
+TWO_SAMPLE_BOUND = Kernel(
+    name="two_sample_bound",
+    target="adjoint_orbits",
+    args=[
+        Arg("r_1", "(...)", "||x^1_0||"),
+        Arg("r_2", "(...)", "||x^2_0||"),
+        Arg("s", "(...)", "||N||"),
+        Arg("p_12", "(...)", "<x^1_0, x^2_0>, at most r_1 r_2 in size"),
+    ],
+    outputs={"bound": _bound_closed_form()},
+    doc="The lower bound of the larger second costate term of two samples on so(3).\n\n"
+    "||N||^2 min(||x^1_0||, ||x^2_0||) sin(beta / 2), cos beta = |<x^1_0, x^2_0>| /\n"
+    "(||x^1_0|| ||x^2_0||): the displayed bound of the corrected statement.",
+    claims=("S15",),
+)
+
+
 @functools.cache
 def two_sample_runs() -> dict[float, Any]:
     """solve_orbit_bvp for the two samples at each horizon of TWO_SAMPLE_HORIZONS (collocation
@@ -1370,11 +1428,21 @@ def s15_two_samples_second_term() -> float:
 
 @S15.check(Level.FLOAT64, tol=1e-5, form="corrected")
 def s15_two_samples_above_bound() -> float:
-    """The same solutions stay above the displayed bound (from the displayed beta of x^1_0, x^2_0)
-    and conserve <x^1, x^2> and ||x^a||: max over T of the relative shortfall below the bound plus
-    the relative drift of the invariants."""
+    """The same solutions stay above the bound and conserve <x^1, x^2> and ||x^a||: max over T of
+    the relative shortfall below symrb.two_sample_bound (the emitted kernel) plus the relative
+    drift of the invariants, plus the relative difference of that bound (and of the emitted
+    expression) from the displayed bound evaluated on the data."""
+    import symrb
+
     rows = two_sample_table()
     second = np.array([row["second"] for row in rows])  # NaN for a failed solve: stays NaN
-    bound = np.array([row["bound"] for row in rows])
-    shortfall = np.maximum(bound - second, 0.0) / bound
-    return float(np.max(shortfall + np.array([row["drift"] for row in rows])))
+    displayed = rows[0]["bound"]
+    X0, N_ = two_sample_data()
+    shipped = float(symrb.two_sample_bound(X0, N_))  # the emitted kernel, through its wrapper
+    norms = np.sqrt(_np_norm2(X0))
+    emitted = float(TWO_SAMPLE_BOUND["bound"].subs({  # the emitted expression, by SymPy
+        _r1: norms[0], _r2: norms[1], _s: np.sqrt(_np_norm2(N_)), _p12: _np_pair(X0[0], X0[1]),
+    }))  # fmt: skip
+    shortfall = np.maximum(shipped - second, 0.0) / shipped
+    agree = max(abs(shipped - displayed), abs(emitted - displayed)) / displayed
+    return float(np.max(shortfall + np.array([row["drift"] for row in rows])) + agree)

@@ -16,6 +16,8 @@ __all__ = [
     "orbit_extremal_rhs",
     "double_bracket_rhs",
     "orbit_rhs_with_control",
+    "one_sample_second_term",
+    "two_sample_bound",
 ]
 
 
@@ -207,3 +209,74 @@ def orbit_rhs_with_control(x, p, u, N):
     N = numpy.asarray(N, dtype=float)
     t0 = (N @ x) - (x @ N)
     return (((x @ u) - (u @ x)), ((p @ u) + (t0 @ N) - (N @ t0) - (u @ p)))
+
+
+def one_sample_second_term(r, s, tau_0, T):
+    r"""||[N, [N, x(T)]]|| along the one-sample extremal on so(3), in closed form.
+
+    The displayed decay ||N||^2 ||x_0|| sin(phi_T), with the displayed phase
+    tan(phi_T / 2) = tan(phi_0 / 2) exp(-||x_0|| ||N|| T): x(T) is the double bracket flow.
+
+    Parameters
+    ----------
+    r : array, shape (...)
+        ||x_0||, the norm of the sample
+    s : array, shape (...)
+        ||N||
+    tau_0 : array, shape (...)
+        tan(phi_0 / 2), phi_0 the angle of x_0 from -N
+    T : array, shape (...)
+        the time, >= 0
+
+    Returns
+    -------
+    second_term : array
+
+    Notes
+    -----
+    Checked by claim S15 (``symrb verify S15``);
+    expressions from ``derivations.parts.adjoint_orbits``.
+
+    Total ops per batch item: 14 scalar.
+    """
+    r = numpy.asarray(r, dtype=float)
+    s = numpy.asarray(s, dtype=float)
+    tau_0 = numpy.asarray(tau_0, dtype=float)
+    T = numpy.asarray(T, dtype=float)
+    t0 = T * r * s
+    return 2 * r * s**2 * tau_0 * numpy.exp(-t0) / (tau_0**2 * numpy.exp(-2 * t0) + 1)
+
+
+def two_sample_bound(r_1, r_2, s, p_12):
+    r"""The lower bound of the larger second costate term of two samples on so(3).
+
+    ||N||^2 min(||x^1_0||, ||x^2_0||) sin(beta / 2), cos beta = |<x^1_0, x^2_0>| /
+    (||x^1_0|| ||x^2_0||): the displayed bound of the corrected statement.
+
+    Parameters
+    ----------
+    r_1 : array, shape (...)
+        ||x^1_0||
+    r_2 : array, shape (...)
+        ||x^2_0||
+    s : array, shape (...)
+        ||N||
+    p_12 : array, shape (...)
+        <x^1_0, x^2_0>, at most r_1 r_2 in size
+
+    Returns
+    -------
+    bound : array
+
+    Notes
+    -----
+    Checked by claim S15 (``symrb verify S15``);
+    expressions from ``derivations.parts.adjoint_orbits``.
+
+    Total ops per batch item: 8 scalar.
+    """
+    r_1 = numpy.asarray(r_1, dtype=float)
+    r_2 = numpy.asarray(r_2, dtype=float)
+    s = numpy.asarray(s, dtype=float)
+    p_12 = numpy.asarray(p_12, dtype=float)
+    return s**2 * numpy.sin((0.5) * numpy.arccos(abs(p_12) / (r_1 * r_2))) * numpy.minimum(r_1, r_2)

@@ -895,7 +895,7 @@ class OneSampleLearning:
     second_corrected, second_printed : ndarray, shape (K,)
         :math:`\|[N, [N, x(t)]]\|` along them.
     second_exact : ndarray, shape (K,)
-        The closed form of the corrected statement,
+        The closed form of the corrected statement (:func:`symrb.one_sample_second_term`),
         :math:`\|N\|^2\|x_0\|\sin\phi_t` with
         :math:`\tan(\phi_t/2) = \tan(\phi_0/2)e^{-\|x_0\|\|N\|t}`.
     rate : float
@@ -968,7 +968,6 @@ def one_sample_learning(
     xc = res.at(ts)[0][:, 0]
     xp = printed.at(ts)[0][:, 0]
     rate = float(r * _norm(N))
-    phi = 2 * np.arctan(np.tan(phi0 / 2) * np.exp(-rate * ts))
     flow = symrb.double_bracket_flow(x0, N, res.t)
     return OneSampleLearning(
         t=ts,
@@ -976,7 +975,7 @@ def one_sample_learning(
         cost_printed=symrb.pairing(xp, N),
         second_corrected=_second_term(xc, N),
         second_printed=_second_term(xp, N),
-        second_exact=float(_norm(N)) ** 2 * r * np.sin(phi),
+        second_exact=symrb.one_sample_second_term(x0, N, ts),
         rate=rate,
         flow_deviation=float(np.abs(res.x[:, 0] - flow).max()),
         costate_deviation=float(np.abs(res.p + N).max()),
@@ -1053,10 +1052,7 @@ def two_sample_learning(T: float = 8.0, seed: int = 150, samples: int = 201) -> 
     xs = res.at(ts)[0]
     own = np.stack([symrb.double_bracket_flow(X0[a], N, ts) for a in range(2)])
     shared = np.moveaxis(xs, 1, 0)
-    cos_beta = abs(symrb.pairing(X0[0], X0[1])) / (_norm(X0[0]) * _norm(X0[1]))
-    bound = float(
-        _norm(N) ** 2 * _norm(X0).min() * np.sin(np.arccos(np.minimum(cos_beta, 1.0)) / 2)
-    )
+    bound = symrb.two_sample_bound(X0, N)
     mesh_pairing = symrb.pairing(res.x[:, 0], res.x[:, 1])
     return TwoSampleLearning(
         t=ts,
