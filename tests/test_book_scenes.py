@@ -36,10 +36,13 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
     ),
     "section3/01_optimal_control.md": ("symmetric_vs_rigid_body", ("flow_agreement(",)),
     "scenes.md": ("rigid_body_momentum", ()),
-    "section3/03_hamiltonian.md": ("hamiltonian_on_gl", ("hamiltonian_drift(",)),
+    "section3/03_hamiltonian.md": (
+        ("hamiltonian_on_so", "hamiltonian_on_gl"),
+        ("hamiltonian_drift(",),
+    ),
     "section3/04_adjoint_orbits.md": ("toda_lattice", ("toda_lattice(",)),
     "section3/05_double_bracket_learning.md": (
-        "orbit_one_sample",
+        ("orbit_one_sample", "orbit_two_samples_shared"),
         ("one_sample_learning(", "two_sample_learning("),
     ),
     "hard_cases.md": (
@@ -47,7 +50,13 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
         ("symrb.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),
     ),
     "learning.md": (
-        "so_training_gradient",
+        (
+            "so_training_gradient",
+            "so_training_msa",
+            "so_training_shooting",
+            "resnet_digits_gd",
+            "resnet_digits_msa",
+        ),
         (
             "train_so_gradient(",
             "train_so_msa(",

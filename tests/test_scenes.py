@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scene_helpers import problem as _problem
+from scene_helpers import same as _same
 
 import symrb
 from symrb import scenes
@@ -66,14 +68,6 @@ def _rb(n=4, effects=(), integrator=None, T=5.0, observables=None, **params):
             "observables": observables or {"energy": {"points": 6}},
         }
     )
-
-
-def _problem(text: str) -> dict:
-    with pytest.raises(SceneError) as info:
-        load_scene(text)
-    assert isinstance(info.value, symrb.InputError)
-    assert len(info.value.problems) == 1, info.value.problems
-    return info.value.problems[0]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -265,10 +259,6 @@ def test_fixed_step_saves_every_gcd() -> None:
 
 # ---------------------------------------------------------------------------------------------
 # a scene equals hand-written calls
-
-
-def _same(a, b) -> None:
-    np.testing.assert_array_equal(np.asarray(a), np.asarray(b), strict=True)
 
 
 def test_rigid_body_scene_equals_integrate() -> None:

@@ -13,17 +13,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scene_helpers import problems as _problems
+from scene_helpers import same as _same
 
 import symrb
 from symrb.experiments import discrete as discrete_experiments
 from symrb.experiments import smooth as smooth_experiments
 from symrb.scenes import (
-    SceneError,
     SceneResult,
     SceneStore,
     load_scene,
     parse_scene,
-    plan_scene,
     run_scene,
     scene_inputs,
     sweep,
@@ -32,7 +32,6 @@ from symrb.scenes import (
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "book" / "scenes"
 LAM3 = [0.7, 1.1, 1.6]
-_same = np.testing.assert_array_equal
 
 
 def _gap(a, b):
@@ -42,12 +41,6 @@ def _gap(a, b):
 def _windows(values, w):
     """The largest value in each numpy.array_split block (the scenes' reduce = "max")."""
     return np.stack([np.max(b, axis=0) for b in np.array_split(np.asarray(values), w)])
-
-
-def _problems(source) -> list[dict]:
-    with pytest.raises(SceneError) as info:
-        load_scene(source) if isinstance(source, str) else plan_scene(source)
-    return info.value.problems
 
 
 def _agreement(integrator, compare, observables, T=40.0, **params):
@@ -139,6 +132,26 @@ def test_mv_algorithm1_scene_equals_hand_written_calls() -> None:
     assert "(R Q0, R Q1), then R^T Q" in plan.compare[1].route
 
 
+@pytest.mark.parametrize("integrator", [
+    {"kind": "discrete", "h": 0.5},
+    {"kind": "mv", "h": 0.5},
+    {"kind": "mv_algorithm2", "h": 0.5},
+    {"kind": "mv_algorithm2", "h": 0.5, "start": "Q1_M1"},
+    {"kind": "mv_algorithm1", "h": 0.5},
+    {"kind": "continuous", "rtol": 1e-12, "atol": 1e-14},
+], ids=lambda i: i["kind"] + i.get("start", ""))  # fmt: skip
+def test_a_run_in_a_rotated_frame_is_rotated_back(integrator) -> None:
+    # the equations are invariant under Q -> R Q: each integrator against itself in the frame of
+    # R differs by its rounding (or its tolerance); a run started unrotated but rotated back
+    # (or rotated but not back) is off by |R - I|, about 1.5 here; one neither rotated nor
+    # rotated back would give exactly 0, which the lower bound refuses
+    sc = _agreement(integrator, {"integrator": integrator, "rotation": 4},
+                    {"Q_gap": {"points": 11}}, T=10.0, momentum=1.0)  # fmt: skip
+    gap = run_scene(sc, cache=False)["Q_gap"]
+    tol = 1e-9 if integrator["kind"] == "continuous" else 1e-12
+    assert 0.0 < gap.max() < tol, gap.max()
+
+
 @pytest.mark.parametrize("observables", [
     {"Q": {"every": 3}, "M": {"every": 3}},  # Q_k is the (k-1)-th state: every step is saved
     {"M": {"every": 3}, "energy": "end"},    # momenta only: saved every third step
@@ -148,11 +161,12 @@ def test_mv_algorithm2_from_the_first_step_every_k_steps(observables) -> None:
     sc = _agreement({"kind": "mv_algorithm2", "h": h, "start": "Q1_M1"}, None, observables, T=N * h)
     r = run_scene(sc, cache=False)
     x = scene_inputs(sc)
-    first = symrb.discrete_rigid_body_flow(x["Q0"], x["M0"], x["lam"], h, 1)
-    Q1, M1 = first.y.Q[1], h * first.y.M[0]
+    # Q_1 of the symmetric first step; M_1 = h (Q0^T P0 - P0^T Q0), P0 = Q0 M0 / 2 (D12)
+    Q1 = symrb.discrete_rigid_body_flow(x["Q0"], x["M0"], x["lam"], h, 1).y.Q[1]
+    M1 = h * symrb.symmetric_momentum(x["Q0"], x["Q0"] @ (0.5 * x["M0"]))
     save = 1 if "Q" in observables else 3
     run = symrb.mv_algorithm2(Q1, M1, x["lam"], N, save_every=save)
-    M = run.y.M[:: 3 // save] / h  # M_{k+1} / h at t_k, k = 0, 3, ..., N
+    M = run.y.M[np.arange(0, N + 1, 3) // save] / h  # M_{k+1} / h at t_k, k = 0, 3, ..., N
     _same(r["M"], M)
     _same(r.times["M"], np.arange(0, N + 1, 3) * h)
     if "Q" in observables:
@@ -168,7 +182,7 @@ def test_the_agreement_scenes_give_the_experiments_windows() -> None:
     # the windows of algorithm_agreement, bit for bit, but for the run one index off
     steps, w = 300, 6
     rng = np.random.default_rng(0)
-    symrb.random_SO(3, seed=rng)  # Q0: the scene draws it from seed 0 (no M0 drawn first)
+    Q0 = symrb.random_SO(3, seed=rng)  # the scene draws it from seed 0 (no M0 drawn first)
     M = symrb.random_so(3, seed=rng, scale=0.05)
     R = symrb.random_SO(3, seed=rng)
     run = discrete_experiments.algorithm_agreement(steps=steps, windows=w)
@@ -187,8 +201,8 @@ def test_the_agreement_scenes_give_the_experiments_windows() -> None:
         r = run_scene(data, cache=False)
         got[base.integrator.kind] = r
     a, b = got["discrete"], got["mv_algorithm1"]
-    _same(a.times["Q_gap"], run.window_k)
-    _same(b.times["Q_gap"], run.window_k)
+    _same(a.times["Q_gap"], run.window_k * 1.0)  # times k h, h = 1
+    _same(b.times["Q_gap"], run.window_k * 1.0)
     _same(a["Q_gap"][:, 0], run.window["sym_mv2"])
     _same(a["Q_gap"][:, 1], run.window["spread_sym"])
     _same(b["Q_gap"][:, 0], run.window["mv1_mv2"])
@@ -197,16 +211,16 @@ def test_the_agreement_scenes_give_the_experiments_windows() -> None:
     # same matrix to rounding, so the two runs part at the rounding level of the algorithm
     np.testing.assert_allclose(a["Q_gap"][:, 2], run.window["wrong_index"], rtol=1e-11)
     assert np.abs(a["Q_gap"][:, 2] - run.window["wrong_index"]).max() < steps * np.finfo(float).eps
-    M1 = a["M"][0]
-    np.testing.assert_allclose(a["M_gap"][:, 0].max() / np.abs(M1).max(),
-                               run.window["momentum"].max(), rtol=0.5)  # fmt: skip
+    # the experiment's relative momentum gap: divided by the size of M_1 = Q0^T P0 - P0^T Q0
+    M1 = symrb.symmetric_momentum(Q0, Q0 @ (0.5 * M))
+    _same(a["M_gap"][:, 0] / np.abs(M1).max(), run.window["momentum"])
     # the discretisation error: the experiment's reference starts from M_1 (= M0 to rounding)
     early = load_scene(SCENES / "agreement_discretisation.toml").model_dump(
         mode="json", exclude_unset=True
     )
     early["parameters"] |= {"M0": M.tolist()}
     disc = run_scene(early, cache=False)
-    np.testing.assert_allclose(disc["Q_gap"].max(), run.discretisation_error, rtol=1e-8)
+    np.testing.assert_allclose(disc["Q_gap"].max(), run.discretisation_error, rtol=1e-11)
 
 
 def test_discretisation_scene_equals_hand_written_calls() -> None:

@@ -8,11 +8,12 @@ import copy
 
 import numpy as np
 import pytest
+from scene_helpers import problem as _problem
+from scene_helpers import same as _same
 
 import symrb
 from symrb import learning
 from symrb.scenes import (
-    SceneError,
     SceneStore,
     SONetworkScene,
     load_scene,
@@ -71,18 +72,6 @@ def _so(integrator=None, observables=None, effects=("terminal_cost", "running_co
         "observables": observables or {"loss": {"every": 1}, "residual": {"every": 1},
                                        "U": "end"},
     })  # fmt: skip
-
-
-def _same(a, b) -> None:
-    np.testing.assert_array_equal(np.asarray(a), np.asarray(b), strict=True)
-
-
-def _problem(text: str) -> dict:
-    with pytest.raises(SceneError) as info:
-        load_scene(text)
-    assert isinstance(info.value, symrb.InputError)
-    assert len(info.value.problems) == 1, info.value.problems
-    return info.value.problems[0]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -186,6 +175,25 @@ def test_shooting_scene_equals_train_so_shooting() -> None:
     cut = symrb.train_so_shooting(Q0, T, lam, 0.5, 3, maxfev=4)
     _same(few["loss"], cut.losses)
     assert few["loss"].shape[0] < r["loss"].shape[0]
+    # integrator.tol reaches the trainer: a loose one stops after fewer evaluations
+    loose = run_scene(_so(integrator={"kind": "shooting", "tol": 1e-6}, steps=300,
+                          observables=obs), cache=False)  # fmt: skip
+    ref = symrb.train_so_shooting(Q0, T, lam, 0.5, 3, tol=1e-6, maxfev=300)
+    _same(loose["loss"], ref.losses)
+    assert loose["iterations"][0] < r["iterations"][0]
+
+
+def test_running_cost_weight_defaults_to_one() -> None:
+    # running_cost without parameters.alpha: alpha = 1, as the docstring says
+    sc = parse_scene({
+        "system": "so_network", "effects": ["terminal_cost", "running_cost"],
+        "parameters": {"n": 3, "samples": 8, "seed": 1, "layers": 3},
+        "integrator": {"kind": "msa", "rho": 2.0}, "horizon": {"steps": 20},
+        "observables": {"loss": {"every": 1}},
+    })  # fmt: skip
+    Q0, T, lam, U0 = _task()
+    res = symrb.train_so_msa(Q0, T, U0, lam, alpha=1.0, steps=20, rho=2.0)
+    _same(run_scene(sc, cache=False)["loss"], res.losses)
 
 
 def test_without_running_cost_alpha_is_zero() -> None:
@@ -378,6 +386,13 @@ def test_digits_scene_equals_train_and_resnet_predict() -> None:
     _same(r["accuracy"], [acc])
     _same(r["test_accuracy"], [test])
     assert acc != test  # the two observables read different images
+    # parameters.test_fraction reaches digits_task
+    held = {**DIGITS["parameters"], "test_fraction": 0.2}
+    y = scene_inputs(parse_scene({**DIGITS, "parameters": held}))
+    other = symrb.digits_task(6, 0.2, seed=4)
+    _same(y["x0"], other.x_train)
+    _same(y["labels_test"], other.labels_test)
+    assert len(y["labels_test"]) < len(x["labels_test"])
 
 
 @pytest.mark.parametrize("data", ["toy", "digits"])

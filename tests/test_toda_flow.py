@@ -73,6 +73,9 @@ def test_toda_flow_at_time_zero_only_and_tolerances() -> None:
     loose = symrb.toda_flow(A0, B0, TS, rtol=1e-6, atol=1e-8)
     tight = symrb.toda_flow(A0, B0, TS)
     assert 0 < np.abs(loose - tight).max() < 1e-4  # the tolerances reach solve_ivp
+    # atol alone: with rtol tight, an absolute tolerance of 1e-6 moves L (measured ~4e-7)
+    loose_atol = symrb.toda_flow(A0, B0, TS, atol=1e-6)
+    assert 0 < np.abs(loose_atol - tight).max() < 1e-4
 
 
 @pytest.mark.parametrize(
