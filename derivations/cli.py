@@ -261,7 +261,7 @@ def _text_printer() -> Any:
     from sympy.printing.precedence import PRECEDENCE, precedence
     from sympy.printing.str import StrPrinter
 
-    from derivations.codegen import W
+    from derivations.vocabulary import W
 
     class TextPrinter(StrPrinter):
         """``Bracket(a, b)`` as ``[a, b]``, ``Pair(a, b)`` as ``<a, b>``, ``W o X`` as ``J^-1(X)``,

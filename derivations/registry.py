@@ -46,6 +46,9 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from derivations.symbolic import latex
+from derivations.vocabulary import CURRENT_CLAIM, KERNELS, Kernel
+
 __all__ = [
     "Level",
     "Evidence",
@@ -54,6 +57,7 @@ __all__ = [
     "EvidenceResult",
     "ClaimResult",
     "all_claims",
+    "all_kernels",
     "get_claim",
     "import_parts",
     "verify",
@@ -130,14 +134,19 @@ class Claim:
     module: str = ""
 
     def __post_init__(self) -> None:
-        if not re.fullmatch(r"[DS]\d+", self.id):
-            raise ValueError(f"claim id must look like D1 or S12, got {self.id!r}")
+        if not re.fullmatch(r"[DSM]\d+", self.id):
+            raise ValueError(f"claim id must look like D1, S12 or M3, got {self.id!r}")
         if self.expected not in OUTCOMES:
             raise ValueError(
                 f"claim {self.id}: expected must be one of {OUTCOMES}, got {self.expected!r}"
             )
         if bool(self.printed) != bool(self.corrected):
             raise ValueError(f"claim {self.id}: give both the printed and the corrected text")
+
+    @property
+    def group(self) -> str:
+        """``"paper"`` for a statement of the paper, ``"method"`` for a check of symrb's own."""
+        return GROUPS[self.id[0]]
 
     # -- declaration ------------------------------------------------------------------------
 
@@ -186,8 +195,6 @@ class Claim:
     def render(self, which: str = "statement") -> str:
         """The text ``which`` (statement, printed, corrected) with every ``[[key]]`` replaced by
         ``$latex$`` of the registered formula."""
-        from derivations.symbolic import latex
-
         text = getattr(self, which) or ""
 
         def sub(m: re.Match[str]) -> str:
@@ -306,26 +313,42 @@ class ClaimResult:
 # discovery
 
 
+#: The packages searched for claims and method checks, in this order.
+PACKAGES = ("derivations.claims", "derivations.methods", "derivations.parts")
+
+#: Claim groups: the paper's statements (D1.., S1..) and checks of symrb's own methods (M1..).
+GROUPS = {"D": "paper", "S": "paper", "M": "method"}
+
+
 def _claim_key(cid: str) -> tuple[int, int]:
-    return (0 if cid[0] == "D" else 1, int(cid[1:]))
+    return ("DSM".index(cid[0]), int(cid[1:]))
 
 
 def import_parts() -> list[Any]:
-    """Import every module of :mod:`derivations.parts` (recursively, sorted by name)."""
-    from derivations import parts
-
+    """Import every module of the claim packages (:data:`PACKAGES`, recursively, sorted by name;
+    a package that does not exist is skipped)."""
     modules = []
-    for info in sorted(
-        pkgutil.walk_packages(parts.__path__, prefix=parts.__name__ + "."), key=lambda m: m.name
-    ):
-        if any(piece.startswith("_") for piece in info.name.split(".")):
+    for pkg_name in PACKAGES:
+        try:
+            pkg = importlib.import_module(pkg_name)
+        except ModuleNotFoundError as exc:
+            if exc.name != pkg_name:
+                raise
             continue
-        modules.append(importlib.import_module(info.name))
+        for info in sorted(
+            pkgutil.walk_packages(pkg.__path__, prefix=pkg.__name__ + "."), key=lambda m: m.name
+        ):
+            if any(piece.startswith("_") for piece in info.name.split(".")):
+                continue
+            modules.append(importlib.import_module(info.name))
     return modules
 
 
-def all_claims() -> list[Claim]:
-    """Every registered claim, in the order D1..D12, S1..S15."""
+def all_claims(group: str | None = None) -> list[Claim]:
+    """Every registered claim, in the order D1..D12, S1..S15, M1..; with ``group`` (``"paper"``
+    or ``"method"``) only that group's."""
+    if group is not None and group not in set(GROUPS.values()):
+        raise ValueError(f"group must be one of {sorted(set(GROUPS.values()))}, got {group!r}")
     claims: dict[str, Claim] = {}
     for module in import_parts():
         for value in vars(module).values():
@@ -335,7 +358,16 @@ def all_claims() -> list[Claim]:
                         f"claim {value.id} declared twice (again in {module.__name__})"
                     )
                 claims[value.id] = value
-    return [claims[k] for k in sorted(claims, key=_claim_key)]
+    ordered = [claims[k] for k in sorted(claims, key=_claim_key)]
+    return [c for c in ordered if group is None or c.group == group]
+
+
+def all_kernels(only: Sequence[str] | None = None) -> list[Kernel]:
+    """Every kernel declared by a claim module, by target and definition order (``only``: just
+    the kernels of those generated modules)."""
+    import_parts()
+    kernels = [k for k in KERNELS if not only or k.target in only]
+    return sorted(kernels, key=lambda k: (k.target, k.order))
 
 
 def get_claim(cid: str) -> Claim:
@@ -352,9 +384,7 @@ def get_claim(cid: str) -> Claim:
 
 
 def _run_evidence(claim_id: str, ev: Evidence) -> EvidenceResult:
-    from derivations.codegen import _CURRENT_CLAIM
-
-    token = _CURRENT_CLAIM.set(claim_id)
+    token = CURRENT_CLAIM.set(claim_id)
     start = time.perf_counter()
     error = None
     try:
@@ -367,7 +397,7 @@ def _run_evidence(claim_id: str, ev: Evidence) -> EvidenceResult:
         error = f"{type(exc).__name__}: {exc}"
         residual = float("inf")
     finally:
-        _CURRENT_CLAIM.reset(token)
+        CURRENT_CLAIM.reset(token)
     return EvidenceResult(
         level=Level(ev.level).value,
         description=ev.description,
@@ -453,8 +483,6 @@ def verify(
 def kernel_report() -> list[dict[str, Any]]:
     """For every emitted kernel: its module, the claims it names and the claims whose evidence
     read its expressions in this process (run :func:`verify` first)."""
-    from derivations.codegen import all_kernels
-
     return [
         {
             "kernel": f"{k.target}.{k.name}",

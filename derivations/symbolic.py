@@ -17,6 +17,8 @@ import sympy as sp
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 from sympy.printing.latex import LatexPrinter
 
+from derivations.vocabulary import AUXILIARIES, Lam, W
+
 __all__ = [
     "skew_matrix",
     "diag_matrix",
@@ -184,7 +186,6 @@ def explicit(
     expression tree is walked node by node with dense explicit arithmetic (much faster than
     substituting and calling ``doit``).
     """
-    from derivations.codegen import AUXILIARIES
 
     env = {
         k: (sp.Matrix(v) if isinstance(v, sp.MatrixBase) else sp.sympify(v))
@@ -335,7 +336,6 @@ class Words:
         ``opaque`` maps subexpressions (e.g. ``Jinv(M)``) to matrix symbols first, so that what
         the letters cannot express (Hadamard products, entrywise functions) becomes a letter.
         """
-        from derivations.codegen import Lam
 
         e = expr.xreplace(opaque) if opaque else expr
         if opaque:
@@ -427,7 +427,6 @@ def trace_residual(expr: sp.Expr) -> sp.Integer:
 
 class _Latex(LatexPrinter):
     def _print_HadamardProduct(self, expr: sp.HadamardProduct) -> str:
-        from derivations.codegen import W
 
         others = [a for a in expr.args if a != W]
         if len(others) == len(expr.args) - 1:

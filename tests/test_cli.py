@@ -22,9 +22,9 @@ import sympy as sp
 
 import derivations.registry as registry
 from derivations import cli as dcli
-from derivations.codegen import W
 from derivations.registry import ClaimResult, EvidenceResult, all_claims, get_claim
 from derivations.symbolic import Bracket, Pair
+from derivations.vocabulary import W
 from symrb import cli as launcher
 
 ROOT = Path(__file__).resolve().parents[1]

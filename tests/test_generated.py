@@ -28,7 +28,8 @@ from sympy.printing.numpy import NumPyPrinter
 
 import symrb
 from derivations import codegen
-from derivations.codegen import AUXILIARIES, Kernel, all_kernels, n
+from derivations.registry import all_kernels
+from derivations.vocabulary import AUXILIARIES, Kernel, n
 
 ROOT = Path(__file__).resolve().parent.parent
 KERNELS = all_kernels()

@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from derivations import codegen
-from derivations.codegen import AUXILIARIES, Arg, Kernel, Lam, W, matrix
+from derivations.vocabulary import AUXILIARIES, Arg, Kernel, Lam, W, matrix, n
 
 SIZE = 3
 BATCH = 2
@@ -76,7 +76,7 @@ def _sympy_value(expr: sp.Basic, values: dict[str, np.ndarray], lam: np.ndarray)
     lam_s = [sp.Float(x, 30) for x in lam]
     for name, aux in AUXILIARIES.items():
         rep[matrix(name)] = aux.explicit(lam_s)
-    out = expr.xreplace(rep).xreplace({codegen.n: SIZE})
+    out = expr.xreplace(rep).xreplace({n: SIZE})
     # entrywise through SymPy's own explicit forms (doit leaves e.g. HadamardPower unevaluated)
     out = out.replace(
         lambda e: isinstance(e, sp.Trace), lambda e: sp.Matrix(e.arg.as_explicit()).trace()

@@ -43,7 +43,6 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from derivations import reference as ref
-from derivations.codegen import Arg, Kernel, matrix, n
 from derivations.registry import Level, claim
 from derivations.symbolic import (
     Bracket,
@@ -55,6 +54,7 @@ from derivations.symbolic import (
     residual,
     trace_residual,
 )
+from derivations.vocabulary import Arg, Kernel, matrix, n
 
 # =============================================================================================
 # display objects and their evaluation (private helpers; _Norm and _SampleSum could move to

@@ -31,9 +31,9 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
-from derivations.codegen import Arg, Kernel, entrywise, matrix, n, vector
 from derivations.registry import Level, claim
 from derivations.symbolic import eq, explicit, lhs_minus_rhs, residual
+from derivations.vocabulary import Arg, Kernel, entrywise, matrix, n, vector
 
 # =============================================================================================
 # display objects for the indexed notation and their evaluation (private helpers; _Dot, _Sample,

@@ -34,7 +34,6 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.codegen import Arg, Kernel, Lam, matrix, n
 from derivations.registry import Level, claim
 from derivations.symbolic import (
     Words,
@@ -47,6 +46,7 @@ from derivations.symbolic import (
     skew_matrix,
     sym_vector,
 )
+from derivations.vocabulary import Arg, Kernel, Lam, matrix, n
 
 # =============================================================================================
 # kernels

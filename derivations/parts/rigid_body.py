@@ -14,7 +14,6 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.codegen import Arg, Jinv, Kernel, Lam, matrix, vector
 from derivations.registry import Level, claim
 from derivations.symbolic import (
     Bracket,
@@ -33,6 +32,7 @@ from derivations.symbolic import (
     trace_words,
     vee3,
 )
+from derivations.vocabulary import Arg, Jinv, Kernel, Lam, matrix, vector
 
 Q, M, Om = matrix("Q"), matrix("M"), matrix("Omega")
 ARG_Q = Arg("Q", "(..., n, n)", "attitude, in SO(n)")

@@ -32,7 +32,6 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.codegen import Arg, Jinv, Kernel, Lam, W, matrix, n
 from derivations.registry import Level, claim
 from derivations.symbolic import (
     Bracket,
@@ -45,6 +44,7 @@ from derivations.symbolic import (
     skew_matrix,
     trace_residual,
 )
+from derivations.vocabulary import Arg, Jinv, Kernel, Lam, W, matrix, n
 
 Q, P, B, U = matrix("Q"), matrix("P"), matrix("B"), matrix("U")
 M, Om = matrix("M"), matrix("Omega")
