@@ -474,6 +474,100 @@ def train_so_shooting(
     >>> bool(res.shooting_residual < 1e-13), round(res.condition, 3)
     (True, 0.095)
     """
+    shoot, x0, tol, maxfev = _shooting_inputs(
+        Q0, targets, lam, alpha, layers, M0, tol, maxfev, condition
+    )
+    prob, n = shoot.prob, shoot.n
+    losses: list[float] = []
+    residuals: list[float] = []
+    last: dict[str, Array] = {}
+    with progress_bar(maxfev, "SO(n) shooting", progress) as bar:
+
+        def F(x: Array) -> Array:
+            out = shoot(x)
+            if out is None:  # beyond the fold of J_D: push the root finder back
+                return -10.0 * (1.0 + np.abs(x)) * np.sign(x + (x == 0))
+            Fx, U, G = out
+            losses.append(_so_loss(shoot.last_Qs[-1], prob.Ts, U, prob.lam, prob.alpha))
+            residuals.append(_grad_norm(G))
+            last["U"] = U
+            last["F"] = Fx
+            bar.step()
+            return Fx
+
+        sol = root(F, x0, method="hybr", options={"xtol": tol, "maxfev": maxfev})
+        F(sol.x)  # the reported controls are those of the returned M_0
+    kappa = _shooting_condition(shoot, sol.x) if condition else None
+    shooting_residual = float(np.linalg.norm(last["F"])) if "F" in last else float("inf")
+    # hybr reports "not making good progress" once F is at rounding level and xtol cannot be
+    # met (the thorough profile found converged = False with |F| = 5.6e-16): F at the rounding
+    # floor of the sweep counts as converged
+    layers_n = 0 if last.get("U") is None else int(np.shape(last["U"])[0])
+    converged = bool(sol.success) or shooting_residual <= _rounding_floor(layers_n, n, sol.x)
+    return SOTrainResult(
+        U=last["U"],
+        losses=np.array(losses),
+        residuals=np.array(residuals),
+        iterations=len(losses) - 1,
+        residual=residuals[-1],
+        converged=converged,
+        method="shooting",
+        M0=_skew_from_upper(sol.x, n),
+        shooting_residual=shooting_residual,
+        condition=kappa,
+    )
+
+
+class _Shooting:
+    """The shooting function of :func:`train_so_shooting`: the strict upper triangle x of
+    :math:`M_0` -> (F(x), the controls U, the skew gradients G), or None beyond the fold of
+    :math:`J_D`; ``last_Qs`` keeps the layers of the last evaluation."""
+
+    def __init__(self, prob: _SOProblem, layers: int) -> None:
+        self.prob, self.N, self.n = prob, layers, prob.n
+        self.iu = np.triu_indices(self.n, 1)
+        self.lam_a = prob.alpha * prob.lam
+        self.last_Qs: Array = np.empty(0)
+
+    def controls(self, x: Array) -> Array:
+        """The controls of the discrete rigid body trajectory from the momentum of x."""
+        N, n = self.N, self.n
+        M = _skew_from_upper(x, n)
+        U = np.empty((N, n, n))
+        guess: Array | None = None
+        for k in range(N):
+            U[k] = np.asarray(solve_moser_veselov(M, self.lam_a, U0=guess))
+            guess = U[k]
+            M = U[k].T @ M @ U[k]
+        return U
+
+    def __call__(self, x: Array) -> tuple[Array, Array, Array] | None:
+        prob = self.prob
+        try:
+            U = self.controls(x)
+        except OutOfDomainError:
+            return None
+        Qs = _so_forward(prob.Qs0, U)
+        G, Ps = _so_backward(Qs, U, prob.lam, prob.Ts, prob.alpha, costates=True)
+        assert Ps is not None
+        self.last_Qs = Qs
+        R = _gsr.symmetric_momentum(Qs[0], Ps[0])
+        return np.asarray(R[self.iu] - x), U, G
+
+
+def _shooting_inputs(
+    Q0: ArrayLike,
+    targets: ArrayLike,
+    lam: ArrayLike,
+    alpha: object,
+    layers: object,
+    M0: ArrayLike | None,
+    tol: object,
+    maxfev: object,
+    condition: object,
+) -> tuple[_Shooting, Array, float, int]:
+    """The validated arguments of :func:`train_so_shooting`: the shooting function, the start
+    (the strict upper triangle of ``M0``, 0 by default), ``tol`` and ``maxfev``."""
     N = v.count(layers, "layers", 1)
     Q = v.orthogonal(Q0, "Q0")
     if Q.ndim != 3:
@@ -488,79 +582,14 @@ def train_so_shooting(
     x0 = np.zeros(len(iu[0]))
     if M0 is not None:
         x0 = v.skew(M0, "M0", n)[iu].copy()
-    lam_a = prob.alpha * prob.lam
-    losses: list[float] = []
-    residuals: list[float] = []
-    last: dict[str, Array] = {}
-
-    def controls(x: Array) -> Array:
-        M = _skew_from_upper(x, n)
-        U = np.empty((N, n, n))
-        guess: Array | None = None
-        for k in range(N):
-            U[k] = np.asarray(solve_moser_veselov(M, lam_a, U0=guess))
-            guess = U[k]
-            M = U[k].T @ M @ U[k]
-        return U
-
     if not isinstance(condition, bool | np.bool_):
         raise InputError(f"condition must be True or False, got {condition!r}; pass a bool")
+    return _Shooting(prob, N), x0, tol, maxfev
 
-    def shoot(x: Array) -> tuple[Array, Array, Array] | None:
-        """(F(x), U, G), or None beyond the fold of J_D."""
-        try:
-            U = controls(x)
-        except OutOfDomainError:
-            return None
-        Qs = _so_forward(prob.Qs0, U)
-        G, Ps = _so_backward(Qs, U, prob.lam, prob.Ts, prob.alpha, costates=True)
-        assert Ps is not None
-        last["Qs"] = Qs
-        R = _gsr.symmetric_momentum(Qs[0], Ps[0])
-        return np.asarray(R[iu] - x), U, G
 
-    with progress_bar(maxfev, "SO(n) shooting", progress) as bar:
-
-        def F(x: Array) -> Array:
-            out = shoot(x)
-            if out is None:  # beyond the fold of J_D: push the root finder back
-                return -10.0 * (1.0 + np.abs(x)) * np.sign(x + (x == 0))
-            Fx, U, G = out
-            losses.append(_so_loss(last["Qs"][-1], prob.Ts, U, prob.lam, prob.alpha))
-            residuals.append(_grad_norm(G))
-            last["U"] = U
-            last["F"] = Fx
-            bar.step()
-            return Fx
-
-        sol = root(F, x0, method="hybr", options={"xtol": tol, "maxfev": maxfev})
-        F(sol.x)  # the reported controls are those of the returned M_0
-    kappa = _shooting_condition(shoot, sol.x) if condition else None
-    shooting_residual = float(np.linalg.norm(last["F"])) if "F" in last else float("inf")
-    # hybr reports "not making good progress" once F is at rounding level and xtol cannot be
-    # met (the thorough profile found converged = False with |F| = 5.6e-16): F at the rounding
-    # floor of the sweep, 10 (N + 1) n eps (1 + |x|), counts as converged
-    layers_n = 0 if last.get("U") is None else int(np.shape(last["U"])[0])
-    floor = (
-        10.0
-        * (layers_n + 1)
-        * n
-        * float(np.finfo(float).eps)
-        * (1.0 + float(np.linalg.norm(sol.x)))
-    )
-    converged = bool(sol.success) or shooting_residual <= floor
-    return SOTrainResult(
-        U=last["U"],
-        losses=np.array(losses),
-        residuals=np.array(residuals),
-        iterations=len(losses) - 1,
-        residual=residuals[-1],
-        converged=converged,
-        method="shooting",
-        M0=_skew_from_upper(sol.x, n),
-        shooting_residual=shooting_residual,
-        condition=kappa,
-    )
+def _rounding_floor(layers: int, n: int, x: Array) -> float:
+    """The rounding floor of the shooting residual, 10 (N + 1) n eps (1 + |x|)."""
+    return 10.0 * (layers + 1) * n * float(np.finfo(float).eps) * (1.0 + float(np.linalg.norm(x)))
 
 
 def _shooting_condition(
