@@ -1,5 +1,6 @@
-"""What the modules of :mod:`symrb.learning` share: the condition estimate of a sweep, and the
-parameter blocks of their docstrings."""
+"""What the modules of :mod:`symrb.learning` share: the condition estimate of a sweep
+(:class:`SweepInfo`), the check of a positive argument and the parameter blocks of their
+docstrings."""
 
 from __future__ import annotations
 
@@ -82,8 +83,9 @@ seed : int, numpy.random.Generator or None, optional
 @dataclass(frozen=True)
 class SweepInfo:
     r"""The condition estimate of a forward and costate sweep (``return_info=True`` of
-    :func:`costate_sweep`, :func:`loss_gradients`, :func:`so_network_gradients` and
-    :func:`so_network_costates`).
+    :func:`~symrb.learning.resnet.costate_sweep`, :func:`~symrb.learning.resnet.loss_gradients`,
+    :func:`~symrb.learning.so_network.so_network_gradients` and
+    :func:`~symrb.learning.so_network.so_network_costates`).
 
     Attributes
     ----------

@@ -298,8 +298,8 @@ def costate_sweep(
     %(activation)s
     %(residual)s
     return_info : bool, optional
-        Also return a :class:`SweepInfo` with the condition estimate of the sweep (one SVD of
-        each layer's Jacobian per sample; not computed by default).
+        Also return a :class:`~symrb.learning.SweepInfo` with the condition estimate of the sweep
+        (one SVD of each layer's Jacobian per sample; not computed by default).
 
     Returns
     -------
@@ -377,8 +377,8 @@ def loss_gradients(
     %(activation)s
     %(residual)s
     return_info : bool, optional
-        Also return a :class:`SweepInfo` with the condition estimate of the sweeps (accuracy
-        stated there; not computed by default).
+        Also return a :class:`~symrb.learning.SweepInfo` with the condition estimate of the sweeps
+        (accuracy stated there; not computed by default).
 
     Returns
     -------

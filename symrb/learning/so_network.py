@@ -273,8 +273,8 @@ def so_network_gradients(
     alpha : float, optional
         The weight :math:`\alpha \ge 0` of the running cost.
     return_info : bool, optional
-        Also return a :class:`SweepInfo` (the condition estimate of the sweeps, about 1 for
-        orthogonal controls; not computed by default).
+        Also return a :class:`~symrb.learning.SweepInfo` (the condition estimate of the sweeps,
+        about 1 for orthogonal controls; not computed by default).
 
     Returns
     -------
@@ -348,7 +348,7 @@ def so_network_costates(
     %(U)s
     %(T)s
     return_info : bool, optional
-        Also return a :class:`SweepInfo` (not computed by default).
+        Also return a :class:`~symrb.learning.SweepInfo` (not computed by default).
 
     Returns
     -------

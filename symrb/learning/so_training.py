@@ -45,7 +45,7 @@ class SOTrainResult:
         The loss before each iteration and at the end.
     residuals : ndarray, shape (iterations + 1,)
         The first-order optimality residual :math:`\max_k\|G_k\|_F` (the Riemannian gradient,
-        :func:`so_network_gradients`) at the same points.
+        :func:`~symrb.learning.so_network.so_network_gradients`) at the same points.
     iterations : int
         The number of iterations done.
     residual : float
@@ -121,7 +121,8 @@ def train_so_gradient(
     tol: float = 1e-10,
     progress: bool = False,
 ) -> SOTrainResult:
-    r"""Riemannian gradient descent on :math:`SO(n)^N` for the loss of :func:`so_network_gradients`.
+    r"""Riemannian gradient descent on :math:`SO(n)^N` for the loss of
+    :func:`~symrb.learning.so_network.so_network_gradients`.
 
     Each step runs the forward and the costate sweep, then :math:`U_k \leftarrow U_k R(-t\,d_k)`
     with :math:`R` the Cayley map :math:`(I - A/2)^{-1}(I + A/2)` or the exponential, the
@@ -397,8 +398,8 @@ def train_so_shooting(
 ) -> SOTrainResult:
     r"""The extremal equations of claim D9 as a two-point boundary value problem, by shooting.
 
-    The extremals of the loss of :func:`so_network_gradients` (:math:`\alpha > 0`) satisfy the
-    discrete system
+    The extremals of the loss of :func:`~symrb.learning.so_network.so_network_gradients`
+    (:math:`\alpha > 0`) satisfy the discrete system
 
     .. math::
 

@@ -159,7 +159,7 @@ def digits_task(
     by ten zeros, its target the same components followed by the one-hot code of the digit, so
     the network has to write the class into the last ten entries while keeping the rest.  The
     predicted class is the largest of the last ten entries of :math:`x_N`
-    (:func:`resnet_predict`).
+    (:func:`~symrb.learning.resnet.resnet_predict`).
 
     Parameters
     ----------

@@ -89,7 +89,8 @@ def two_sample_bound(x0: ArrayLike, N: ArrayLike) -> float:
 
     at every horizon T (norms and pairing of :func:`symrb.pairing`): unlike one sample, the
     second term does not go to zero.  The formula is the generated ``two_sample_bound``, the
-    expression that the evidence of S15 compares with solutions of :func:`solve_orbit_bvp`.
+    expression that the evidence of S15 compares with solutions of
+    :func:`~symrb.orbits.bvp.solve_orbit_bvp`.
 
     Parameters
     ----------

@@ -129,8 +129,9 @@ def double_bracket_flow(
     %(times)s
     %(tolerances)s
     return_info : bool, optional
-        Also return a :class:`DoubleBracketInfo`: the condition number of the flow and an error
-        estimate at each output time (costs about four more integrations; none by default).
+        Also return a :class:`~symrb.orbits.DoubleBracketInfo`: the condition number of the flow
+        and an error estimate at each output time (costs about four more integrations; none by
+        default).
 
     Returns
     -------
