@@ -582,7 +582,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
         argv += ["--only", *args.only] if args.only else []
         argv += ["--target", str(args.target)] if args.target else []
         return subprocess.run(argv, env=env, check=False).returncode
-    from derivations.codegen import emit_all
+    from derivations.printer import emit_all
 
     try:
         return emit_all(check=args.check, target=args.target, only=args.only)
