@@ -29,8 +29,8 @@ hold), ``"printed"`` (the statement as printed, expected to *fail*: an erratum) 
 * ``fails``: some printed-form evidence fails and no correction is registered;
 * ``not checkable``: there is no evidence.
 
-Claims live in the modules of :mod:`derivations.parts`; the registry discovers every
-:class:`Claim` object there, so adding a part never edits this file.
+Claims live in the modules of the packages :data:`PACKAGES`; the registry discovers every
+:class:`Claim` object there, so adding a claim module never edits this file.
 """
 
 from __future__ import annotations
@@ -64,6 +64,8 @@ __all__ = [
     "verify_claim",
     "kernel_report",
     "OUTCOMES",
+    "GROUPS",
+    "GROUP_TITLES",
 ]
 
 OUTCOMES = ("holds", "holds after correction", "fails", "not checkable")
@@ -318,6 +320,9 @@ PACKAGES = ("derivations.claims", "derivations.methods", "derivations.parts")
 
 #: Claim groups: the paper's statements (D1.., S1..) and checks of symrb's own methods (M1..).
 GROUPS = {"D": "paper", "S": "paper", "M": "method"}
+
+#: The heading of each group where claims are listed (terminal tables, the book's claims page).
+GROUP_TITLES = {"paper": "The paper's claims", "method": "symrb's own methods"}
 
 
 def _claim_key(cid: str) -> tuple[int, int]:
