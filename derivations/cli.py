@@ -32,6 +32,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from derivations import report
 from derivations.printer import emit_all
 from derivations.registry import (
     GROUP_TITLES,
@@ -42,7 +43,6 @@ from derivations.registry import (
     kernel_report,
     verify_claim,
 )
-from derivations.report import result_from_dict, source_hash, verify_json_path
 from derivations.text import (
     WIDTH,
     claim_text,
@@ -114,19 +114,19 @@ def _cmd_claims(args: argparse.Namespace) -> int:
 def _recorded(cid: str) -> tuple[ClaimResult | None, str]:
     """The result of claim ``cid`` from ``book/_build/verify.json`` when that file was written
     for the current code, with a phrase saying so; ``(None, why not)`` otherwise."""
-    path = verify_json_path()
+    path = report.verify_json_path()
     if not path.is_file():
         return None, "no book/_build/verify.json"
     try:
         payload = json.loads(path.read_text())
     except (OSError, ValueError):
         return None, "book/_build/verify.json is unreadable"
-    if payload.get("source_hash") != source_hash():
+    if payload.get("source_hash") != report.source_hash():
         return None, "book/_build/verify.json was written for other code"
     match = [r for r in payload.get("claims", []) if r.get("id") == cid]
     if not match:
         return None, f"book/_build/verify.json has no result for {cid}"
-    return result_from_dict(match[0]), "recorded in book/_build/verify.json for this code"
+    return report.result_from_dict(match[0]), "recorded in book/_build/verify.json for this code"
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
@@ -201,20 +201,20 @@ def _reporter(quiet: bool) -> Callable[[str, bool], None]:
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
-    report = _reporter(args.quiet)
+    progress = _reporter(args.quiet)
     try:
         claims = _claims(args.ids, args.group)
     except KeyError as exc:
         print(textwrap.fill(exc.args[0], width=WIDTH), file=sys.stderr)
         return 2
-    results = list(_run(claims, args.fail_fast, report))
+    results = list(_run(claims, args.fail_fast, progress))
     complete = not args.ids and len(results) == len(all_claims())
     kernels = kernel_report()
     unchecked = []
     if complete:
         unchecked = [k for k in kernels if set(k["claims"]) - set(k["checked_by"])]
     payload = {
-        "source_hash": source_hash(),
+        "source_hash": report.source_hash(),
         "claims": [r.to_dict() for r in results],
         "kernels": kernels,
     }

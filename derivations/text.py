@@ -159,6 +159,12 @@ class TextPrinter(PrettyPrinter):
             name = latex_text(name)
         return super()._print_Function(e, sort=sort, func_name=name, **kw)
 
+    def _print_Max(self, e: Any) -> Any:  # SymPy draws Max and Min with str()
+        return prettyForm(*self._print_seq(e.args, "(", ")").left("max"))
+
+    def _print_Min(self, e: Any) -> Any:
+        return prettyForm(*self._print_seq(e.args, "(", ")").left("min"))
+
     def _print_Bracket(self, e: Any) -> Any:
         return self._print_seq(e.args, "[", "]")
 
@@ -187,30 +193,33 @@ class TextPrinter(PrettyPrinter):
         return prettyForm(*prettyForm(*self._print(inner).parens()).left("J⁻¹"))
 
 
-def _pretty(expr: Any, width: int) -> str:
+def _pretty(expr: Any, width: int, suffix: str = "") -> str:
     printer = TextPrinter(
         {"use_unicode": True, "order": "none", "wrap_line": True, "num_columns": width}
     )
-    return "\n".join(line.rstrip() for line in printer.doprint(expr).splitlines())
+    form = printer._print(expr)
+    if suffix:
+        form = prettyForm(*form.right(suffix))
+    return "\n".join(line.rstrip() for line in form.render(**printer._settings).splitlines())
 
 
-def formula_text(expr: Any, width: int = WIDTH) -> str:
+def formula_text(expr: Any, width: int = WIDTH, suffix: str = "") -> str:
     """A registered formula (a SymPy object, or a tuple of them) drawn by :class:`TextPrinter`,
-    lines at most ``width`` wide; the parts of a tuple are side by side when each is one line,
-    else one under the other."""
+    lines at most ``width`` wide, followed by ``suffix`` (punctuation, on its baseline); the parts
+    of a tuple are side by side when each is one line, else one under the other."""
     if not isinstance(expr, tuple | list):
-        return _pretty(expr, width)
+        return _pretty(expr, width, suffix)
     parts = [formula_text(e, width) for e in expr]
-    joined = ",  ".join(parts)
+    joined = ",  ".join(parts) + suffix
     if all("\n" not in p for p in parts) and len(joined) <= width:
         return joined
-    return "\n\n".join(parts)
+    return "\n\n".join([*parts[:-1], formula_text(expr[-1], width, suffix)])
 
 
 # ---------------------------------------------------------------------------------------------
 # a claim's texts
 
-_PLACEHOLDER = re.compile(r"\[\[([A-Za-z0-9_]+)\]\]")
+_PLACEHOLDER = re.compile(r"\[\[([A-Za-z0-9_]+)\]\]([.,;:]?)")
 _MATH = re.compile(r"(\$[^$]+\$)")
 #: Joins the words of a short formula so that wrapping does not split it (see :func:`paragraph`).
 _GLUE = "\x1f"
@@ -240,7 +249,7 @@ def text_of(
         key = m.group(1)
         if formulas is None or key not in formulas:
             raise KeyError(f"claim {owner}: [[{key}]] has no formula")
-        text = formula_text(formulas[key], width - len(_DISPLAY_INDENT) - 2)
+        text = formula_text(formulas[key], width - len(_DISPLAY_INDENT) - 2, m.group(2))
         return glued(text) if "\n" not in text else f"{_DISPLAY}{text}{_DISPLAY}"
 
     out = []
@@ -278,8 +287,7 @@ def fit(text: str, width: int) -> str:
 
 def paragraph(text: str, indent: str = "  ", width: int | None = None) -> str:
     """``text`` wrapped and indented; words joined by :data:`_GLUE` stay on one line, and a
-    display block of :func:`text_of` is set on lines of its own, indented deeper (punctuation
-    right after it ends its last line)."""
+    display block of :func:`text_of` is set on lines of its own, indented deeper."""
     width = width or terminal_width()
     out: list[str] = []
     for k, piece in enumerate(text.split(_DISPLAY)):
@@ -288,14 +296,15 @@ def paragraph(text: str, indent: str = "  ", width: int | None = None) -> str:
             out.append("\n".join((deeper + line).rstrip() for line in piece.splitlines()))
             continue
         piece = piece.strip()
-        if out and piece[:1] in tuple(".,;:"):
-            out[-1] += piece[0]
-            piece = piece[1:].strip()
         if piece:
             out.append(
                 textwrap.fill(
-                    piece, width=width, initial_indent=indent, subsequent_indent=indent,
-                    break_on_hyphens=False, break_long_words=False,
+                    piece,
+                    width=width,
+                    initial_indent=indent,
+                    subsequent_indent=indent,
+                    break_on_hyphens=False,
+                    break_long_words=False,
                 ).replace(_GLUE, " ")  # fmt: skip
             )
     return "\n".join(out)
