@@ -21,6 +21,7 @@ import contextlib
 import io
 import sys
 from collections.abc import Callable, Sequence
+from importlib import metadata
 
 COMMANDS = ("claims", "show", "verify", "derive")
 
@@ -68,8 +69,6 @@ derivations missing)
 
 def version() -> str:
     """The installed version (package metadata, else ``symrb.__version__``)."""
-    from importlib import metadata
-
     try:
         return metadata.version("symrb")
     except metadata.PackageNotFoundError:
