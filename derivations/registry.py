@@ -66,6 +66,7 @@ __all__ = [
     "OUTCOMES",
     "GROUPS",
     "GROUP_TITLES",
+    "grouped",
 ]
 
 OUTCOMES = ("holds", "holds after correction", "fails", "not checkable")
@@ -323,6 +324,13 @@ GROUPS = {"D": "paper", "S": "paper", "M": "method"}
 
 #: The heading of each group where claims are listed (terminal tables, the book's claims page).
 GROUP_TITLES = {"paper": "The paper's claims", "method": "symrb's own methods"}
+
+
+def grouped(items: Sequence[Any], id_of: Callable[[Any], str]) -> list[tuple[str, list[Any]]]:
+    """``[(title, members), ...]``: ``items`` (claims, results, their dicts) by the group of their
+    ID ``id_of(item)``, in the order of :data:`GROUP_TITLES`, groups without members left out."""
+    out = [(t, [x for x in items if GROUPS[id_of(x)[0]] == g]) for g, t in GROUP_TITLES.items()]
+    return [(title, members) for title, members in out if members]
 
 
 def _claim_key(cid: str) -> tuple[int, int]:

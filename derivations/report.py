@@ -19,13 +19,13 @@ from pathlib import Path
 from typing import Any
 
 from derivations.registry import (
-    GROUP_TITLES,
     GROUPS,
     OUTCOMES,
     ClaimResult,
     EvidenceResult,
     all_claims,
     get_claim,
+    grouped,
     kernel_report,
     verify,
 )
@@ -359,14 +359,10 @@ SHORT_LEVELS = {
 }
 
 
-def by_group(results: Sequence[Mapping[str, Any]]) -> list[tuple[str, list[Mapping[str, Any]]]]:
+def by_group(results: Sequence[Mapping[str, Any]]) -> list[tuple[str, list[Any]]]:
     """``[(title, results), ...]``: the results (dicts of ``verify --json``) of each claim group
     that has any, in the order of :data:`~derivations.registry.GROUP_TITLES`."""
-    groups = [
-        (title, [r for r in results if GROUPS[r["id"][0]] == group])
-        for group, title in GROUP_TITLES.items()
-    ]
-    return [(title, rs) for title, rs in groups if rs]
+    return grouped(results, lambda r: str(r["id"]))
 
 
 def _seconds_cell(s: float) -> str:

@@ -34,7 +34,7 @@ from sympy.printing.precedence import PRECEDENCE, precedence
 from sympy.printing.pretty.pretty import PrettyPrinter
 from sympy.printing.pretty.stringpict import prettyForm
 
-from derivations.registry import GROUP_TITLES, GROUPS, Claim, ClaimResult, EvidenceResult
+from derivations.registry import Claim, ClaimResult, EvidenceResult, grouped
 from derivations.symbolic import latex
 from derivations.vocabulary import W
 
@@ -48,7 +48,6 @@ __all__ = [
     "terminal_width",
     "fit",
     "paragraph",
-    "claim_groups",
     "claims_lines",
     "statement_lines",
     "evidence_lines",
@@ -305,16 +304,13 @@ def paragraph(text: str, indent: str = "  ", width: int | None = None) -> str:
                     subsequent_indent=indent,
                     break_on_hyphens=False,
                     break_long_words=False,
-                ).replace(_GLUE, " ")  # fmt: skip
+                ).replace(_GLUE, " ")
             )
     return "\n".join(out)
 
 
-def claim_groups(items: Sequence[Any]) -> list[tuple[str, list[Any]]]:
-    """``[(heading, items), ...]`` for the claim groups among ``items`` (claims or results, by
-    their ID), in the order of :data:`~derivations.registry.GROUP_TITLES`."""
-    out = [(t, [c for c in items if GROUPS[c.id[0]] == g]) for g, t in GROUP_TITLES.items()]
-    return [(title, members) for title, members in out if members]
+def _id(item: Claim | ClaimResult) -> str:
+    return item.id
 
 
 def claims_lines(claims: Sequence[Claim], width: int = WIDTH) -> list[str]:
@@ -323,7 +319,7 @@ def claims_lines(claims: Sequence[Claim], width: int = WIDTH) -> list[str]:
     where_w = 22
     head = f"{'ID':<4} {'recorded outcome':<22}  {'in the paper':<{where_w}}  title"
     lines = [head, "-" * min(width, len(head) + 30)]
-    groups = claim_groups(claims)
+    groups = grouped(claims, _id)
     for title, members in groups:
         if len(groups) > 1:
             lines += ["", title]
@@ -466,7 +462,7 @@ def verify_table(
     recorded, kernels not evaluated by their claims, a summary."""
     lines = [_row([name for name, _w in _COLUMNS])]
     lines.append("-" * len(lines[0]))
-    groups = claim_groups(results)
+    groups = grouped(results, _id)
     for title, members in groups:
         if len(groups) > 1:
             lines += ["", title]
