@@ -99,8 +99,12 @@ def _cmd_claims(args: argparse.Namespace) -> int:
         return 0
     for line in claims_lines(claims, terminal_width()):
         print(line)
+    methods = sum(c.group == "method" for c in claims)
+    count = f"{len(claims) - methods} claims" + (
+        f" and {methods} checks of symrb's own methods" if methods else ""
+    )
     tail = (
-        f"{len(claims)} claims, with the outcomes recorded in the registry; '{args.prog} show ID' "
+        f"{count}, with the outcomes recorded in the registry; '{args.prog} show ID' "
         f"explains one, '{args.prog} verify' checks them."
     )
     print("\n" + textwrap.fill(tail, width=terminal_width()))
@@ -292,7 +296,10 @@ def _add_verify(sub: Any) -> None:
         "own methods), print a progress line per claim on stderr and a table on stdout, and\n"
         "fail when a computed outcome differs from the recorded one.",
     )  # fmt: skip
-    p.add_argument("ids", nargs="*", metavar="ID", help="claim IDs (default: all), e.g. S1 D10")
+    p.add_argument(
+        "ids", nargs="*", metavar="ID",
+        help="claim IDs, e.g. S1 D10 (default: all, or all of the group asked for)",
+    )  # fmt: skip
     which = p.add_mutually_exclusive_group()
     which.add_argument("--group", choices=tuple(GROUP_TITLES), help=_GROUP_HELP)
     which.add_argument(

@@ -1,10 +1,11 @@
-"""How the book shows a claim: one function, so every page renders claims the same way.
+"""How the book shows claims: one module, so every page renders them the same way.
 
 ``check("S4")`` displays a claim's statement, the printed and corrected forms of an erratum, the
 note and a table of its evidence, from the one run of every claim's evidence that the build makes
 (``symrb verify --output book/_build/verify.json``, reused when it was written for the current
 code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
-which fails the book build.
+which fails the book build.  :func:`claims_table` and :func:`claims_summary` are the claims
+page, one table per claim group (:func:`by_group`: the paper's claims, then symrb's own methods).
 """
 
 from __future__ import annotations

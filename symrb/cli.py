@@ -55,6 +55,7 @@ commands (they need a source checkout of symrb with its 'derive' extra):
   claims           list the claims with their recorded outcomes
   show ID          one claim: statement, printed and corrected forms, evidence
   verify [ID ...]  run the evidence and compare the outcomes with the record
+                   (--paper: only the paper's claims, not symrb's own methods)
   derive [--check] regenerate (or only compare) symrb/_generated
 
 {bench}
