@@ -1,12 +1,19 @@
 """Derivations of the paper's statements with SymPy (development time only; not in the wheel).
 
-* :mod:`derivations.registry`: the claim registry (IDs D1-D12, S1-S15 of CLAIMS.md);
-* :mod:`derivations.codegen`: :class:`~derivations.codegen.Kernel` and the printer that emits
-  ``symrb/_generated``;
+* :mod:`derivations.vocabulary`: symbols and shapes (``n``, ``matrix``, ``Lam``, ``W``) and the
+  :class:`~derivations.vocabulary.Kernel` declaration;
 * :mod:`derivations.symbolic`: the algebra the evidence works in (explicit matrices, noncommutative
   words, trace words) and the LaTeX of displayed formulas;
+* :mod:`derivations.registry`: the claim registry (IDs D1-D12, S1-S15 of CLAIMS.md, and the
+  checks M1.. of symrb's own methods), discovery of claims and kernels;
+* :mod:`derivations.printer`: CSE and the NumPy printer that emits ``symrb/_generated``;
+* :mod:`derivations.text` and :mod:`derivations.report`: claims as terminal text and as book
+  tables; :mod:`derivations.cli`: the commands ``claims``, ``show``, ``verify``, ``derive``;
 * :mod:`derivations.reference`: independent float64 / high-precision references (never symrb);
-* :mod:`derivations.parts`: one module per part of the paper (``rigid_body`` is S1-S4, ...).
+* :mod:`derivations.claims`, :mod:`derivations.methods` (and, until moved,
+  :mod:`derivations.parts`): the modules that declare claims, their evidence and kernels.
+
+Imports run one way: vocabulary <- symbolic <- registry <- printer <- text, report <- cli.
 
 How a part is written (``derivations/parts/rigid_body.py`` is the model):
 
@@ -18,7 +25,7 @@ How a part is written (``derivations/parts/rigid_body.py`` is the model):
    ``expr`` (``S2.formulas[key]`` or the module-level name it was bound to).  Hand-written ``$...$``
    math may name objects but not state a relation (``=``, ``<``, ``\\le``, ...), except a parameter
    value such as ``$n=3$``.
-3. **Emit what was verified.**  A :class:`~derivations.codegen.Kernel` holds the expressions of a
+3. **Emit what was verified.**  A :class:`~derivations.vocabulary.Kernel` holds the expressions of a
    generated function (``target`` = the part module's name); evidence reads them with
    ``KERNEL["output"]`` (this records that the claim checked the kernel) and evaluates them with
    :func:`~derivations.symbolic.explicit` (fixed n) or :class:`~derivations.symbolic.Words`
