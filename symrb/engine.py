@@ -62,9 +62,9 @@ from numpy.typing import ArrayLike, NDArray
 from . import _compiled
 from . import _validate as v
 from ._generated import discrete_rigid_body as _gen
-from ._results import Trajectory
+from ._results import DiscreteFlowSolution, Trajectory
+from ._stepping import _check_h, _check_steps, _prepare
 from ._validate import Array
-from .discrete import DiscreteFlowSolution, _check_h, _check_steps, _prepare
 from .errors import InputError, NotConvergedError, OutOfDomainError
 from .solvers import solve_moser_veselov
 

@@ -1,15 +1,24 @@
-r"""Discrete rigid body flows (paper, Section 2): the symmetric representation and Moser-Veselov.
+r"""The paper's algorithms by the paper's names (Bloch, Crouch and Ratiu 2024, Section 2).
 
 Three maps, each implemented from its own equations and sharing only the solver of
 :math:`J_D(U) = U\Lambda - \Lambda U^T = M` (:func:`symrb.solve_moser_veselov`):
 
-* the symmetric representation (paper, Section 2.1):
-  :math:`J_D(U_k) = h\,(Q_k^TP_k - P_k^TQ_k)`, :math:`Q_{k+1} = Q_kU_k`, :math:`P_{k+1} = P_kU_k`;
-* MV-Algorithm 1, :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})` (paper, Section 2.2);
-* MV-Algorithm 2, :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (paper, Section 2.2).
+* the symmetric representation of the discrete rigid body (Section 2.1, equations
+  ``discrbopteqns1`` and ``Ukdef1`` of the paper's source):
+  :math:`J_D(U_k) = h\,(Q_k^TP_k - P_k^TQ_k)`, :math:`Q_{k+1} = Q_kU_k`,
+  :math:`P_{k+1} = P_kU_k` (:func:`symmetric_step`, :func:`symmetric_flow`, and
+  :func:`discrete_rigid_body_flow` started from the body momentum);
+* MV-Algorithm 1, :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})` (Section 2.2,
+  :func:`mv_algorithm1`);
+* MV-Algorithm 2, :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (Section 2.2,
+  :func:`mv_algorithm2`).
 
 MV1-MV3 below name the three Moser-Veselov equations of Section 2.2 in the order the paper
-prints them.
+prints them (labels ``mv1``, ``mv2``, ``mv3``):
+:math:`\Omega_k = Q_k^TQ_{k-1}`, :math:`M_k = \Omega_k^T\Lambda - \Lambda\Omega_k`,
+:math:`M_{k+1} = \Omega_kM_k\Omega_k^T`.  :func:`jd_residual` is the residual of
+:math:`J_D(U) = M`.  To simulate the rigid body by any method (these maps' fast engine among
+them) use :func:`symrb.rigid_body.simulate`.
 
 Time step.  A discrete momentum is :math:`h` times the continuous one.  In the symmetric
 representation ``P`` is on the continuous scale (:math:`Q^TP - P^TQ \approx M(t_k)`, so
@@ -31,19 +40,16 @@ of :math:`J_D`) ends the run early with ``success`` False rather than raising.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from . import _validate as v
 from ._generated import discrete_rigid_body as _gen
 from ._generated import symmetric_rigid_body as _srb
-from ._progress import progress_bar
-from ._results import Trajectory
+from ._results import DiscreteFlowSolution
+from ._stepping import _check_h, _check_steps, _prepare, _Run, _Stepper
 from ._validate import Array
-from .errors import InputError, NotConvergedError, OutOfDomainError
-from .solvers import _EPS, _condition, _fold_scale_one, _solve_batch, _warm_single
+from .errors import NotConvergedError, OutOfDomainError
 
 __all__ = [
     "jd_residual",
@@ -54,96 +60,6 @@ __all__ = [
     "discrete_rigid_body_flow",
     "DiscreteFlowSolution",
 ]
-
-_MAXITER = 30
-
-
-@dataclass
-class DiscreteFlowSolution:
-    r"""Result of the discrete flows (:func:`symmetric_flow`, :func:`mv_algorithm1`,
-    :func:`mv_algorithm2`, :func:`discrete_rigid_body_flow`), modelled on :class:`FlowSolution`.
-
-    Attributes
-    ----------
-    t : ndarray, shape (K,)
-        The times :math:`kh` of the saved states; for the Moser-Veselov maps, which have no time
-        step, the step indices ``k`` (as floats).
-    k : ndarray of int, shape (K,)
-        The step index of each saved state (``0, s, 2s, ...`` for ``save_every = s``).
-    y : Trajectory
-        The saved states by name, each of shape ``(K, ..., n, n)``: ``Q`` always, ``P`` and the
-        body momentum ``M`` for the symmetric representation, ``M`` for MV-Algorithm 2.
-    iterations : ndarray of int, shape (number of solves,)
-        Newton iterations of each solve of :math:`J_D(U) = M`, in order (summed over a batch).
-    success : bool
-        True when every step was taken.
-    status : int
-        0 when every step was taken, -1 when a step failed (then ``message`` says why and the
-        last state reached is the last saved one).
-    message : str
-        What happened, in words.
-    method : str
-        The name of the map.
-    h : float or None
-        The time step, or None for the Moser-Veselov maps.
-    residual : ndarray, shape (number of solves,)
-        :math:`\|U\Lambda - \Lambda U^T - M\|_F` of each solve (the largest over a batch).
-    tol : ndarray, shape (number of solves,)
-        The tolerance each residual met (the default of :func:`symrb.solve_moser_veselov`: ten
-        times the rounding error of evaluating the residual): every entry of ``residual`` is at
-        most its ``tol``.
-    condition : ndarray, shape (number of solves,)
-        The solver's condition estimate :math:`\kappa` of each solve (see
-        :class:`symrb.MVSolveInfo`; the largest over a batch), with ``diagnostics=True``;
-        NaN otherwise.
-    failed_step : int or None
-        The step that failed, or None.
-    fold : float or None
-        When a step failed: :math:`t^*` of :func:`symrb.fold_scale` for that step's momentum
-        (below 1: it is past the fold by :math:`1/t^* - 1`; the smallest over a batch).
-    h_max : float or None
-        When a step of a flow with a time step failed: :math:`t^*h`, the step at which that
-        step's momentum reaches the fold; every step below it can be taken there.
-    halvings : ndarray of int, shape (steps taken,)
-        With ``halve=True``: how many times each step was halved (0: taken whole; ``j``: as
-        :math:`2^j` steps of :math:`h/2^j`).  Empty otherwise.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> import symrb
-    >>> Q0 = np.eye(3)
-    >>> M0 = symrb.hat([0.1, 0.2, 0.3])
-    >>> sol = symrb.discrete_rigid_body_flow(Q0, M0, [0.7, 1.1, 1.6], 0.1, 20, save_every=10)
-    >>> sol.success, sol.t, sol.k
-    (True, array([0., 1., 2.]), array([ 0, 10, 20]))
-    >>> sol.y.Q.shape, sorted(sol.y)
-    ((3, 3, 3), ['M', 'P', 'Q'])
-    >>> sol.message
-    'all 20 steps taken'
-    """
-
-    t: Array
-    k: NDArray[np.int64]
-    y: Trajectory
-    iterations: NDArray[np.int64]
-    success: bool
-    status: int
-    message: str
-    method: str
-    h: float | None = None
-    residual: Array = field(default_factory=lambda: np.zeros(0))
-    tol: Array = field(default_factory=lambda: np.zeros(0))
-    condition: Array = field(default_factory=lambda: np.zeros(0))
-    failed_step: int | None = None
-    fold: float | None = None
-    h_max: float | None = None
-    halvings: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-
-    @property
-    def nit(self) -> int:
-        """The total number of Newton iterations."""
-        return int(self.iterations.sum())
 
 
 def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
@@ -176,197 +92,6 @@ def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
     return _gen.jd(v.square(U, "U", nn), L) - v.skew(M, "M", nn)
-
-
-def _check_steps(steps: int, save_every: int) -> tuple[int, int]:
-    return v.count(steps, "steps", 0), v.count(save_every, "save_every", 1)
-
-
-def _check_h(h: float) -> float:
-    value = v.real_scalar(h, "h")
-    if not value > 0:
-        raise InputError(f"h must be a finite number > 0, got {h!r}; pass a float > 0")
-    return value
-
-
-class _Stepper:
-    """Solves J_D(U) = M on a flat batch, warm-starting from the previous solution.
-
-    After each solve ``last_iterations``, ``last_residual``, ``last_tol`` (and, with
-    ``diagnostics``, ``last_condition``) describe it.
-    """
-
-    def __init__(self, lam: Array, batch: tuple[int, ...], diagnostics: bool = False) -> None:
-        nn = lam.shape[-1]
-        self.lam = np.broadcast_to(lam, batch + (nn,)).reshape(-1, nn)
-        self.U: Array | None = None
-        self.U_prev: Array | None = None
-        self.diagnostics = diagnostics
-        self.last_iterations = 0  # Newton iterations of the last solve (summed over the batch)
-        self.last_residual = 0.0
-        self.last_tol = 0.0
-        self.last_condition = float("nan")
-
-    def _record(self, U: Array, res: Array, tol: Array) -> None:
-        if res.size:
-            i = int(np.argmax(res / np.where(tol > 0, tol, 1.0)))
-            self.last_residual, self.last_tol = float(res[i]), float(tol[i])
-        if self.diagnostics and U.shape[0]:
-            self.last_condition = float(np.max(_condition(U, self.lam)))
-
-    def solve(self, M: Array) -> Array:
-        Mf = M.reshape(self.lam.shape[0], *M.shape[-2:])
-        Mf = 0.5 * (Mf - np.swapaxes(Mf, -1, -2))  # rounding leaves M skew only to ~eps
-        tol = 10.0 * _EPS * np.sqrt(np.einsum("bij,bij->b", Mf, Mf))
-        if self.U is not None and Mf.shape[0] == 1:
-            guess = self.U[0]
-            if self.U_prev is not None:
-                # U changes smoothly along a run: extrapolate U_k (U_{k-1}^T U_k) (orthogonal)
-                guess = guess @ (self.U_prev[0].T @ guess)
-                # one Newton-Schulz step back to SO(n), so rounding errors in U^T U - I do not
-                # compound from step to step
-                guess = guess @ (1.5 * np.eye(guess.shape[-1]) - 0.5 * (guess.T @ guess))
-            got = _warm_single(guess, Mf[0], self.lam[0], float(tol[0]), _MAXITER, True)
-            if got is not None:
-                self.U_prev = self.U
-                self.U = got[0][None]
-                self.last_iterations = got[1]
-                self._record(self.U, np.array([got[2]]), np.array([got[3]]))
-                return got[0].reshape(M.shape)
-        U, it, res, _margin, _start, tol = _solve_batch(
-            Mf, self.lam, tol, _MAXITER, self.U, floor=True
-        )
-        self.U_prev, self.U = self.U, U
-        self.last_iterations = int(it.sum())
-        self._record(U, res, tol)
-        return U.reshape(M.shape)
-
-    def fold(self, M: Array) -> float:
-        """The smallest fold_scale over the batch of M (for the failure report)."""
-        Mf = M.reshape(self.lam.shape[0], *M.shape[-2:])
-        Mf = 0.5 * (Mf - np.swapaxes(Mf, -1, -2))
-        return min(
-            (_fold_scale_one(Mf[i], self.lam[i]) for i in range(Mf.shape[0])), default=np.inf
-        )
-
-
-def _prepare(
-    lam: ArrayLike, *mats: tuple[ArrayLike, str, str]
-) -> tuple[Array, list[Array], tuple[int, ...]]:
-    L = v.inertia(lam, positive=True)
-    nn = L.shape[-1]
-    arrays = []
-    for x, name, kind in mats:
-        if kind == "SO":
-            arrays.append(v.orthogonal(x, name, nn))
-        elif kind == "skew":
-            arrays.append(v.skew(x, name, nn))
-        else:
-            arrays.append(v.square(x, name, nn))
-    try:
-        batch = np.broadcast_shapes(L.shape[:-1], *[a.shape[:-2] for a in arrays])
-    except ValueError:
-        shapes = ", ".join(
-            f"{name} {a.shape}" for (_x, name, _k), a in zip(mats, arrays, strict=True)
-        )
-        raise InputError(
-            f"the batch axes do not broadcast: lam {L.shape}, {shapes}; pass arrays whose "
-            "leading axes broadcast (numpy rules)"
-        ) from None
-    arrays = [np.broadcast_to(a, batch + (nn, nn)).copy() for a in arrays]
-    return L, arrays, batch
-
-
-class _Run:
-    """Bookkeeping of a discrete run: saved states, Newton counts, failure, progress bar."""
-
-    def __init__(self, steps: int, solves: int, method: str, progress: bool) -> None:
-        self.steps, self.method = steps, method
-        self.saved: dict[str, list[Array]] = {}
-        self.k: list[int] = []
-        self.iterations = np.zeros(solves, dtype=np.int64)
-        self.residual = np.zeros(solves)
-        self.tol = np.zeros(solves)
-        self.condition = np.full(solves, np.nan)
-        self.solves = 0
-        self.failure = ""
-        self.failed_step: int | None = None
-        self.fold: float | None = None
-        self.h_max: float | None = None
-        self.halvings: list[int] = []
-        self.bar = progress_bar(steps, method, progress)
-
-    def save(self, k: int, **states: Array) -> None:
-        self.k.append(k)
-        for name, x in states.items():
-            self.saved.setdefault(name, []).append(x)
-
-    def count(self, stepper: _Stepper) -> None:
-        if self.solves == self.iterations.shape[0]:  # halved steps solve more often
-            grow = max(16, self.solves)
-            self.iterations = np.concatenate([self.iterations, np.zeros(grow, dtype=np.int64)])
-            self.residual = np.concatenate([self.residual, np.zeros(grow)])
-            self.tol = np.concatenate([self.tol, np.zeros(grow)])
-            self.condition = np.concatenate([self.condition, np.full(grow, np.nan)])
-        i = self.solves
-        self.iterations[i] = stepper.last_iterations
-        self.residual[i], self.tol[i] = stepper.last_residual, stepper.last_tol
-        self.condition[i] = stepper.last_condition
-        self.solves += 1
-
-    def fail(
-        self, k: int, exc: Exception, fold: float | None = None, h: float | None = None
-    ) -> None:
-        self.failed_step, self.fold = k, fold
-        note = ""
-        if fold is not None and np.isfinite(fold):
-            if fold <= 1.0:
-                note = f" (the step's momentum is {(1.0 / fold - 1.0) * 100:.4g} % past the fold"
-                if h is not None:
-                    self.h_max = fold * h
-                    note += (
-                        f"; h = {h:.10g}, the largest step that works there is just below "
-                        f"h_max = {self.h_max:.10g})"
-                    )
-                else:
-                    note += f"; the momentum scaled by less than {fold:.10g} works)"
-            else:
-                note = (
-                    f" (the step's momentum is inside the fold by {(1.0 - 1.0 / fold) * 100:.4g} %)"
-                )
-        self.failure = f"step {k} of {self.steps} failed: {exc}{note}"
-
-    def result(self, t_scale: float | None) -> DiscreteFlowSolution:
-        self.bar.close()
-        k = np.asarray(self.k, dtype=np.int64)
-        y = Trajectory({name: np.stack(xs) for name, xs in self.saved.items()})
-        t = k.astype(np.float64) * (1.0 if t_scale is None else t_scale)
-        halved = sum(1 for j in self.halvings if j)
-        message = self.failure or f"all {self.steps} steps taken"
-        if halved:
-            message += (
-                f"; {halved} step(s) halved (at most {max(self.halvings)} times) to stay inside "
-                "the fold of J_D"
-            )
-        n = self.solves
-        return DiscreteFlowSolution(
-            t=t,
-            k=k,
-            y=y,
-            iterations=self.iterations[:n],
-            success=not self.failure,
-            status=-1 if self.failure else 0,
-            message=message,
-            method=self.method,
-            h=t_scale,
-            residual=self.residual[:n],
-            tol=self.tol[:n],
-            condition=self.condition[:n],
-            failed_step=self.failed_step,
-            fold=self.fold,
-            h_max=self.h_max,
-            halvings=np.asarray(self.halvings, dtype=np.int64),
-        )
 
 
 def symmetric_step(

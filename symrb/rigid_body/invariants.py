@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from . import _validate as v
-from ._generated import rigid_body as _gen
-from ._validate import Array
-from .errors import InputError
+from .. import _validate as v
+from .._generated import rigid_body as _gen
+from .._validate import Array
+from ..errors import InputError
 
 __all__ = [
     "rigid_body_rhs",
