@@ -61,7 +61,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "rigid_body": (
         "rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals",
-        "euler_rhs_so3", "simulate", "RigidBodySolution", "METHODS",
+        "euler_rhs_so3", "simulate", "RigidBodySolution",
     ),
     "solvers": ("MVSolveInfo", "solve_moser_veselov", "fold_scale"),
 }  # fmt: skip

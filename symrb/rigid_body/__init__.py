@@ -21,5 +21,4 @@ __all__ = [
     "euler_rhs_so3",
     "simulate",
     "RigidBodySolution",
-    "METHODS",
 ]
