@@ -37,8 +37,7 @@ FRAGMENTS: dict[str, str] = {
         "    Keep the states :math:`k = 0, s, 2s, \\dots` (``s = save_every``)."
     ),
     "progress": (
-        "progress : bool, optional\n"
-        "    Show a tqdm progress bar (needs the optional package tqdm)."
+        "progress : bool, optional\n    Show a tqdm progress bar (needs the optional package tqdm)."
     ),
     "halve": (
         "halve : bool, optional\n"

@@ -16,6 +16,7 @@ import scipy.linalg as sla
 from numpy.typing import ArrayLike
 
 from . import _validate as v
+from ._docs import fill
 from ._validate import Array
 from .errors import NotConvergedError
 from .solvers import solve_moser_veselov
@@ -43,6 +44,7 @@ def _lam(lam: ArrayLike) -> Array:
     return np.array(v.inertia(lam, positive=True), dtype=float)
 
 
+@fill
 class MVStep:
     r"""One step of MV-Algorithm 2 at step ``h`` (continuous-scale momenta).
 
@@ -55,14 +57,13 @@ class MVStep:
 
     Parameters
     ----------
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
 
     Examples
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> from symrb.compose import MVStep
+    >>> from symrb.base_steps import MVStep
     >>> lam = [0.7, 1.1, 1.6]
     >>> Q0, M0 = np.eye(3), symrb.hat([0.5, 1.0, 1.5])
     >>> Q1, M1 = MVStep(lam).step(Q0, M0, 0.1)
@@ -92,6 +93,7 @@ def _cayley(A: Array) -> Array:
     return np.asarray(np.linalg.solve(eye - 0.5 * A, eye + 0.5 * A), dtype=np.float64)
 
 
+@fill
 class MidpointStep:
     r"""One step of the implicit midpoint rule for the rigid body (continuous-scale momenta).
 
@@ -107,8 +109,7 @@ class MidpointStep:
 
     Parameters
     ----------
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
     maxiter : int, optional
         The most fixed-point iterations; more raise :class:`symrb.errors.NotConvergedError`.
 
@@ -121,7 +122,7 @@ class MidpointStep:
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> from symrb.compose import MidpointStep
+    >>> from symrb.base_steps import MidpointStep
     >>> lam = np.array([0.7, 1.1, 1.6])
     >>> M0 = symrb.hat([0.5, 1.0, 1.5])
     >>> Q1, M1 = MidpointStep(lam).step(np.eye(3), M0, 0.1)
@@ -162,6 +163,7 @@ class MidpointStep:
         return Q @ _cayley(h * Om), _skew(2.0 * Mb - M)
 
 
+@fill
 class RKMK4Step:
     r"""One step of RKMK4, the Runge-Kutta-Munthe-Kaas method of order 4 for the rigid body.
 
@@ -184,14 +186,13 @@ class RKMK4Step:
 
     Parameters
     ----------
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
 
     Examples
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> from symrb.compose import RKMK4Step
+    >>> from symrb.base_steps import RKMK4Step
     >>> M0 = symrb.hat([0.5, 1.0, 1.5])
     >>> Q1, M1 = RKMK4Step([0.7, 1.1, 1.6]).step(np.eye(3), M0, 0.1)
     >>> bool(np.allclose(Q1.T @ Q1, np.eye(3), rtol=0, atol=1e-15))

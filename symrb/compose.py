@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _validate as v
+from ._docs import fill
 from ._progress import progress_bar
 from ._results import DiscreteFlowSolution, Trajectory
 from ._validate import Array
@@ -160,6 +161,7 @@ class _Counter:
         return got
 
 
+@fill
 def composed_rigid_body_flow(
     Q0: ArrayLike,
     M0: ArrayLike,
@@ -183,14 +185,10 @@ def composed_rigid_body_flow(
 
     Parameters
     ----------
-    Q0 : array_like, shape (..., n, n)
-        The initial attitude, in SO(n).
-    M0 : array_like, shape (..., n, n)
-        The initial body momentum (skew-symmetric, continuous scale).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
-    h : float
-        The time step, > 0.
+    %(Q0)s
+    %(M0)s
+    %(lam_positive)s
+    %(h)s
     steps : int
         The number of (composed) steps, >= 0.
     order : {2, 4, 6, 8}, optional
@@ -204,10 +202,8 @@ def composed_rigid_body_flow(
         ``"midpoint"`` (:class:`MidpointStep`), or any
         object with a method ``step(Q, M, h) -> (Q, M)`` that is symmetric and of order 2 (e.g.
         a faster engine); its ``last_iterations`` attribute, if any, is recorded.
-    save_every : int, optional
-        Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
-    progress : bool, optional
-        Show a tqdm progress bar (needs the optional package tqdm).
+    %(save_every)s
+    %(progress)s
 
     Returns
     -------
@@ -261,6 +257,7 @@ def composed_rigid_body_flow(
     )
 
 
+@fill
 def rkmk4_rigid_body_flow(
     Q0: ArrayLike,
     M0: ArrayLike,
@@ -275,8 +272,13 @@ def rkmk4_rigid_body_flow(
 
     Parameters
     ----------
-    Q0, M0, lam, h, steps, save_every, progress
-        As in :func:`composed_rigid_body_flow`.
+    %(Q0)s
+    %(M0)s
+    %(lam_positive)s
+    %(h)s
+    %(steps)s
+    %(save_every)s
+    %(progress)s
 
     Returns
     -------
@@ -303,6 +305,7 @@ def rkmk4_rigid_body_flow(
     )
 
 
+@fill
 def midpoint_rigid_body_flow(
     Q0: ArrayLike,
     M0: ArrayLike,
@@ -317,8 +320,13 @@ def midpoint_rigid_body_flow(
 
     Parameters
     ----------
-    Q0, M0, lam, h, steps, save_every, progress
-        As in :func:`composed_rigid_body_flow`.
+    %(Q0)s
+    %(M0)s
+    %(lam_positive)s
+    %(h)s
+    %(steps)s
+    %(save_every)s
+    %(progress)s
 
     Returns
     -------

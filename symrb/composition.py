@@ -132,7 +132,7 @@ def composition_coefficients(order: int, kind: str | None = None) -> Array:
     Examples
     --------
     >>> import numpy as np
-    >>> from symrb.compose import composition_coefficients
+    >>> from symrb.composition import composition_coefficients
     >>> g = composition_coefficients(4, "triple_jump")
     >>> g.round(6)
     array([ 1.351207, -1.702414,  1.351207])
@@ -187,7 +187,7 @@ def compose_steps(step: Callable[[S, float], S], gammas: ArrayLike) -> Callable[
     coefficients sum to 1:
 
     >>> import numpy as np
-    >>> from symrb.compose import compose_steps, composition_coefficients
+    >>> from symrb.composition import compose_steps, composition_coefficients
     >>> psi = compose_steps(lambda x, h: np.exp(h) * x, composition_coefficients(6))
     >>> bool(np.isclose(psi(1.0, 0.5), np.exp(0.5), rtol=1e-14, atol=0))
     True

@@ -61,6 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _compiled
 from . import _validate as v
+from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
 from ._results import DiscreteFlowSolution, Trajectory
 from ._stepping import _check_h, _check_steps, _prepare
@@ -293,6 +294,7 @@ def _on_branch(U: Array, lam: Array) -> NDArray[np.bool_]:
 # the stepper
 
 
+@fill
 class MVStepper:
     r"""One Moser-Veselov step :math:`(Q, M) \mapsto (Q_1, M_1)` with an internal warm start.
 
@@ -303,8 +305,7 @@ class MVStepper:
 
     Parameters
     ----------
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
     batch_shape : tuple of int, optional
         The batch axes of the states the stepper will be given (broadcast with those of
         ``lam``); ``()`` for one body.
@@ -527,6 +528,7 @@ def _check_modified(lam_k: Any, h: float, order: int) -> None:
 # the flow
 
 
+@fill
 def mv_flow(
     Q0: ArrayLike,
     M0: ArrayLike,
@@ -548,18 +550,12 @@ def mv_flow(
 
     Parameters
     ----------
-    Q0 : array_like, shape (..., n, n)
-        The initial attitude, in SO(n).
-    M0 : array_like, shape (..., n, n)
-        The initial body momentum (skew-symmetric, continuous scale).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
-    h : float
-        The time step, > 0.
-    steps : int
-        The number of steps, >= 0.
-    save_every : int, optional
-        Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
+    %(Q0)s
+    %(M0)s
+    %(lam_positive)s
+    %(h)s
+    %(steps)s
+    %(save_every)s
     method : str, optional
         One of ``"auto"``, ``"newton"``, ``"fixed-point"``, ``"numpy"``, ``"numba"``: the solver
         for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or for

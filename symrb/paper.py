@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _validate as v
+from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
 from ._generated import symmetric_rigid_body as _srb
 from ._results import DiscreteFlowSolution
@@ -62,6 +63,7 @@ __all__ = [
 ]
 
 
+@fill
 def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
     r""":math:`U\Lambda - \Lambda U^T - M` (zero when ``U`` solves :math:`J_D(U) = M`).
 
@@ -71,8 +73,7 @@ def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
         A candidate solution (any square matrix).
     M : array_like, shape (..., n, n)
         The skew-symmetric right-hand side.
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
 
     Returns
     -------
@@ -94,6 +95,7 @@ def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
     return _gen.jd(v.square(U, "U", nn), L) - v.skew(M, "M", nn)
 
 
+@fill
 def symmetric_step(
     Q: ArrayLike, P: ArrayLike, lam: ArrayLike, h: float = 1.0
 ) -> tuple[Array, Array, Array]:
@@ -108,8 +110,7 @@ def symmetric_step(
         The attitude, in SO(n).
     P : array_like, shape (..., n, n)
         The costate (any square matrix; continuous scale, see the module docstring).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
     h : float, optional
         The time step, > 0 (``h = 1`` is the paper's map).
 
@@ -138,6 +139,7 @@ def symmetric_step(
     return Qa @ U, Pa @ U, U
 
 
+@fill
 def symmetric_flow(
     Q0: ArrayLike,
     P0: ArrayLike,
@@ -154,30 +156,18 @@ def symmetric_flow(
 
     Parameters
     ----------
-    Q0 : array_like, shape (..., n, n)
-        The initial attitude, in SO(n).
+    %(Q0)s
     P0 : array_like, shape (..., n, n)
         The initial costate (any square matrix; continuous scale, see the module docstring).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
     h : float
         The time step, > 0 (``h = 1`` is the paper's map).
-    steps : int
-        The number of steps, >= 0.
+    %(steps)s
     save_every : int, optional
         Keep every ``save_every``-th state (``s``): the states :math:`k = 0, s, 2s, \dots`.
-    progress : bool, optional
-        Show a tqdm progress bar (needs the optional package tqdm).
-    halve : bool, optional
-        When a step has no solution on the branch (:math:`h` times the momentum past the fold of
-        :math:`J_D`) or Newton fails, take it as :math:`2^j` steps of :math:`h/2^j` with the
-        smallest such :math:`j \le 30` (for the continuous-time use, where :math:`h` is only a
-        resolution); ``halvings`` and ``message`` say which steps were halved.  Without it such
-        a step ends the run (``failed_step``, ``fold`` and ``h_max`` say where, how far past the
-        fold and the largest step that works).
-    diagnostics : bool, optional
-        Also estimate the solver's condition number at every solve (``condition``; costs about
-        sixteen Sylvester solves a step).
+    %(progress)s
+    %(halve)s
+    %(diagnostics)s
 
     Returns
     -------
@@ -286,6 +276,7 @@ def _symmetric_run(
     return out
 
 
+@fill
 def mv_algorithm1(
     Q0: ArrayLike,
     Q1: ArrayLike,
@@ -308,17 +299,13 @@ def mv_algorithm1(
     ----------
     Q0, Q1 : array_like, shape (..., n, n)
         The first two configurations, in SO(n).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
     steps : int
         The number of steps, >= 0; the last configuration is :math:`Q_{steps+1}`.
     save_every : int, optional
         Keep the configurations :math:`Q_0, Q_s, Q_{2s}, \dots` (``s = save_every``).
-    progress : bool, optional
-        Show a tqdm progress bar (needs the optional package tqdm).
-    diagnostics : bool, optional
-        Also estimate the solver's condition number at every solve (``condition``; costs about
-        sixteen Sylvester solves a step).
+    %(progress)s
+    %(diagnostics)s
 
     Returns
     -------
@@ -365,6 +352,7 @@ def mv_algorithm1(
     return run.result(None)
 
 
+@fill
 def mv_algorithm2(
     Q: ArrayLike,
     M: ArrayLike,
@@ -390,17 +378,11 @@ def mv_algorithm2(
     M : array_like, shape (..., n, n)
         The initial discrete momentum (skew); with the paper's indices
         :math:`M_k \approx hM(t_{k-1})` (module docstring).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
-    steps : int
-        The number of steps, >= 0.
-    save_every : int, optional
-        Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
-    progress : bool, optional
-        Show a tqdm progress bar (needs the optional package tqdm).
-    diagnostics : bool, optional
-        Also estimate the solver's condition number at every solve (``condition``; costs about
-        sixteen Sylvester solves a step).
+    %(lam_positive)s
+    %(steps)s
+    %(save_every)s
+    %(progress)s
+    %(diagnostics)s
 
     Returns
     -------
@@ -447,6 +429,7 @@ def mv_algorithm2(
     return run.result(None)
 
 
+@fill
 def discrete_rigid_body_flow(
     Q0: ArrayLike,
     M0: ArrayLike,
@@ -470,30 +453,15 @@ def discrete_rigid_body_flow(
 
     Parameters
     ----------
-    Q0 : array_like, shape (..., n, n)
-        The initial attitude, in SO(n).
-    M0 : array_like, shape (..., n, n)
-        The initial body momentum (skew-symmetric, continuous scale).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
-    h : float
-        The time step, > 0.
-    steps : int
-        The number of steps, >= 0.
-    save_every : int, optional
-        Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
-    progress : bool, optional
-        Show a tqdm progress bar (needs the optional package tqdm).
-    halve : bool, optional
-        When a step has no solution on the branch (:math:`h` times the momentum past the fold of
-        :math:`J_D`) or Newton fails, take it as :math:`2^j` steps of :math:`h/2^j` with the
-        smallest such :math:`j \le 30` (for the continuous-time use, where :math:`h` is only a
-        resolution); ``halvings`` and ``message`` say which steps were halved.  Without it such
-        a step ends the run (``failed_step``, ``fold`` and ``h_max`` say where, how far past the
-        fold and the largest step that works).
-    diagnostics : bool, optional
-        Also estimate the solver's condition number at every solve (``condition``; costs about
-        sixteen Sylvester solves a step).
+    %(Q0)s
+    %(M0)s
+    %(lam_positive)s
+    %(h)s
+    %(steps)s
+    %(save_every)s
+    %(progress)s
+    %(halve)s
+    %(diagnostics)s
 
     Returns
     -------

@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 from scipy.linalg import schur
 
 from . import _validate as v
+from ._docs import fill
 from ._generated import symmetric_rigid_body as _gen
 from ._validate import Array
 from .algebra import _Jinv_weights
@@ -83,6 +84,7 @@ def symmetric_momentum(Q: ArrayLike, P: ArrayLike) -> Array:
     return _gen.symmetric_momentum(a, b)
 
 
+@fill
 def symmetric_rigid_body_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:
     r"""The symmetric rigid body field :math:`(\dot Q, \dot P) = (QU, PU)`,
     :math:`U = J^{-1}(Q^TP - P^TQ)` (claims S5, S6, S12).
@@ -94,8 +96,7 @@ def symmetric_rigid_body_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tupl
     ----------
     Q, P : array_like, shape (..., n, n)
         The state (any square matrices); batch axes broadcast.
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------
@@ -118,6 +119,7 @@ def symmetric_rigid_body_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tupl
     return _gen.symmetric_rigid_body_rhs(a, b, L)
 
 
+@fill
 def mclachlan_scovel_rhs(Q: ArrayLike, B: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:
     r"""The McLachlan-Scovel field :math:`(\dot Q, \dot B) = (QU, BU)`, :math:`U = J^{-1}(Q^TB)`
     (claim S7).
@@ -132,8 +134,7 @@ def mclachlan_scovel_rhs(Q: ArrayLike, B: ArrayLike, lam: ArrayLike) -> tuple[Ar
     ----------
     Q, B : array_like, shape (..., n, n)
         The state, with :math:`Q^TB` skew-symmetric; batch axes broadcast.
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------
@@ -168,6 +169,7 @@ def _samples(Q: ArrayLike, P: ArrayLike, lam: ArrayLike):
     return a, b, L
 
 
+@fill
 def multi_sample_control(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     r"""The shared optimal control :math:`U = \sum_a J^{-1}((Q^a)^TP^a - (P^a)^TQ^a)` (claim S8).
 
@@ -175,8 +177,7 @@ def multi_sample_control(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     ----------
     Q, P : array_like, shape (..., m, n, n)
         The states and costates of the m samples (axis -3 runs over the samples).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------
@@ -202,6 +203,7 @@ def _shared_control(Q: Array, P: Array, lam: Array) -> Array:
     return _Jinv_weights(lam) * np.sum(_gen.symmetric_momentum(Q, P), axis=-3)
 
 
+@fill
 def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:
     r"""The learning flow :math:`\dot Q^a = Q^aU`, :math:`\dot P^a = P^aU` with the shared
     control of :func:`multi_sample_control` (claim S8).
@@ -210,8 +212,7 @@ def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array,
     ----------
     Q, P : array_like, shape (..., m, n, n)
         The states and costates of the m samples (axis -3 runs over the samples).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------
@@ -233,6 +234,7 @@ def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array,
     return _gen.control_rhs(a, b, U[..., None, :, :])
 
 
+@fill
 def gl_hamiltonian(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     r"""The Hamiltonian on :math:`\mathfrak{gl}(n)\times\mathfrak{gl}(n)` (paper, Section 3.3;
     claim S12):
@@ -246,8 +248,7 @@ def gl_hamiltonian(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     ----------
     Q, P : array_like, shape (..., n, n)
         The state (any square matrices); batch axes broadcast.
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------

@@ -11,7 +11,8 @@ from .invariants import (
     manakov_integrals,
     rigid_body_rhs,
 )
-from .simulate import METHODS, simulate
+from .simulate import METHODS as METHODS
+from .simulate import simulate
 
 __all__ = [
     "rigid_body_rhs",
