@@ -21,6 +21,7 @@ from symrb.errors import InputError
 from symrb.exact import rigid_body_exact
 from symrb.rigid_body import METHODS, RigidBodySolution, simulate
 from symrb.rigid_body.ivp import NAMES as IVP
+from symrb.rigid_body.simulate import _finite
 
 LAM = np.array([0.7, 1.1, 1.6])
 Q0 = symrb.random_SO(3, seed=3)
@@ -203,8 +204,6 @@ def test_a_run_past_the_fold_stops_with_finite_states() -> None:
 
 
 def test_non_finite_states_are_cut() -> None:
-    from symrb.rigid_body.simulate import _finite
-
     Q = np.stack([np.eye(3)] * 3)
     M = np.stack([M0, M0, M0 * np.nan])
     raw = type("Raw", (), {"t": np.arange(3.0)})()
