@@ -151,10 +151,27 @@ def test_fixed_step_t_eval_keeps_the_grid_steps(method: str) -> None:
 
 
 def test_a_start_time_shifts_the_times_only() -> None:
-    for method in ("mv", "rkmk4"):
-        a = simulate(Q0, M0, LAM, (0.0, 1.0), method=method, h=H)
-        b = simulate(Q0, M0, LAM, (3.0, 4.0), method=method, h=H)
-        _same(b, 3.0 + a.t, a.Q, a.M)
+    for method in ("mv", "rkmk4", "exact", "DOP853"):
+        a = simulate(Q0, M0, LAM, (0.0, 1.0), method=method, h=0.25)
+        b = simulate(Q0, M0, LAM, (3.0, 4.0), method=method, h=0.25)
+        np.testing.assert_array_equal(b.t, 3.0 + a.t)
+        tol = 1e-12 if method in ("exact", "DOP853") else 0.0  # rounding of t - t0 only
+        np.testing.assert_allclose(b.Q, a.Q, rtol=0, atol=tol)
+        np.testing.assert_allclose(b.M, a.M, rtol=0, atol=tol)
+
+
+def test_fixed_step_t_eval_at_the_start_only() -> None:
+    sol = simulate(Q0, M0, LAM, SPAN, method="mv", h=H, t_eval=[0.0])
+    _same(sol, [0.0], Q0[None], M0[None])
+    assert sol.raw.k.tolist() == [0, STEPS]  # one run of all steps, keeping only the ends
+
+
+def test_errors_name_the_arrays() -> None:
+    for method, h in (("DOP853", None), ("mv", H), ("composition", H), ("exact", H)):
+        with pytest.raises(InputError, match="Q0"):
+            simulate(2 * Q0, M0, LAM, SPAN, method=method, h=h)
+        with pytest.raises(InputError, match="M0"):
+            simulate(Q0, M0 + np.eye(3), LAM, SPAN, method=method, h=h)
 
 
 def test_every_method_is_tested_here() -> None:

@@ -99,9 +99,9 @@ class Request:
         if self.save_every is not None:
             return self.save_every
         keep = self.keep
-        if keep is not None and np.any(keep):
-            return math.gcd(*(int(k) for k in keep))
-        return 1
+        if keep is None:
+            return 1
+        return math.gcd(*(int(k) for k in keep)) or max(int(self.steps or 0), 1)
 
     def grid(self) -> Array | None:
         """The output times of a method without steps of its own: ``t_eval``, else the grid
@@ -114,9 +114,9 @@ class Request:
         return self.t0 + k.astype(np.float64) * self.h
 
     def _steps_taken(self, raw: DiscreteFlowSolution) -> int:
-        if raw.success or not raw.k.size:
-            return int(self.steps or 0) if raw.success else 0
-        return int(raw.k[-1])
+        if raw.success:
+            return int(self.steps or 0)
+        return int(raw.k[-1]) if raw.k.size else 0
 
     def fixed_result(self, raw: DiscreteFlowSolution, stats: dict[str, int]) -> RigidBodySolution:
         """The solution of a fixed-step implementation's result (kept steps of ``t_eval``)."""

@@ -16,9 +16,12 @@ def run(req: Request) -> RigidBodySolution:
             "method 'exact' has no steps of its own: pass t_eval, or h (and save_every) for the "
             "output grid t0 + k h"
         )
-    raw = rigid_body_exact(req.Q0, req.M0, req.lam, te, check=req.options.get("check", True))
+    # the solution is from Q0, M0 at time 0: evaluate it at t - t0
+    raw = rigid_body_exact(
+        req.Q0, req.M0, req.lam, te - req.t0, check=req.options.get("check", True)
+    )
     return RigidBodySolution(
-        t=raw.t,
+        t=req.t0 + raw.t,
         Q=raw.y["Q"],
         M=raw.y["M"],
         success=True,

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from .. import _validate as v
 from ..continuous import RigidBody, integrate
 from ._request import Method, Request, RigidBodySolution
 
@@ -21,7 +22,8 @@ def run(req: Request) -> RigidBodySolution:
     raw = integrate(
         RigidBody,
         (req.t0, req.t1),
-        {"Q": req.Q0, "M": req.M0},
+        # validated here so that errors name Q0 and M0 (integrate's names are y0['Q'], y0['M'])
+        {"Q": v.orthogonal(req.Q0, "Q0"), "M": v.skew(req.M0, "M0")},
         lam=req.lam,
         method=req.method,
         rtol=RTOL if req.rtol is None else req.rtol,

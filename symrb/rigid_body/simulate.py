@@ -133,9 +133,10 @@ def _finite(sol: RigidBodySolution) -> RigidBodySolution:
     if ok.all():
         return sol
     first = int(np.argmin(ok))
+    at = float(sol.t[first])
     sol.t, sol.Q, sol.M = sol.t[:first], sol.Q[:first], sol.M[:first]
     sol.success = False
-    sol.message += f"; the state is not finite from t = {float(sol.raw.t[first])!r} on (cut there)"
+    sol.message += f"; the state is not finite from t = {at!r} on (cut there)"
     return sol
 
 
