@@ -257,6 +257,49 @@ def _flow_condition(
     return kappa, err
 
 
+def _initial_state(
+    fl: Flow, y0: Mapping[str, ArrayLike] | Sequence[ArrayLike], L: Array
+) -> tuple[dict[str, Array], tuple[int, ...]]:
+    """The validated initial state of ``fl`` (a float copy of each variable, broadcast to the
+    common batch shape) and that shape."""
+    nn = L.shape[-1]
+    if isinstance(y0, Mapping):
+        missing = [k for k in fl.state if k not in y0]
+        extra = [k for k in y0 if k not in fl.state]
+        if missing or extra:
+            raise InputError(
+                f"y0 for {fl.name} needs exactly the variables {fl.state}; "
+                f"missing {missing}, unexpected {extra}; pass exactly those names"
+            )
+        items = [y0[k] for k in fl.state]
+    else:
+        items = list(y0)
+        if len(items) != len(fl.state):
+            raise InputError(
+                f"y0 for {fl.name} must have {len(fl.state)} arrays {fl.state}, got {len(items)}; "
+                "pass one array per state variable"
+            )
+    arrays = [v.square(a, f"y0[{k!r}]", nn) for a, k in zip(items, fl.state, strict=True)]
+    if fl.sample_axes and any(a.ndim < 3 for a in arrays):
+        raise InputError(
+            f"y0 for {fl.name} needs a sample axis: shape (..., m, n, n); pass the samples "
+            "stacked along axis -3"
+        )
+    try:
+        arrays = list(np.broadcast_arrays(*arrays))
+        Lb = L[(Ellipsis,) + (None,) * fl.sample_axes + (slice(None),)] if fl.sample_axes else L
+        np.broadcast_shapes(Lb.shape[:-1] + (nn, nn), arrays[0].shape)
+    except ValueError as exc:
+        raise InputError(
+            f"y0 and lam batch shapes do not broadcast: {exc}; pass arrays whose leading axes "
+            "broadcast"
+        ) from None
+    shape = arrays[0].shape
+    state0 = {k: np.array(a, dtype=float) for k, a in zip(fl.state, arrays, strict=True)}
+    fl.check(state0, L)
+    return state0, shape
+
+
 def integrate(
     flow: Flow | type[Flow],
     t_span: Sequence[float],
@@ -367,41 +410,7 @@ def integrate(
     """
     fl = _as_flow(flow)
     L = v.inertia(lam)
-    nn = L.shape[-1]
-    if isinstance(y0, Mapping):
-        missing = [k for k in fl.state if k not in y0]
-        extra = [k for k in y0 if k not in fl.state]
-        if missing or extra:
-            raise InputError(
-                f"y0 for {fl.name} needs exactly the variables {fl.state}; "
-                f"missing {missing}, unexpected {extra}; pass exactly those names"
-            )
-        items = [y0[k] for k in fl.state]
-    else:
-        items = list(y0)
-        if len(items) != len(fl.state):
-            raise InputError(
-                f"y0 for {fl.name} must have {len(fl.state)} arrays {fl.state}, got {len(items)}; "
-                "pass one array per state variable"
-            )
-    arrays = [v.square(a, f"y0[{k!r}]", nn) for a, k in zip(items, fl.state, strict=True)]
-    if fl.sample_axes and any(a.ndim < 3 for a in arrays):
-        raise InputError(
-            f"y0 for {fl.name} needs a sample axis: shape (..., m, n, n); pass the samples "
-            "stacked along axis -3"
-        )
-    try:
-        arrays = list(np.broadcast_arrays(*arrays))
-        Lb = L[(Ellipsis,) + (None,) * fl.sample_axes + (slice(None),)] if fl.sample_axes else L
-        np.broadcast_shapes(Lb.shape[:-1] + (nn, nn), arrays[0].shape)
-    except ValueError as exc:
-        raise InputError(
-            f"y0 and lam batch shapes do not broadcast: {exc}; pass arrays whose leading axes "
-            "broadcast"
-        ) from None
-    shape = arrays[0].shape
-    state0 = {k: np.array(a, dtype=float) for k, a in zip(fl.state, arrays, strict=True)}
-    fl.check(state0, L)
+    state0, shape = _initial_state(fl, y0, L)
 
     ts = v.as_float_array(t_span, "t_span")
     if ts.shape != (2,):
