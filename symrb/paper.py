@@ -65,7 +65,8 @@ __all__ = [
 
 @fill
 def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
-    r""":math:`U\Lambda - \Lambda U^T - M` (zero when ``U`` solves :math:`J_D(U) = M`).
+    r""":math:`U\Lambda - \Lambda U^T - M` (zero when ``U`` solves :math:`J_D(U) = M`; the paper's
+    :math:`J_DU := U\Lambda - \Lambda U^T`, Section 2.1).
 
     Parameters
     ----------
@@ -99,7 +100,8 @@ def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
 def symmetric_step(
     Q: ArrayLike, P: ArrayLike, lam: ArrayLike, h: float = 1.0
 ) -> tuple[Array, Array, Array]:
-    r"""One step of the symmetric representation (paper, Section 2.1).
+    r"""One step of the symmetric representation (paper, Section 2.1, labels ``discrbopteqns1``
+    and ``Ukdef1``).
 
     Solves :math:`U\Lambda - \Lambda U^T = h(Q^TP - P^TQ)` on the branch through the identity and
     returns :math:`(QU, PU, U)`.
@@ -152,7 +154,8 @@ def symmetric_flow(
     halve: bool = False,
     diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
-    r"""Iterate the symmetric representation ``steps`` times from :math:`(Q_0, P_0)`.
+    r"""Iterate the symmetric representation (paper, Section 2.1) ``steps`` times from
+    :math:`(Q_0, P_0)`.
 
     Parameters
     ----------
@@ -287,7 +290,7 @@ def mv_algorithm1(
     progress: bool = False,
     diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
-    r"""MV-Algorithm 1: :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})`.
+    r"""The paper's MV-Algorithm 1: :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})`.
 
     Each step (paper, Section 2.2): :math:`\Omega_{k+1} = Q_{k+1}^TQ_k` (MV1),
     :math:`M_{k+1} = \Omega_{k+1}^T\Lambda - \Lambda\Omega_{k+1}` (MV2),
@@ -363,7 +366,8 @@ def mv_algorithm2(
     progress: bool = False,
     diagnostics: bool = False,
 ) -> DiscreteFlowSolution:
-    r"""MV-Algorithm 2: :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (discrete momenta).
+    r"""The paper's MV-Algorithm 2: :math:`(Q_k, M_k) \mapsto (Q_{k+1}, M_{k+1})` (discrete
+    momenta).
 
     Each step (paper, Section 2.2): solve (MV2) :math:`M_k = \Omega_k^T\Lambda -
     \Lambda\Omega_k` for :math:`\Omega_k`, :math:`M_{k+1} = \Omega_kM_k\Omega_k^T` (MV3), solve the
