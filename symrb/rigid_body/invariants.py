@@ -12,10 +12,11 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from . import _validate as v
-from ._generated import rigid_body as _gen
-from ._validate import Array
-from .errors import InputError
+from .. import _validate as v
+from .._docs import fill
+from .._generated import rigid_body as _gen
+from .._validate import Array
+from ..errors import InputError
 
 __all__ = [
     "rigid_body_rhs",
@@ -26,6 +27,7 @@ __all__ = [
 ]
 
 
+@fill
 def rigid_body_rhs(Q: ArrayLike, M: ArrayLike, lam: ArrayLike) -> tuple[Array, Array]:
     r"""The rigid body vector field :math:`(\dot Q, \dot M) = (Q\Omega, [M, \Omega])`,
     :math:`\Omega = J^{-1}(M)`.
@@ -36,8 +38,7 @@ def rigid_body_rhs(Q: ArrayLike, M: ArrayLike, lam: ArrayLike) -> tuple[Array, A
         The attitude (any square matrix is accepted; SO(n) is invariant).
     M : array_like, shape (..., n, n)
         The skew-symmetric body angular momentum.
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------
@@ -60,6 +61,7 @@ def rigid_body_rhs(Q: ArrayLike, M: ArrayLike, lam: ArrayLike) -> tuple[Array, A
     return _gen.rigid_body_rhs(v.square(Q, "Q", nn), v.skew(M, "M", nn), L)
 
 
+@fill
 def kinetic_energy(M: ArrayLike, lam: ArrayLike) -> Array:
     r"""The kinetic energy :math:`\tfrac12\langle J^{-1}M, M\rangle = \tfrac12\langle\Omega, J\Omega\rangle`.
 
@@ -69,8 +71,7 @@ def kinetic_energy(M: ArrayLike, lam: ArrayLike) -> Array:
     ----------
     M : array_like, shape (..., n, n)
         Skew-symmetric body momenta.
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------
@@ -116,6 +117,7 @@ def casimir_traces(M: ArrayLike) -> Array:
     return _gen.casimir_traces(v.skew(M, "M"))
 
 
+@fill
 def manakov_integrals(M: ArrayLike, lam: ArrayLike) -> Array:
     r"""Manakov's integrals: coefficients of :math:`\lambda^j` in :math:`\operatorname{tr}(M+\lambda\Lambda^2)^k`.
 
@@ -131,8 +133,7 @@ def manakov_integrals(M: ArrayLike, lam: ArrayLike) -> Array:
     ----------
     M : array_like, shape (..., n, n)
         Skew-symmetric body momenta.
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, with :math:`\lambda_i+\lambda_j>0` for :math:`i \ne j`.
+    %(lam)s
 
     Returns
     -------
