@@ -7,6 +7,10 @@
   words, trace words) and the LaTeX of displayed formulas;
 * :mod:`derivations.reference`: independent float64 / high-precision references (never symrb);
 * :mod:`derivations.parts`: one module per part of the paper (``rigid_body`` is S1-S4, ...).
+* :mod:`derivations.claims`: one module per claim, by section (``section2.d10_moser_veselov``
+  is D10); code shared by a section's claims sits in its underscore modules;
+* :mod:`derivations.methods`: checks of symrb's own methods (ids M1, ...), apart from the
+  paper's claims (``cayley_step`` is M1).
 
 How a part is written (``derivations/parts/rigid_body.py`` is the model):
 

@@ -146,7 +146,7 @@ def test_claims_lists_every_claim_on_one_line_within_100_columns(
     monkeypatch.setattr(registry, "_run_evidence", no_evidence)
     code, out, _ = _call(capsys, "claims")
     assert code == 0
-    rows = [line for line in out.splitlines() if re.match(r"[DS]\d+ ", line)]
+    rows = [line for line in out.splitlines() if re.match(r"[DSM]\d+ ", line)]
     assert [r.split()[0] for r in rows] == IDS
     for row, c in zip(rows, CLAIMS, strict=True):
         assert row[5:].startswith(c.expected + " "), row
