@@ -2,17 +2,22 @@ r"""The ResNet layer and its adjoint at matrix level (D6).
 
 One function, :func:`layer`, builds both the displayed generic layer (activation :math:`\sigma`,
 step :math:`h`) and the expressions of the emitted kernels (tanh and the logistic function), so
-what the book shows and what is emitted are one construction.
+what the book shows and what is emitted are one construction.  :func:`_layer_env` and
+:func:`_layer_function` give the explicit entries of a layer and a displayed layer as a function
+:math:`f(x, u)` of explicit vectors, for the evidence.
 """
 
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from typing import Any
 
 import sympy as sp
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
+from derivations.claims.section2._indexed import _vec
+from derivations.symbolic import explicit
 from derivations.vocabulary import entrywise, matrix, vector
 
 # the matrix-level symbols of a layer (the kernels' arguments)
@@ -82,3 +87,26 @@ def layer(act: str, residual_layer: bool, h: sp.Expr = sp.S.One) -> dict[str, sp
         "dH_dK": c * s * _xv.T,
         "dH_dbeta": c * s,
     }
+
+
+def _layer_env(dim: int) -> dict[str, sp.Matrix]:
+    return {
+        "K": sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"k{i}{j}", real=True)),
+        "x": _vec("x", dim),
+        "beta": _vec("b", dim),
+        "p": _vec("p", dim),
+    }
+
+
+def _unflatten(u: sp.Matrix, dim: int) -> tuple[sp.Matrix, sp.Matrix]:
+    return sp.Matrix(dim, dim, list(u[: dim * dim])), sp.Matrix(list(u[dim * dim :]))
+
+
+def _layer_function(shown: sp.Eq, dim: int, h: Any) -> Callable[..., Any]:
+    """f(x, u) of a displayed layer, u the vector of the entries of K (row-major) and beta."""
+
+    def f(x: sp.Matrix, u: sp.Matrix) -> sp.Matrix:
+        K, beta = _unflatten(u, dim)
+        return explicit(shown.rhs, {"x": x, "K": K, "beta": beta, "h": h})
+
+    return f

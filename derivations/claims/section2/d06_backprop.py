@@ -50,7 +50,15 @@ from derivations.claims.section2._indexed import (
     _value,
     _vec,
 )
-from derivations.claims.section2._layers import _SIGMA, ACTIVATIONS, _hstep, layer
+from derivations.claims.section2._layers import (
+    _SIGMA,
+    ACTIVATIONS,
+    _hstep,
+    _layer_env,
+    _layer_function,
+    _unflatten,
+    layer,
+)
 from derivations.claims.section2._resnet_reference import (
     _reference_forward,
     complex_step_gradients,
@@ -183,15 +191,6 @@ for _act, _res in itertools.product(ACTIVATIONS, (True, False)):
 # D6 evidence
 
 
-def _layer_env(dim: int) -> dict[str, sp.Matrix]:
-    return {
-        "K": sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"k{i}{j}", real=True)),
-        "x": _vec("x", dim),
-        "beta": _vec("b", dim),
-        "p": _vec("p", dim),
-    }
-
-
 @D6.check(Level.SYMBOLIC_FIXED_N)
 def d6_sigmoid() -> sp.Expr:
     """The activation of the logistic kernels is the displayed sigmoid 1/(1 + e^-z) (read from the
@@ -229,20 +228,6 @@ def d6_kernels() -> sp.Expr:
         for name, value in grads.items():
             total += _nonzero(explicit(adjoint[name], env) - value)
     return total
-
-
-def _unflatten(u: sp.Matrix, dim: int) -> tuple[sp.Matrix, sp.Matrix]:
-    return sp.Matrix(dim, dim, list(u[: dim * dim])), sp.Matrix(list(u[dim * dim :]))
-
-
-def _layer_function(shown: sp.Eq, dim: int, h: Any) -> Callable[..., Any]:
-    """f(x, u) of a displayed layer, u the vector of the entries of K (row-major) and beta."""
-
-    def f(x: sp.Matrix, u: sp.Matrix) -> sp.Matrix:
-        K, beta = _unflatten(u, dim)
-        return explicit(shown.rhs, {"x": x, "K": K, "beta": beta, "h": h})
-
-    return f
 
 
 @D6.check(Level.SYMBOLIC_FIXED_N)
