@@ -17,6 +17,7 @@ from scipy.linalg import expm, schur
 
 from derivations.vocabulary import Arg, matrix
 
+# the kernels' matrix arguments (J_D, mv2, mv3)
 U, Om, M = matrix("U"), matrix("Omega"), matrix("M")
 ARG_LAM = Arg("lam", "(..., n)", "diagonal of Lambda, positive")
 
