@@ -10,8 +10,11 @@
 * :mod:`derivations.text` and :mod:`derivations.report`: claims as terminal text and as book
   tables; :mod:`derivations.cli`: the commands ``claims``, ``show``, ``verify``, ``derive``;
 * :mod:`derivations.reference`: independent float64 / high-precision references (never symrb);
-* :mod:`derivations.claims`, :mod:`derivations.methods` (and, until moved,
-  :mod:`derivations.parts`): the modules that declare claims, their evidence and kernels.
+* :mod:`derivations.parts`: the part modules not yet split (``rigid_body`` is S1-S4, ...).
+* :mod:`derivations.claims`: one module per claim, by section (``section2.d10_moser_veselov``
+  is D10); code shared by a section's claims sits in its underscore modules;
+* :mod:`derivations.methods`: checks of symrb's own methods (ids M1, ...), apart from the
+  paper's claims (``cayley_step`` is M1).
 
 Imports run one way: vocabulary <- symbolic <- registry <- printer <- text, report <- cli.
 

@@ -21,8 +21,8 @@ written :math:`U = \operatorname{cay}(X) = (I + X)(I - X)^{-1}` with :math:`X` s
   step is one call of the generated kernel ``mv3_cayley_step`` (one Newton step on :math:`p`,
   whose size is checked, then :math:`x`, :math:`U` and the update :math:`(QU, U^Tm)`); the first
   step, a changed ``h`` or a rejected check iterate ``mv3_cayley_s_newton`` and check the branch.
-  Claim D10 checks both kernels symbolically.  One body runs on Python floats, a batch on
-  structure-of-arrays component vectors.
+  Method check M1 checks both kernels symbolically (M2 checks this function's runs).  One body
+  runs on Python floats, a batch on structure-of-arrays component vectors.
 * general n: Newton's linear equation is the Lyapunov equation
   :math:`P\,dX + dX\,P^T = -G`, :math:`P = 2\Lambda - (I - X)B`, solved on the
   :math:`n(n-1)/2` skew unknowns as one batched dense system (``method="newton"``); or the
@@ -45,7 +45,7 @@ that one Moser-Veselov step of a body whose inertia is modified as a function of
 :math:`|m|^2` and of the energy, :math:`1/\tilde I_i = c/I_i + d`, is the step ``h`` of the
 original body's flow to order 4, 6, 8 or 10, in the momentum and the attitude.  The constants
 of :math:`c` and :math:`d` are the generated ``mv3_preprocessing_coefficients`` (computed once),
-the modified :math:`\tilde\Lambda` of a step the generated ``mv3_preprocessed_lam``; claim D10
+the modified :math:`\tilde\Lambda` of a step the generated ``mv3_preprocessed_lam``; method check M3
 checks the composition with exact rational power series in ``h`` against the Taylor series of
 the exact flow.  The cost of a step is one more kernel call; the map stays symplectic and
 conserves :math:`|m|` exactly (the modified body is a rigid body), the energy to the order.

@@ -102,6 +102,7 @@ def test_registry_ids_are_those_of_claims_md() -> None:
     assert {c.group for c in CLAIMS} <= {"paper", "method"}
     with pytest.raises(ValueError, match="group must be one of"):
         all_claims(group="nonsense")
+    assert all(c.section == "symrb" and c.where for c in CLAIMS if c.group == "method")
 
 
 @pytest.mark.parametrize("c", CLAIMS, ids=[c.id for c in CLAIMS])

@@ -14,7 +14,7 @@ Benning et al. (2019) with :math:`h = 1`; the paper's Remark 1 gives that name t
 (claim D6).  The samples :math:`x^a_0` share the controls.  The loss is the terminal cost
 :math:`\Phi = \sum_a \phi(x^a_N)`, :math:`\phi(x) = \tfrac12|x - y^a|^2` (running cost g = 0).
 
-Sign conventions (derived in :mod:`derivations.parts.discrete_control`, claims D5 and D6):
+Sign conventions (derived in :mod:`derivations.claims.section2`, claims D5 and D6):
 the Hamiltonian is :math:`H(p, x, u) = \langle p, f(x, u)\rangle` and the problem a minimisation,
 so with the corrected endpoint condition of D5 (the paper's endpoint condition in Section 2 has the
 opposite sign, which without a running cost only flips the sign of every costate) the costates are

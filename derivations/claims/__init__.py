@@ -1,0 +1,1 @@
+"""The paper's claims, one module per claim, grouped by section (``section2``, ``section3``)."""
