@@ -29,6 +29,7 @@ __all__ = [
     "norm_conservation",
 ]
 
+
 def _window_max(values: ArrayLike, windows: int) -> Array:
     """The largest absolute value over each of ``windows`` consecutive blocks of the leading axis
     (and over every trailing axis): a summary of a noisy series that keeps its envelope."""

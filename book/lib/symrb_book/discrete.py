@@ -218,6 +218,7 @@ def layer_jacobian(scales: ArrayLike | None = None, n: int = 3, seed: int = 0) -
     }
     return LayerJacobian(scale=eps, residual_gap=gaps[True], plain_gap=gaps[False])
 
+
 # ---------------------------------------------------------------------------------------------
 # The discrete symmetric rigid body (book/section2/03_discrete_rigid_body.md)
 

@@ -34,6 +34,7 @@ __all__ = [
     "boundary_accuracy",
 ]
 
+
 def _positive(x: float, name: str) -> float:
     value = float(x)
     if not (np.isfinite(value) and value > 0):
@@ -421,5 +422,3 @@ def boundary_accuracy(
         forward_error=np.array(fwd),
         eps_over_sqrt_delta=np.finfo(float).eps / np.sqrt(ds),
     )
-
-
