@@ -342,6 +342,21 @@ def test_bench_needs_neither_sympy_nor_the_derivations() -> None:
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
+def test_bench_without_the_harness_exits_2_and_says_why() -> None:
+    """In a wheel there is no ``benchmarks`` package: ``symrb bench`` says it needs a checkout."""
+    code = (
+        "import sys; sys.modules['benchmarks'] = None\n"
+        "from symrb.cli import main\n"
+        "sys.exit(main(['bench', '--quick']))\n"
+    )
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env
+    )
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "source checkout" in proc.stderr and "pip install -e '.[bench]'" in proc.stderr
+
+
 def test_committed_results_carry_no_path_of_the_machine() -> None:
     """Benchmark results in the repository name files, never where they were on the machine."""
     import re
