@@ -6,9 +6,9 @@ The first four are development tools that run the SymPy derivations of a source 
 wheel; see ``derivations.cli`` for what each does), reached through ``derivations.cli.main``.
 This launcher imports none of symrb's numerics for them, so they work while ``symrb/_generated``
 is missing; ``symrb --version`` and ``symrb --help`` work without SymPy and without the derivations.
-``symrb bench`` times the numerics (:mod:`symrb.bench`) and needs only NumPy and SciPy, so it is
-handled here, before the derivations are looked for; so are ``symrb run`` and ``symrb sweep``
-(:mod:`symrb.scene_cli`, scenes of :mod:`symrb.scenes`).
+``symrb bench`` times the numerics (``benchmarks.harness``, also of a source checkout only) with
+NumPy and SciPy alone, so it is handled here, before the derivations are looked for; so are
+``symrb run`` and ``symrb sweep`` (:mod:`symrb.scene_cli`, scenes of :mod:`symrb.scenes`).
 
 Exit status: 0 everything as recorded; 1 a surprise (a computed outcome differs from the record,
 a kernel not evaluated by its claims, a stale generated file); 2 usage or environment (bad
@@ -110,11 +110,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     cmd = next((a for a in args if not a.startswith("-")), "")
     if cmd == "bench":
-        from symrb.bench import main as bench_main
-
         i = args.index("bench")
         if any(a not in ("-h", "--help") for a in args[:i]):
             return _exit2(f"usage: symrb bench [options]; got options before 'bench': {args[:i]}")
+        try:  # the harness of a source checkout (benchmarks/), not part of the wheel
+            from benchmarks.harness import main as bench_main
+        except ModuleNotFoundError as exc:
+            if exc.name not in ("benchmarks", "benchmarks.harness"):
+                raise
+            return _exit2(
+                "symrb bench runs the benchmark harness of a source checkout of symrb "
+                "(benchmarks/, not part of the wheel): git clone the repository, then "
+                "pip install -e '.[bench]' in it"
+            )
         return int(bench_main(args[i + 1 :], prog="symrb bench"))
     if cmd in ("run", "sweep"):
         i = args.index(cmd)

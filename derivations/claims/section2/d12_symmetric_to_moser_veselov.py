@@ -65,7 +65,7 @@ D12 = claim(
     "momentum is $M_{k+1} = J_D(U_k)$. With $Q_{k+1} = Q_k U_k$, the first Moser-Veselov equation "
     "gives $\\Omega_{k+1} = Q_{k+1}^T Q_k = U_k^T$, the second then gives $M_{k+1} = U_k\\Lambda "
     "- \\Lambda U_k^T = J_D(U_k)$, and the third transports it as the symmetric algorithm does. "
-    "With a time step $h$ the momenta are $h$ times the continuous ones (`symrb.discrete`).",
+    "With a time step $h$ the momenta are $h$ times the continuous ones (`symrb.paper`).",
     expected="holds after correction",
     section="2.2",
     where="Section 2.2, the last paragraph: a solution $(Q_k, P_k)$ of the symmetric equations "
