@@ -15,9 +15,9 @@ from typing import Any
 import numpy as np
 
 from symrb._generated import discrete_rigid_body as _gen
+from symrb._stepping import _Stepper
 from symrb._validate import Array
 from symrb.algebra import random_so
-from symrb._stepping import _Stepper
 
 from .problems import _backend, _find, _problem
 from .timing import time_interleaved
