@@ -62,39 +62,27 @@ toda                   (none)                          L, a, b, spectrum, off_ba
 
 from __future__ import annotations
 
-from ._core import (
+from .parse import load_scene, parse_scene
+from .plan import Plan, plan_scene
+from .result import SceneResult
+from .run import run_scene, scene_inputs
+from .schema import Scene as Scene
+from .schema import SceneError, When
+from .schema import register_system as register_system
+from .store import SceneStore
+from .store import scene_key as scene_key
+from .sweeps import SweepResult, expand_grid, sweep
+from .systems import (
     DoubleBracketScene,
     McLachlanScovelScene,
     OrbitExtremalScene,
-    Plan,
     ResNetScene,
     RigidBodyMomentum,
     RigidBodyScene,
-    SceneError,
-    SceneResult,
-    SceneStore,
-    SweepResult,
+    SONetworkScene,
     SymmetricRigidBodyScene,
-    When,
-    expand_grid,
-    load_scene,
-    parse_scene,
-    plan_scene,
-    run_scene,
-    scene_inputs,
-    sweep,
+    TodaScene,
 )
-from ._core import (
-    Scene as Scene,
-)
-from ._core import (
-    register_system as register_system,
-)
-from ._core import (
-    scene_key as scene_key,
-)
-from ._so_network import SONetworkScene
-from ._toda import TodaScene
 
 __all__ = [
     "SceneError",
@@ -124,6 +112,6 @@ __all__ = [
 # the public classes name this package as their home (in reprs, tracebacks and pickles)
 for _name in __all__:
     _obj = globals()[_name]
-    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}._"):
+    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}."):
         _obj.__module__ = __name__
 del _name, _obj

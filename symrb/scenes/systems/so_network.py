@@ -17,13 +17,16 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 from pydantic_core.core_schema import ValidationInfo
 
-from .._validate import Array
-from . import _core
+from ... import learning
+from ..._validate import Array
+from ...errors import InputError
+from ..plan import Plan, SystemPlan, _fmt_seconds
+from ..schema import TrainingHorizon, Vector, When, _invalid, _Model, _SceneBase, register_system
 
 __all__ = ["SONetworkScene"]
 
 
-class SONetworkParameters(_core._Model):
+class SONetworkParameters(_Model):
     r"""The task and the network: ``symrb.so_rotation_task(n, samples, angle, noise, seed)``
     (its defaults), ``layers`` controls :math:`U_k`, started from :math:`U_k = I`; with the
     effect ``running_cost`` its weight ``alpha`` (> 0, default 1) and the diagonal ``lam`` of
@@ -35,21 +38,21 @@ class SONetworkParameters(_core._Model):
     noise: float = Field(default=0.05, ge=0)
     seed: int = 0
     layers: int = Field(default=4, ge=1)
-    lam: _core.Vector | None = None
+    lam: Vector | None = None
     alpha: float | None = Field(default=None, gt=0)
 
     @field_validator("lam")
     @classmethod
-    def _lam_of_n(cls, value: _core.Vector | None, info: ValidationInfo) -> _core.Vector | None:
+    def _lam_of_n(cls, value: Vector | None, info: ValidationInfo) -> Vector | None:
         n = info.data.get("n")
         if value is not None and n is not None and len(value) != n:
-            raise ValueError(f"lam must have n = {n} entries, got {len(value)}")
+            raise InputError(f"lam must have n = {n} entries, got {len(value)}")
         if value is not None and not all(x > 0 for x in value):
-            raise ValueError(f"lam must be positive, got {list(value)}")
+            raise InputError(f"lam must be positive, got {list(value)}")
         return value
 
 
-class SOGradient(_core._Model):
+class SOGradient(_Model):
     """``symrb.train_so_gradient``: Riemannian gradient descent, step ``lr`` (the first trial
     step with ``line_search``, Armijo backtracking), heavy-ball ``momentum`` in [0, 1), the
     ``retraction`` (``"cayley"`` or ``"exp"``); stops when max_k ||G_k||_F <= ``tol``."""
@@ -62,7 +65,7 @@ class SOGradient(_core._Model):
     tol: float = Field(default=1e-10, gt=0)
 
 
-class SOMSA(_core._Model):
+class SOMSA(_Model):
     """``symrb.train_so_msa``: the extended method of successive approximations, penalty
     ``rho`` >= 0 (0: the basic MSA), each layer's step a Procrustes problem; stops when
     max_k ||G_k||_F <= ``tol``."""
@@ -72,7 +75,7 @@ class SOMSA(_core._Model):
     tol: float = Field(default=1e-10, gt=0)
 
 
-class SOShooting(_core._Model):
+class SOShooting(_Model):
     """``symrb.train_so_shooting``: the extremal equations solved for M_0 by Powell's hybrid
     method to the relative tolerance ``tol``; the horizon's ``steps`` is its budget of
     evaluations (``maxfev``)."""
@@ -84,7 +87,7 @@ class SOShooting(_core._Model):
     @classmethod
     def _maxfev_is_the_horizon(cls, data: Any) -> Any:
         if isinstance(data, dict) and "maxfev" in data:
-            raise _core._invalid(
+            raise _invalid(
                 ("maxfev",), "the budget of evaluations is the horizon: set horizon.steps = "
                 f"{data['maxfev']!r} instead", ["kind", "tol"],
             )  # fmt: skip
@@ -102,8 +105,8 @@ _SWEEP_KERNELS = (
 )
 
 
-@_core.register_system
-class SONetworkScene(_core._SceneBase):
+@register_system
+class SONetworkScene(_SceneBase):
     r"""The SO(n) network of the learning theorem (claim D9) trained on
     :func:`symrb.so_rotation_task` from :math:`U_k = I`.
 
@@ -174,13 +177,13 @@ class SONetworkScene(_core._SceneBase):
     system: Literal["so_network"]
     parameters: SONetworkParameters = SONetworkParameters()
     integrator: Annotated[SOGradient | SOMSA | SOShooting, Field(discriminator="kind")]
-    horizon: _core.TrainingHorizon
+    horizon: TrainingHorizon
     observables: dict[
         Literal[
             "loss", "residual", "U", "Q", "costates", "extremal_residual", "iterations",
             "converged",
         ],
-        _core.When,
+        When,
     ]  # fmt: skip
 
     @model_validator(mode="after")
@@ -188,30 +191,30 @@ class SONetworkScene(_core._SceneBase):
         running = "running_cost" in self.effects
         for key in ("alpha", "lam"):
             if not running and key in self.parameters.model_fields_set:
-                raise _core._invalid(
+                raise _invalid(
                     ("parameters", key), f"{key} belongs to the running cost alpha tr(Lambda "
                     "(I - U_k)), which is off: add 'running_cost' to the effects",
                     [k for k in SONetworkParameters.model_fields if k not in ("alpha", "lam")],
                 )  # fmt: skip
         if isinstance(self.integrator, SOShooting):
             if not running:
-                raise _core._invalid(
+                raise _invalid(
                     ("integrator", "kind"), "shooting solves alpha J_D(U_k) = M_k for the "
                     "controls: it needs the effect 'running_cost' (alpha > 0)",
                     ["gradient", "msa"],
                 )  # fmt: skip
             if self.horizon.steps < 1:
-                raise _core._invalid(
+                raise _invalid(
                     ("horizon", "steps"), "shooting needs a budget of at least one evaluation"
                 )  # fmt: skip
         for name, when in self.observables.items():
             if name in _END_ONLY and not when.end:
-                raise _core._invalid(
+                raise _invalid(
                     ("observables", name), f"only the final controls are kept: record {name} "
                     "at the end", ["end"],
                 )  # fmt: skip
             if name not in _END_ONLY and not (when.end or when.every is not None):
-                raise _core._invalid(
+                raise _invalid(
                     ("observables", name), f"{name} is recorded per iteration: give every (or "
                     "end), not times or points", ["end", "every"],
                 )  # fmt: skip
@@ -226,16 +229,14 @@ class SONetworkScene(_core._SceneBase):
 
     def _inputs(self) -> dict[str, Any]:
         """``Q0``, ``targets`` (the task), ``lam``, ``alpha`` and the start ``U0`` (identities)."""
-        from ..learning import so_rotation_task
-
         p = self.parameters
-        Q0, targets = so_rotation_task(p.n, samples=p.samples, angle=p.angle, noise=p.noise,
+        Q0, targets = learning.so_rotation_task(p.n, samples=p.samples, angle=p.angle, noise=p.noise,
                                        seed=p.seed)  # fmt: skip
         lam = np.asarray(p.lam, dtype=float) if p.lam is not None else np.linspace(1.0, 2.0, p.n)
         return {"Q0": Q0, "targets": targets, "lam": lam, "alpha": self.alpha,
                 "U0": np.tile(np.eye(p.n), (p.layers, 1, 1))}  # fmt: skip
 
-    def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> _core.SystemPlan:
+    def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> SystemPlan:
         p, integ, steps = self.parameters, self.integrator, self.horizon.steps
         n, N, M = p.n, p.layers, p.samples
         asked = set(self.observables)
@@ -246,7 +247,7 @@ class SONetworkScene(_core._SceneBase):
         seconds = 3 * N * call
         kernels: tuple[str, ...] = _SWEEP_KERNELS
         modules: tuple[str, ...] = (
-            "scenes._so_network", "learning", "algebra", "_validate", "_progress",
+            "scenes.systems.so_network", "learning", "algebra", "_validate", "_progress",
             "_generated.discrete_rigid_body",
         )  # fmt: skip
         propagated: tuple[str, ...] = (
@@ -333,10 +334,10 @@ class SONetworkScene(_core._SceneBase):
             "flops": budget * flops,
             "seconds": budget * (seconds + flops / 1.5e9),
             "formula": f"at most {budget} {what}s x (~{flops:.2g} flops + "
-            f"~{_core._fmt_seconds(seconds)} of kernel calls); it stops at tol, usually much "
+            f"~{_fmt_seconds(seconds)} of kernel calls); it stops at tol, usually much "
             "earlier",
         }
-        return _core.SystemPlan(
+        return SystemPlan(
             route=route,
             propagated=propagated,
             kernels=kernels,
@@ -347,10 +348,8 @@ class SONetworkScene(_core._SceneBase):
         )
 
     def _run(
-        self, plan: _core.Plan, x: dict[str, Any]
+        self, plan: Plan, x: dict[str, Any]
     ) -> tuple[dict[str, Array], dict[str, Array], str]:
-        from .. import learning
-
         integ, steps = self.integrator, self.horizon.steps
         Q0, T, lam, alpha = x["Q0"], x["targets"], x["lam"], x["alpha"]
         if isinstance(integ, SOGradient):
