@@ -62,6 +62,14 @@ toda                   (none)                          L, a, b, spectrum, off_ba
 
 from __future__ import annotations
 
+try:
+    import pydantic  # noqa: F401 - the schema's models; checked first for a clear message
+except ImportError as exc:  # pragma: no cover - exercised in the clean-venv wheel test
+    raise ImportError(
+        "symrb.scenes needs pydantic, which comes with the scenes extra: "
+        "pip install 'symrb[scenes]' (or pip install pydantic)"
+    ) from exc
+
 from .parse import load_scene, parse_scene
 from .plan import Plan, plan_scene
 from .result import SceneResult

@@ -142,8 +142,6 @@ class Plan:
         return json.loads(json.dumps(d, default=_json_default))
 
 
-
-
 @dataclasses.dataclass(frozen=True)
 class SystemPlan:
     """A system's part of a :class:`Plan` (the hook ``_plan`` of a registered system returns it;
@@ -259,8 +257,6 @@ def _est_continuous(T: float, rtol: float, rate: float, flops_rhs: float) -> dic
         "formula": f"~{nfev:.3g} field evaluations (DOP853: 12 per step, ~0.15 T |Omega| "
         "rtol^(-1/8) steps) of the flops of one field, plus 6 us of overhead each",
     }
-
-
 
 
 def _fixed_step_cost(steps: int, flops: float, per: float, how: str = "") -> dict[str, Any]:

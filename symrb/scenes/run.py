@@ -70,7 +70,6 @@ def _window_reduce(
     return ends, (out[0] if len(out) == 1 else np.stack(out, axis=1))
 
 
-
 def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
     """Run a planned scene: (times per observable, data per observable, failure message), the
     windowed observables reduced."""

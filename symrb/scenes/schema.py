@@ -15,23 +15,16 @@ from collections.abc import Mapping, Sequence
 from typing import Annotated, Any, ClassVar, Literal, Union
 
 import numpy as np
-
-try:
-    from pydantic import (
-        BaseModel,
-        ConfigDict,
-        Field,
-        TypeAdapter,
-        ValidationError,
-        field_validator,
-        model_validator,
-    )
-    from pydantic_core import InitErrorDetails, PydanticCustomError
-except ImportError as exc:  # pragma: no cover - exercised in the clean-venv wheel test
-    raise ImportError(
-        "symrb.scenes needs pydantic, which comes with the scenes extra: "
-        "pip install 'symrb[scenes]' (or pip install pydantic)"
-    ) from exc
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from .. import _validate as v
 from .._validate import Array
@@ -75,6 +68,7 @@ class SceneError(InputError):
 # ---------------------------------------------------------------------------------------------
 # the schema
 
+
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -101,7 +95,6 @@ def _skew_from(value: Any, n: int, name: str) -> Array:
     if a.shape == (3,) and n == 3:
         return hat(a)
     return v.skew(a, name, n)
-
 
 
 Reduction = Literal["max", "min", "max_abs", "max_abs_change", "max_rel_change"]
@@ -233,8 +226,6 @@ class TrainingHorizon(_Model):
 # alpha tr(Lambda (I - U_k))); potential is a cost on the state (Brockett's potential)
 _ALL_EFFECTS = ("attitude", "samples", "terminal_cost", "potential", "running_cost", "costates")
 Effect = Literal["attitude", "samples", "terminal_cost", "potential", "running_cost", "costates"]
-
-
 
 
 class _SceneBase(_Model):

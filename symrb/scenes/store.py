@@ -67,7 +67,6 @@ def scene_key(scene: Scene, plan: Plan | None = None) -> str:
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
-
 def _default_cache() -> Path:
     env = os.environ.get("SYMRB_CACHE_DIR")
     if env:

@@ -90,7 +90,6 @@ class MVAlgorithm1(_Model):
     h: float = Field(gt=0)
 
 
-
 class BodyParameters(_Model):
     """A body: ``n``, the diagonal ``lam`` of Lambda (default: ``random_lam(n, seed=seed)``), the
     initial momentum ``M0`` (a 3-vector for n = 3 or an n x n skew matrix; default:
@@ -120,7 +119,6 @@ class BodyParameters(_Model):
             raise InputError("give the size of M0 once: momentum (the pairing norm) or op_norm "
                              "(the operator norm), not both")  # fmt: skip
         return self
-
 
 
 def body_inputs(p: Any, boundary: bool = False) -> dict[str, Any]:
@@ -196,7 +194,6 @@ def _body_observable(name: str, y: Mapping[str, Array], lam: Array) -> Array:
     raise KeyError(name)  # pragma: no cover - the schema lists the names
 
 
-
 def _rot(rotation: Array | None, a: Array) -> Array:
     """R a (a run in a rotated frame), or a itself."""
     return a if rotation is None else rotation @ a
@@ -213,7 +210,6 @@ def _rotate_back(states: dict[str, Array], rotation: Array | None) -> dict[str, 
         if name in states:
             states[name] = rotation.T @ states[name]
     return states
-
 
 
 def _integrate(
@@ -243,8 +239,9 @@ def body_continuous_plan(
         kernels=kernels,
         save={"t_eval": [float(t) for t in t_eval]},
         index=index,
-        cost=_est_continuous(sc.horizon.T, integ.rtol, 2.0 * p.momentum,
-                             10.0 * p.samples * p.n**3),  # fmt: skip
+        cost=_est_continuous(
+            sc.horizon.T, integ.rtol, 2.0 * p.momentum, 10.0 * p.samples * p.n**3
+        ),  # fmt: skip
         modules=modules + ("_generated.symmetric_rigid_body",),
     )
 

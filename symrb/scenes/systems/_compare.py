@@ -142,7 +142,6 @@ def _route_problems(sc: Any, lines: Mapping[tuple[str, ...], int]) -> list[dict[
     return out
 
 
-
 def _gap_offset(cmp: Compare, when: When) -> int:
     """The first record of a gap observable that the (shifted) second run can be paired with."""
     return cmp.shift // when.every if cmp.shift and when.every is not None else 0

@@ -49,14 +49,12 @@ class OrbitParameters(_Model):
         return value
 
 
-
 class DoubleBracketIVP(_Model):
     """``symrb.double_bracket_flow`` (DOP853) with ``rtol``, ``atol``."""
 
     kind: Literal["continuous"]
     rtol: float = Field(default=1e-11, gt=0)
     atol: float = Field(default=1e-12, ge=0)
-
 
 
 def orbit_inputs(p: OrbitParameters) -> dict[str, Any]:
@@ -93,7 +91,6 @@ class DoubleBracketScene(_SceneBase):
     horizon: TimeHorizon
     observables: dict[Literal["x", "potential", "pairing", "casimirs"], When]
 
-
     def _inputs(self) -> dict[str, Any]:
         """``x0`` and ``N``."""
         return orbit_inputs(self.parameters)
@@ -108,8 +105,14 @@ class DoubleBracketScene(_SceneBase):
             save={"t_eval": [float(t) for t in t_eval]},
             index=index,
             cost=_est_continuous(self.horizon.T, integ.rtol, 1.0, 8.0 * self.parameters.n**3),
-            modules=("orbits", "algebra", "_validate", "_generated.adjoint_orbits",
-                     "_generated.rigid_body", "scenes.systems.double_bracket"),  # fmt: skip
+            modules=(
+                "orbits",
+                "algebra",
+                "_validate",
+                "_generated.adjoint_orbits",
+                "_generated.rigid_body",
+                "scenes.systems.double_bracket",
+            ),  # fmt: skip
         )
 
     def _run(self, plan: Plan, x: dict[str, Any]) -> tuple[dict[str, Array], dict[str, Array], str]:

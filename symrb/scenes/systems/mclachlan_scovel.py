@@ -42,7 +42,6 @@ class McLachlanScovelScene(_BodyScene):
     horizon: TimeHorizon
     observables: dict[Literal["Q", "B", "M", "energy", "orthogonality"], When]
 
-
     def _inputs(self) -> dict[str, Any]:
         """``lam``, ``Q0``, ``M0`` and ``B0 = Q0 M0``."""
         out = body_inputs(self.parameters)
@@ -53,7 +52,9 @@ class McLachlanScovelScene(_BodyScene):
         part = body_continuous_plan(self, "McLachlanScovel",
                                     ("symmetric_rigid_body.mclachlan_scovel_rhs",), ("Q", "B"),
                                     _MODULES)  # fmt: skip
-        return dataclasses.replace(part, kernels=part.kernels + diagnostic_kernels(self.observables))
+        return dataclasses.replace(
+            part, kernels=part.kernels + diagnostic_kernels(self.observables)
+        )
 
     def _states(
         self, plan: Plan, x: dict[str, Any], rotation: Array | None

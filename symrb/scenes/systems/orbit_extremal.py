@@ -37,7 +37,6 @@ class BVP(_Model):
     one_sample_ivp: bool = True
 
 
-
 @register_system
 class OrbitExtremalScene(_SceneBase):
     r"""Extremals of the adjoint-orbit problem with Brockett's potential and the terminal cost
@@ -78,7 +77,6 @@ class OrbitExtremalScene(_SceneBase):
                 "sample_pairings"],
         When,
     ]  # fmt: skip
-
 
     def _inputs(self) -> dict[str, Any]:
         """``x0`` and ``N``."""
@@ -126,7 +124,11 @@ class OrbitExtremalScene(_SceneBase):
         data = {}
         for name, idx in plan.index.items():
             sel = list(idx)
-            own = xdb[np.searchsorted(db_idx, sel)] if name.startswith("db_") and xdb is not None else None
+            own = (
+                xdb[np.searchsorted(db_idx, sel)]
+                if name.startswith("db_") and xdb is not None
+                else None
+            )
             data[name] = _observable(name, xs[sel], ps[sel], N, own)
         times = {k: t_eval[list(i)] for k, i in plan.index.items()}
         return times, data, failure
@@ -168,7 +170,6 @@ def _pairing_norm(a: Array) -> Array:
 def _second_term(x: Array, N: Array) -> Array:
     r""":math:`\|[N, [N, x]]\|`, the second term of the costate equation (its norm)."""
     return _pairing_norm(commutator(N, commutator(N, x)))
-
 
 
 def _db_asked(sc: OrbitExtremalScene) -> list[str]:

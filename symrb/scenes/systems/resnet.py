@@ -49,7 +49,6 @@ class ExtendedMSA(_Model):
     residual: bool = True
 
 
-
 class NetworkParameters(_Model):
     """The ResNet of Section 2, Remark 1 on the data ``data``: ``"toy"`` (the default),
     ``symrb.toy_classification(samples, seed)`` in the plane (width 2), or ``"digits"``,
@@ -127,7 +126,6 @@ class ResNetScene(_SceneBase):
             )  # fmt: skip
         return self
 
-
     def _inputs(self) -> dict[str, Any]:
         """``x0``, ``targets``, ``labels``, ``K0``, ``beta0`` (on the digits also ``x_test``,
         ``labels_test`` and ``classes``)."""
@@ -172,7 +170,7 @@ class ResNetScene(_SceneBase):
         kernels: tuple[str, ...] = (f"discrete_control.resnet_step_{kind}",)
         if steps > 0 or "costates" in self.effects:
             kernels += (f"discrete_control.resnet_adjoint_{kind}",)
-        index = {}
+        index: dict[str, tuple[int, ...]] = {}
         for name, when in self.observables.items():
             if name == "loss" and when.every is not None:
                 index[name] = tuple(range(0, steps + 1, when.every))
@@ -182,7 +180,7 @@ class ResNetScene(_SceneBase):
                           save={"steps": steps}, index=index, cost=cost, modules=modules)  # fmt: skip
 
     def _run(self, plan: Plan, x: dict[str, Any]) -> tuple[dict[str, Array], dict[str, Array], str]:
-        integ = self.integrator
+        integ: Any = self.integrator
         act, res = integ.activation, integ.residual
         steps = self.horizon.steps
         K, beta = x["K0"], x["beta0"]
@@ -254,7 +252,8 @@ def _training(
 ) -> tuple[str, tuple[str, ...], dict[str, Any]]:
     """The route, the state and the cost of the training (or of the forward pass alone), on
     ``S`` samples of width ``width``."""
-    steps, integ, L = sc.horizon.steps, sc.integrator, sc.parameters.layers
+    integ: Any = sc.integrator
+    steps, L = sc.horizon.steps, sc.parameters.layers
     flops_ls = 2.0 * width**2 + 16.0 * width  # a layer on one sample (K x, tanh, the sum)
     per = L * S * (4e-7 + 2.6e-9 * (width**2 - 4)) + L * 2e-5
     trained = ("states x_k", "costates p_k", "weights K, beta")

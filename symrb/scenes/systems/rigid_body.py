@@ -85,8 +85,6 @@ class RigidBodyMomentum(Flow):
         return {"Omega": _Jinv_weights(lam) * y["M"]}
 
 
-
-
 @register_system
 class RigidBodyScene(_ComparedBody):
     """The free rigid body (momentum only, or with the attitude: effect ``attitude``).
@@ -142,7 +140,9 @@ class RigidBodyScene(_ComparedBody):
         else:
             fixed = _fixed_step_save(self, integ.h)
             part = _FIXED_STEP_PLANS[type(integ)](self, skipped, notes, fixed)
-        return dataclasses.replace(part, kernels=part.kernels + diagnostic_kernels(self.observables))
+        return dataclasses.replace(
+            part, kernels=part.kernels + diagnostic_kernels(self.observables)
+        )
 
     def _states(
         self, plan: Plan, x: dict[str, Any], rotation: Array | None
@@ -215,10 +215,20 @@ def _plan_mv(
         kernels=kernels,
         save={"steps": steps, "save_every": every},
         index=index,
-        cost=_fixed_step_cost(steps, flops, per, " a step (n = 3: one fused kernel call; else "
-                              "~4 solver sweeps of two n^3 products)"),  # fmt: skip
-        modules=_MODULES + ("engine", "discrete", "solvers", "_compiled",
-                            "_generated.discrete_rigid_body"),  # fmt: skip
+        cost=_fixed_step_cost(
+            steps,
+            flops,
+            per,
+            " a step (n = 3: one fused kernel call; else ~4 solver sweeps of two n^3 products)",
+        ),  # fmt: skip
+        modules=_MODULES
+        + (
+            "engine",
+            "discrete",
+            "solvers",
+            "_compiled",
+            "_generated.discrete_rigid_body",
+        ),  # fmt: skip
     )
 
 
@@ -229,7 +239,12 @@ def _plan_mv_algorithm(
     steps, every, index = fixed
     integ: Any = sc.integrator
     n = sc.parameters.n
-    modules = _MODULES + ("discrete", "solvers", "_generated.discrete_rigid_body", "_progress")
+    modules: tuple[str, ...] = _MODULES + (
+        "discrete",
+        "solvers",
+        "_generated.discrete_rigid_body",
+        "_progress",
+    )
     first = ("symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1) for Q_1 and M_1 = "
              "h (Q0^T P0 - P0^T Q0) (the first step, D12), then ")  # fmt: skip
     kernels: tuple[str, ...]
@@ -310,7 +325,9 @@ _FIXED_STEP_PLANS: dict[type, _PlanFixed] = {
 _Run = tuple[Array, dict[str, Array], str]
 
 
-def _run_continuous(sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None) -> _Run:
+def _run_continuous(
+    sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None
+) -> _Run:
     if "Q" in plan.propagated:
         y0 = {"Q": _rot(rotation, x["Q0"]), "M": x["M0"]}
         return _integrate(sc, plan, RigidBody, y0, x["lam"], rotation)
@@ -363,9 +380,7 @@ def _run_discrete(
     return dsol.t, states, "" if dsol.success else dsol.message
 
 
-def _mv_from_first_step(
-    sc: Any, plan: Plan, x: dict[str, Any], rotation: Array | None
-) -> _Run:
+def _mv_from_first_step(sc: Any, plan: Plan, x: dict[str, Any], rotation: Array | None) -> _Run:
     """MV-Algorithm 1 from (Q_0, Q_1), or MV-Algorithm 2 from (Q_1, M_1) (``start = "Q1_M1"``),
     Q_1 and M_1 from the symmetric algorithm's first step; Q_k and M_{k+1}/h at t_k."""
     integ, lam, h = sc.integrator, x["lam"], sc.integrator.h
@@ -376,7 +391,9 @@ def _mv_from_first_step(
         return np.zeros(0), {"Q": empty, "M": empty}, first.message
     Q1, M1 = first.y.Q[1], h * first.y.M[0]
     if isinstance(integ, MVAlgorithm1):
-        dsol = mv_algorithm1(_rot(rotation, x["Q0"]), _rot(rotation, Q1), lam, steps - 1, save_every=every)
+        dsol = mv_algorithm1(
+            _rot(rotation, x["Q0"]), _rot(rotation, Q1), lam, steps - 1, save_every=every
+        )
         return (np.asarray(dsol.k, dtype=float) * h, _rotate_back({"Q": dsol.y.Q}, rotation),
                 "" if dsol.success else dsol.message)  # fmt: skip
     need_Q = any(o.removesuffix("_gap") in ("Q", "orthogonality") for o in plan.index)
@@ -384,7 +401,9 @@ def _mv_from_first_step(
     # Q_k is the (k - 1)-th state of the run from Q_1: with Q asked for every e > 1 steps the
     # run saves every step; M_{k+1}, its k-th momentum, is saved at the steps asked for
     save = every if every == 1 or not need_Q else 1
-    dsol = mv_algorithm2(_rot(rotation, Q1), M1, lam, steps if need_M else steps - 1, save_every=save)
+    dsol = mv_algorithm2(
+        _rot(rotation, Q1), M1, lam, steps if need_M else steps - 1, save_every=save
+    )
     states: dict[str, Array] = {}
     if need_Q:
         Qs = np.concatenate([_rot(rotation, x["Q0"])[None], dsol.y.Q])[: steps + 1]

@@ -11,6 +11,7 @@ the three trainers of :mod:`symrb.learning`.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
@@ -237,119 +238,37 @@ class SONetworkScene(_SceneBase):
                 "U0": np.tile(np.eye(p.n), (p.layers, 1, 1))}  # fmt: skip
 
     def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> SystemPlan:
-        p, integ, steps = self.parameters, self.integrator, self.horizon.steps
-        n, N, M = p.n, p.layers, p.samples
+        steps = self.horizon.steps
         asked = set(self.observables)
-        layer = 2.0 * M * n**3  # one layer, costate step or sample sum on the stacked samples
-        call = 5e-6  # the overhead of a kernel call
-        sweep = f"a forward sweep over the {N} layers and a backward costate sweep"
-        flops = 3 * N * layer
-        seconds = 3 * N * call
-        kernels: tuple[str, ...] = _SWEEP_KERNELS
-        modules: tuple[str, ...] = (
-            "scenes.systems.so_network", "learning", "algebra", "_validate", "_progress",
-            "_generated.discrete_rigid_body",
-        )  # fmt: skip
-        propagated: tuple[str, ...] = (
-            f"layers Q^a_k ({M} samples x {N + 1} layers, stacked by rows)",
-            "costates P^a_k (backward sweep)", f"controls U_k ({N} in SO({n}))",
-        )  # fmt: skip
-        if isinstance(integ, SOGradient):
-            route = (f"symrb.train_so_gradient(steps={steps}, lr={integ.lr:g}, "
-                     f"line_search={integ.line_search}, momentum={integ.momentum:g}, "
-                     f"retraction={integ.retraction!r}, tol={integ.tol:g}) "
-                     "from U_k = I")  # fmt: skip
-            per = f"{sweep} (the gradients G_k), then U_k {integ.retraction}(-t G_k)"
-            flops += N * 10.0 * n**3
-            seconds += N * 2 * call
-            if integ.line_search:
-                per += " with Armijo backtracking (a forward sweep per trial step, ~1.5)"
-                flops += 1.5 * N * layer
-                seconds += 1.5 * N * call
-            what = "iteration"
-        elif isinstance(integ, SOMSA):
-            route = (f"symrb.train_so_msa(steps={steps}, rho={integ.rho:g}, tol={integ.tol:g}) "
-                     "from U_k = I")  # fmt: skip
-            per = (f"{sweep} keeping all {N + 1} costates, then per layer the Procrustes "
-                   "problem max tr(A_k U) over SO(n): one SVD (so_procrustes)")  # fmt: skip
-            flops += N * ((3 if integ.rho else 1) * layer + 30.0 * n**3)
-            seconds += N * 1e-4
-            what = "iteration"
-        else:
-            d = n * (n - 1) // 2
-            route = (f"symrb.train_so_shooting(layers={N}, tol={integ.tol:g}, maxfev={steps}) "
-                     f"from M_0 = 0 (U_k = I)")  # fmt: skip
-            per = (f"{N} Moser-Veselov solves alpha J_D(U_k) = M_k, M_(k+1) = U_k^T M_k U_k, "
-                   f"then {sweep} and the momentum of the costates at k = 0")  # fmt: skip
-            propagated = (f"momentum M_0 (n(n-1)/2 = {d} unknowns)", *propagated)
-            kernels = kernels + (
-                "discrete_rigid_body.jd",
-                "symmetric_rigid_body.symmetric_momentum",
-            )
-            modules += ("solvers", "errors", "_generated.symmetric_rigid_body")
-            flops += N * 60.0 * n**3
-            seconds += N * 8e-4
-            what = "evaluation"
-            notes.append(f"shooting's records count evaluations of F(M_0) on the {d} unknowns "
-                         "(hybr's finite-difference Jacobian included), not iterations; "
-                         f"horizon.steps = {steps} is its maxfev")  # fmt: skip
+        t = _trainer(self, notes)
+        kernels, modules = t.kernels, t.modules
         if "extremal_residual" in asked:
             kernels += ("symmetric_rigid_body.symmetric_momentum", "discrete_rigid_body.jd")
             modules += ("_generated.symmetric_rigid_body",)
-        kernels = tuple(dict.fromkeys(kernels))
-        if not isinstance(integ, SOShooting):
-            notes.append(f"stops once max_k ||G_k||_F <= tol = {integ.tol:g}: the records are "
-                         f"those of the iterations done, at most {steps} + 1")  # fmt: skip
-        notes.append(f"the trainer evaluates the loss and max_k ||G_k||_F at every {what} (its "
-                     "stopping test); only the records asked for are kept")  # fmt: skip
-        extra = []
-        if "extremal_residual" in asked:
-            extra.append("extremal_residual: a forward and a costate sweep and N momenta")
-        if "costates" in asked:
-            extra.append("costates (and Q): a forward and a costate sweep")
-        elif "Q" in asked:
-            extra.append("Q: a forward sweep")
-        if extra:
-            notes.append("at the final controls, " + "; ".join(extra))
-        if not {"Q", "costates"} & asked:
-            skipped.append(("Q (the final layers)", "not asked for: no forward sweep at the end"))
-        if "running_cost" not in self.effects:
-            skipped.append(("running cost alpha tr(Lambda (I - U_k))", "effect 'running_cost' "
-                            "not named: alpha = 0, the loss is the data term alone and fixes "
-                            "only the product U_0 ... U_(N-1)"))  # fmt: skip
-        if "costates" not in asked:
-            keep = ("at most two alive" if isinstance(integ, SOGradient)
-                    else "all N + 1 inside, for the step")  # fmt: skip
-            why = ("effect 'costates' not named" if "costates" not in self.effects
-                   else "not asked for")  # fmt: skip
-            skipped.append(("recording the costates P^a_k", f"{why}: the trainer's sweeps run "
-                            f"(they give G_k; {keep}), no costate leaves it"))  # fmt: skip
-        route += f": each {what} is {per}"
+        _notes_and_skips(self, skipped, notes, t.what)
         budget = max(steps, 1)
         index: dict[str, tuple[int, ...]] = {}
         for name, when in self.observables.items():
             every = when.every
             index[name] = tuple(range(0, steps + 1, every)) if every is not None else (steps,)
         cost = {
-            "flops": budget * flops,
-            "seconds": budget * (seconds + flops / 1.5e9),
-            "formula": f"at most {budget} {what}s x (~{flops:.2g} flops + "
-            f"~{_fmt_seconds(seconds)} of kernel calls); it stops at tol, usually much "
+            "flops": budget * t.flops,
+            "seconds": budget * (t.seconds + t.flops / 1.5e9),
+            "formula": f"at most {budget} {t.what}s x (~{t.flops:.2g} flops + "
+            f"~{_fmt_seconds(t.seconds)} of kernel calls); it stops at tol, usually much "
             "earlier",
         }
         return SystemPlan(
-            route=route,
-            propagated=propagated,
-            kernels=kernels,
+            route=f"{t.route}: each {t.what} is {t.per}",
+            propagated=t.propagated,
+            kernels=tuple(dict.fromkeys(kernels)),
             save={"steps": steps},
             index=index,
             cost=cost,
             modules=tuple(dict.fromkeys(modules)),
         )
 
-    def _run(
-        self, plan: Plan, x: dict[str, Any]
-    ) -> tuple[dict[str, Array], dict[str, Array], str]:
+    def _run(self, plan: Plan, x: dict[str, Any]) -> tuple[dict[str, Array], dict[str, Array], str]:
         integ, steps = self.integrator, self.horizon.steps
         Q0, T, lam, alpha = x["Q0"], x["targets"], x["lam"], x["alpha"]
         if isinstance(integ, SOGradient):
@@ -396,3 +315,109 @@ class SONetworkScene(_SceneBase):
             else:
                 data[name] = np.array([int(res.converged)])
         return times, data, ""
+
+
+@dataclasses.dataclass(frozen=True)
+class _Trainer:
+    """A trainer's part of the plan: its call, one iteration (or evaluation) in words, and the
+    estimated flops and seconds of one."""
+
+    route: str
+    per: str
+    what: str
+    flops: float
+    seconds: float
+    propagated: tuple[str, ...]
+    kernels: tuple[str, ...]
+    modules: tuple[str, ...]
+
+
+def _trainer(sc: SONetworkScene, notes: list[str]) -> _Trainer:
+    """The plan of the scene's trainer (gradient descent, the MSA or shooting)."""
+    p, integ, steps = sc.parameters, sc.integrator, sc.horizon.steps
+    n, N, M = p.n, p.layers, p.samples
+    layer = 2.0 * M * n**3  # one layer, costate step or sample sum on the stacked samples
+    call = 5e-6  # the overhead of a kernel call
+    sweep = f"a forward sweep over the {N} layers and a backward costate sweep"
+    flops = 3 * N * layer
+    seconds = 3 * N * call
+    kernels: tuple[str, ...] = _SWEEP_KERNELS
+    modules: tuple[str, ...] = (
+        "scenes.systems.so_network", "learning", "algebra", "_validate", "_progress",
+        "_generated.discrete_rigid_body",
+    )  # fmt: skip
+    propagated: tuple[str, ...] = (
+        f"layers Q^a_k ({M} samples x {N + 1} layers, stacked by rows)",
+        "costates P^a_k (backward sweep)", f"controls U_k ({N} in SO({n}))",
+    )  # fmt: skip
+    if isinstance(integ, SOGradient):
+        route = (f"symrb.train_so_gradient(steps={steps}, lr={integ.lr:g}, "
+                 f"line_search={integ.line_search}, momentum={integ.momentum:g}, "
+                 f"retraction={integ.retraction!r}, tol={integ.tol:g}) "
+                 "from U_k = I")  # fmt: skip
+        per = f"{sweep} (the gradients G_k), then U_k {integ.retraction}(-t G_k)"
+        flops += N * 10.0 * n**3
+        seconds += N * 2 * call
+        if integ.line_search:
+            per += " with Armijo backtracking (a forward sweep per trial step, ~1.5)"
+            flops += 1.5 * N * layer
+            seconds += 1.5 * N * call
+        what = "iteration"
+    elif isinstance(integ, SOMSA):
+        route = (f"symrb.train_so_msa(steps={steps}, rho={integ.rho:g}, tol={integ.tol:g}) "
+                 "from U_k = I")  # fmt: skip
+        per = (f"{sweep} keeping all {N + 1} costates, then per layer the Procrustes "
+               "problem max tr(A_k U) over SO(n): one SVD (so_procrustes)")  # fmt: skip
+        flops += N * ((3 if integ.rho else 1) * layer + 30.0 * n**3)
+        seconds += N * 1e-4
+        what = "iteration"
+    else:
+        d = n * (n - 1) // 2
+        route = (f"symrb.train_so_shooting(layers={N}, tol={integ.tol:g}, maxfev={steps}) "
+                 f"from M_0 = 0 (U_k = I)")  # fmt: skip
+        per = (f"{N} Moser-Veselov solves alpha J_D(U_k) = M_k, M_(k+1) = U_k^T M_k U_k, "
+               f"then {sweep} and the momentum of the costates at k = 0")  # fmt: skip
+        propagated = (f"momentum M_0 (n(n-1)/2 = {d} unknowns)", *propagated)
+        kernels = kernels + ("discrete_rigid_body.jd", "symmetric_rigid_body.symmetric_momentum")
+        modules += ("solvers", "errors", "_generated.symmetric_rigid_body")
+        flops += N * 60.0 * n**3
+        seconds += N * 8e-4
+        what = "evaluation"
+        notes.append(f"shooting's records count evaluations of F(M_0) on the {d} unknowns "
+                     "(hybr's finite-difference Jacobian included), not iterations; "
+                     f"horizon.steps = {steps} is its maxfev")  # fmt: skip
+    return _Trainer(route, per, what, flops, seconds, propagated, kernels, modules)
+
+
+def _notes_and_skips(
+    sc: SONetworkScene, skipped: list[tuple[str, str]], notes: list[str], what: str
+) -> None:
+    """What the plan says about the stopping test, the sweeps at the end and what is skipped."""
+    integ, steps, asked = sc.integrator, sc.horizon.steps, set(sc.observables)
+    if not isinstance(integ, SOShooting):
+        notes.append(f"stops once max_k ||G_k||_F <= tol = {integ.tol:g}: the records are "
+                     f"those of the iterations done, at most {steps} + 1")  # fmt: skip
+    notes.append(f"the trainer evaluates the loss and max_k ||G_k||_F at every {what} (its "
+                 "stopping test); only the records asked for are kept")  # fmt: skip
+    extra = []
+    if "extremal_residual" in asked:
+        extra.append("extremal_residual: a forward and a costate sweep and N momenta")
+    if "costates" in asked:
+        extra.append("costates (and Q): a forward and a costate sweep")
+    elif "Q" in asked:
+        extra.append("Q: a forward sweep")
+    if extra:
+        notes.append("at the final controls, " + "; ".join(extra))
+    if not {"Q", "costates"} & asked:
+        skipped.append(("Q (the final layers)", "not asked for: no forward sweep at the end"))
+    if "running_cost" not in sc.effects:
+        skipped.append(("running cost alpha tr(Lambda (I - U_k))", "effect 'running_cost' "
+                        "not named: alpha = 0, the loss is the data term alone and fixes "
+                        "only the product U_0 ... U_(N-1)"))  # fmt: skip
+    if "costates" not in asked:
+        keep = ("at most two alive" if isinstance(integ, SOGradient)
+                else "all N + 1 inside, for the step")  # fmt: skip
+        why = ("effect 'costates' not named" if "costates" not in sc.effects
+               else "not asked for")  # fmt: skip
+        skipped.append(("recording the costates P^a_k", f"{why}: the trainer's sweeps run "
+                        f"(they give G_k; {keep}), no costate leaves it"))  # fmt: skip

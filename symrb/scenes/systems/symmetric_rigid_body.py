@@ -79,7 +79,6 @@ class SymmetricBodyParameters(BodyParameters):
         return self
 
 
-
 @register_system
 class SymmetricRigidBodyScene(_ComparedBody):
     """The symmetric rigid body (Q, P) of Section 3.2; effect ``samples`` for the learning
@@ -113,7 +112,6 @@ class SymmetricRigidBodyScene(_ComparedBody):
         ],
         When,
     ]  # fmt: skip
-
 
     def _inputs(self) -> dict[str, Any]:
         """``lam``, ``Q0``, ``M0`` and ``P0`` (see :class:`SymmetricBodyParameters`)."""
@@ -196,4 +194,3 @@ def _boundary_rotation(n: int) -> Array:
     if n >= 4:
         A[2:4, 2:4] = [[0.6, -0.8], [0.8, 0.6]]
     return A
-

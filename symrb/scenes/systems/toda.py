@@ -129,9 +129,7 @@ class TodaScene(_SceneBase):
             modules=("scenes.systems.toda", "orbits", "_validate", "_generated.adjoint_orbits"),
         )
 
-    def _run(
-        self, plan: Plan, x: dict[str, Any]
-    ) -> tuple[dict[str, Array], dict[str, Array], str]:
+    def _run(self, plan: Plan, x: dict[str, Any]) -> tuple[dict[str, Array], dict[str, Array], str]:
         t_eval = np.asarray(plan.save["t_eval"])
         integ = self.integrator
         failure = ""
