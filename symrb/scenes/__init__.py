@@ -38,6 +38,14 @@ nothing recomputes nothing.  :func:`sweep` runs a grid of scenes, in-process or 
 cluster (``dask.distributed``, imported only there), and returns one pandas table plus the
 results.
 
+Where each stage lives: ``schema`` (what every system shares: :class:`SceneError`,
+:class:`When`, the base model with its hooks, :func:`register_system`), ``parse``
+(:func:`parse_scene`, :func:`load_scene`, the errors with their TOML lines), ``plan``
+(:class:`Plan`, :func:`plan_scene`), ``run`` (:func:`scene_inputs`, :func:`run_scene`),
+``result`` (:class:`SceneResult`), ``store`` (:func:`scene_key`, :class:`SceneStore`), ``sweeps``
+(:func:`expand_grid`, :func:`sweep`), and ``systems/``, one module per system with its model and
+its hooks ``_inputs``, ``_plan``, ``_run`` (a new system is a new module there).
+
 The systems (``system = ...``) and what each offers:
 
 =====================  ==============================  =============================================

@@ -14,7 +14,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from ..errors import InputError
-from .schema import _SYSTEMS, Scene, SceneError, _adapter, _SceneBase
+from .schema import _SCENES, _SYSTEMS, Scene, SceneError, _adapter, _SceneBase
 
 # ---------------------------------------------------------------------------------------------
 # errors: pydantic's loc -> key, TOML line, allowed values
@@ -102,23 +102,40 @@ def _model_at(model: Any, loc: Sequence[Any]) -> Any:
         field = cur.model_fields.get(str(part))
         if field is None:
             return None
-        ann = field.annotation
-        cands = [ann]
-        for _ in range(6):
-            nxt: list[Any] = []
-            for c in cands:
-                args = typing.get_args(c)
-                nxt.extend(args if args else [c])
-            cands = nxt
-        models = list(dict.fromkeys(c for c in cands
-                                    if isinstance(c, type) and issubclass(c, BaseModel)))  # fmt: skip
+        models = _models_in(field.annotation)
         cur = models[0] if len(models) == 1 else None
         members = models if len(models) > 1 else []
     return cur
 
 
-_KIND_TAGS = ("continuous", "mv", "mv_algorithm2", "mv_algorithm1", "discrete", "bvp",
-              "gradient_descent", "msa", "gradient", "shooting")  # fmt: skip
+def _models_in(ann: Any) -> list[type[BaseModel]]:
+    """The pydantic models in an annotation (through unions, Annotated, tuples, dicts)."""
+    cands = [ann]
+    for _ in range(6):
+        nxt: list[Any] = []
+        for c in cands:
+            args = typing.get_args(c)
+            nxt.extend(args if args else [c])
+        cands = nxt
+    return list(dict.fromkeys(c for c in cands
+                              if isinstance(c, type) and issubclass(c, BaseModel)))  # fmt: skip
+
+
+def _kind_tags() -> set[str]:
+    """The ``kind`` of every integrator of the registered systems (and of their second runs)."""
+    tags: set[str] = set()
+    todo: list[type[BaseModel]] = list(_SCENES)
+    seen: set[type[BaseModel]] = set()
+    while todo:
+        model = todo.pop()
+        if model in seen:
+            continue
+        seen.add(model)
+        if "kind" in model.model_fields:
+            tags.update(str(a) for a in typing.get_args(model.model_fields["kind"].annotation))
+        for field in model.model_fields.values():
+            todo.extend(_models_in(field.annotation))
+    return tags
 
 
 def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
@@ -128,8 +145,9 @@ def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
            and str(x) not in ("int", "[compare]", "[[compare]]")]  # fmt: skip
     if out and system is not None and out[0] == system:
         out = out[1:]
+    kinds = _kind_tags()
     for i in range(len(out) - 1):
-        if out[i] == "integrator" and out[i + 1] in _KIND_TAGS:
+        if out[i] == "integrator" and out[i + 1] in kinds:
             out.pop(i + 1)
             break
     if len(out) > 2 and out[0] == "observables" and out[2] in ("[key]",):

@@ -22,8 +22,6 @@ from .schema import Scene, When, _problem
 
 #: the modules of the scene machinery a run goes through (their source enters the cache key)
 _CORE_MODULES = ("scenes.schema", "scenes.parse", "scenes.plan", "scenes.run")
-#: the state variables of the systems: never listed among the diagnostics not asked for
-_STATE_NAMES = frozenset({"Q", "M", "P", "B", "x", "p", "states", "K", "beta"})
 #: a diagnostic observable -> the generated kernel that evaluates it
 DIAGNOSTIC_KERNELS = {
     "energy": "rigid_body.kinetic_energy", "casimirs": "rigid_body.casimir_traces",
@@ -311,7 +309,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     obs = sc.observables
     skipped: list[tuple[str, str]] = []
     notes: list[str] = []
-    state_names = _STATE_NAMES | set(type(sc).STATE_OBSERVABLES)
+    state_names = set(type(sc).STATE_OBSERVABLES)
     not_asked = sorted(o for o in set(type(sc).OBSERVABLES) - set(obs) - state_names
                        if not o.endswith("_gap"))  # fmt: skip
     if not_asked:

@@ -247,7 +247,7 @@ class _SceneBase(_Model):
     #: observable -> the effect it needs (or None)
     OBSERVABLES: ClassVar[dict[str, str | None]] = {}
 
-    #: observables that are state variables, not diagnostics (a registered system lists its own)
+    #: observables that are state variables, not diagnostics: never listed as not asked for
     STATE_OBSERVABLES: ClassVar[tuple[str, ...]] = ()
     #: the label of the record axis in plots ("t", or "step" for training)
     RECORD_AXIS: ClassVar[str] = "t"

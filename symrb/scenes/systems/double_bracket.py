@@ -84,6 +84,7 @@ class DoubleBracketScene(_SceneBase):
     """
 
     SINGLE_SAMPLE: ClassVar[bool] = True
+    STATE_OBSERVABLES = ("x",)
     OBSERVABLES = {"x": None, "potential": None, "pairing": None, "casimirs": None}
     system: Literal["double_bracket"]
     parameters: OrbitParameters = OrbitParameters()

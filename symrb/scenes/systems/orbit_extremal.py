@@ -64,6 +64,7 @@ class OrbitExtremalScene(_SceneBase):
 
     EFFECTS = ("terminal_cost", "potential", "samples", "costates")
     REQUIRED = ("terminal_cost", "potential")
+    STATE_OBSERVABLES = ("x", "p")
     OBSERVABLES = {
         "x": None, "u": None, "p": "costates", "pairing": None, "second_term": None,
         "db_distance": None, "db_second_term": None, "sample_pairings": "samples",

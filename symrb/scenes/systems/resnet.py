@@ -103,6 +103,7 @@ class ResNetScene(_SceneBase):
 
     EFFECTS = ("terminal_cost", "costates")
     RECORD_AXIS = "step"
+    STATE_OBSERVABLES = ("states", "K", "beta")
     OBSERVABLES = {
         "states": None, "K": None, "beta": None, "accuracy": None, "test_accuracy": None,
         "loss": "terminal_cost", "costates": "costates",

@@ -98,6 +98,7 @@ class RigidBodyScene(_ComparedBody):
     """
 
     EFFECTS = ("attitude",)
+    STATE_OBSERVABLES = ("Q", "M")
     OBSERVABLES = {
         "M": None, "Omega": None, "energy": None, "casimirs": None, "manakov": None,
         "lax_spectrum": None, "Q": "attitude", "orthogonality": "attitude", "M_gap": None,

@@ -170,10 +170,10 @@ class SONetworkScene(_SceneBase):
         "loss": "terminal_cost", "residual": None, "U": None, "Q": None, "costates": "costates",
         "extremal_residual": None, "iterations": None, "converged": None,
     }  # fmt: skip
-    # what the trainers return anyway (Q and extremal_residual cost sweeps of their own and are
-    # reported as not asked for; the costates have an entry of their own)
+    # what the trainers return anyway, and Q, which has an entry of its own among the skipped
+    # (extremal_residual costs sweeps of its own and is reported as not asked for)
     STATE_OBSERVABLES: ClassVar[tuple[str, ...]] = (
-        "U", "loss", "residual", "iterations", "converged", "costates",
+        "U", "loss", "residual", "iterations", "converged", "costates", "Q",
     )  # fmt: skip
     system: Literal["so_network"]
     parameters: SONetworkParameters = SONetworkParameters()
