@@ -264,6 +264,17 @@ def _fixed_step_cost(steps: int, flops: float, per: float, how: str = "") -> dic
             "formula": f"{steps} steps x ~{_fmt_seconds(per)}{how}"}  # fmt: skip
 
 
+def _fixed_step_plan(
+    fixed: tuple[int, int, dict[str, tuple[int, ...]]], route: str, propagated: tuple[str, ...],
+    kernels: tuple[str, ...], cost: dict[str, Any], modules: tuple[str, ...],
+) -> SystemPlan:  # fmt: skip
+    """The plan of a fixed-step map, ``fixed`` from :func:`_fixed_step_save`."""
+    steps, every, index = fixed
+    return SystemPlan(route=route, propagated=propagated, kernels=kernels,
+                      save={"steps": steps, "save_every": every}, index=index, cost=cost,
+                      modules=modules)  # fmt: skip
+
+
 def diagnostic_kernels(asked: Iterable[str]) -> tuple[str, ...]:
     """The kernels of the diagnostic observables among ``asked``, in the order of their names."""
     return tuple(DIAGNOSTIC_KERNELS[o] for o in sorted(asked) if o in DIAGNOSTIC_KERNELS)

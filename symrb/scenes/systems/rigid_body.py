@@ -26,6 +26,7 @@ from ..plan import (
     _continuous_save,
     _est_continuous,
     _fixed_step_cost,
+    _fixed_step_plan,
     _fixed_step_save,
     diagnostic_kernels,
 )
@@ -47,6 +48,9 @@ from ._body import (
 from ._compare import _Q_ONLY, Compares, _ComparedBody
 
 _MODULES = _RB_MODULES + ("scenes.systems._compare", "scenes.systems.rigid_body")
+#: the modules of the Moser-Veselov engine, and of the paper's MV-Algorithms
+_MV_MODULES = ("engine", "discrete", "solvers", "_compiled", "_generated.discrete_rigid_body")
+_MV_ALGORITHM_MODULES = ("discrete", "solvers", "_generated.discrete_rigid_body", "_progress")
 
 
 class RigidBodyMomentum(Flow):
@@ -184,7 +188,7 @@ def _plan_continuous(sc: RigidBodyScene, notes: list[str]) -> SystemPlan:
 def _plan_mv(
     sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
 ) -> SystemPlan:
-    steps, every, index = fixed
+    steps = fixed[0]
     integ: Any = sc.integrator
     n = sc.parameters.n
     attitude = "attitude" in sc.effects
@@ -210,42 +214,19 @@ def _plan_mv(
         kernels += ("discrete_rigid_body.mv3_preprocessed_lam",)
     per = 3e-6 if n == 3 else 8 * 2.0 * n**3 / 1.5e9 + 40e-6
     flops = 60.0 if n == 3 else 16.0 * n**3
-    return SystemPlan(
-        route=route,
-        propagated=propagated,
-        kernels=kernels,
-        save={"steps": steps, "save_every": every},
-        index=index,
-        cost=_fixed_step_cost(
-            steps,
-            flops,
-            per,
-            " a step (n = 3: one fused kernel call; else ~4 solver sweeps of two n^3 products)",
-        ),  # fmt: skip
-        modules=_MODULES
-        + (
-            "engine",
-            "discrete",
-            "solvers",
-            "_compiled",
-            "_generated.discrete_rigid_body",
-        ),  # fmt: skip
-    )
+    how = " a step (n = 3: one fused kernel call; else ~4 solver sweeps of two n^3 products)"
+    cost = _fixed_step_cost(steps, flops, per, how)
+    return _fixed_step_plan(fixed, route, propagated, kernels, cost, _MODULES + _MV_MODULES)
 
 
 def _plan_mv_algorithm(
     sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
 ) -> SystemPlan:
     """MV-Algorithm 1, or MV-Algorithm 2 from (Q0, h M0) or from (Q1, M1)."""
-    steps, every, index = fixed
+    steps, every, _ = fixed
     integ: Any = sc.integrator
     n = sc.parameters.n
-    modules: tuple[str, ...] = _MODULES + (
-        "discrete",
-        "solvers",
-        "_generated.discrete_rigid_body",
-        "_progress",
-    )
+    modules: tuple[str, ...] = _MODULES + _MV_ALGORITHM_MODULES
     first = ("symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1) for Q_1 and M_1 = "
              "h (Q0^T P0 - P0^T Q0) (the first step, D12), then ")  # fmt: skip
     kernels: tuple[str, ...]
@@ -279,21 +260,14 @@ def _plan_mv_algorithm(
         modules += ("_generated.symmetric_rigid_body",)
         kernels += ("symmetric_rigid_body.symmetric_momentum",)
     per = 40e-6 + 16.0 * n**3 / 1.5e9
-    return SystemPlan(
-        route=route,
-        propagated=propagated,
-        kernels=kernels,
-        save={"steps": steps, "save_every": every},
-        index=index,
-        cost=_fixed_step_cost(steps, 16.0 * n**3, per, " (one solve of J_D(Omega^T) = M a step)"),
-        modules=modules,
-    )
+    cost = _fixed_step_cost(steps, 16.0 * n**3, per, " (one solve of J_D(Omega^T) = M a step)")
+    return _fixed_step_plan(fixed, route, propagated, kernels, cost, modules)
 
 
 def _plan_discrete(
     sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
 ) -> SystemPlan:
-    steps, every, index = fixed
+    steps = fixed[0]
     integ: Any = sc.integrator
     n = sc.parameters.n
     if "attitude" not in sc.effects:
@@ -301,15 +275,12 @@ def _plan_discrete(
         notes.append("the symmetric representation's state is (Q, P): Q is "
                      "propagated by the map itself, though not recorded")  # fmt: skip
     per = 60e-6 + 30.0 * n**3 / 1.5e9
-    return SystemPlan(
-        route=f"symrb.discrete_rigid_body_flow(h={integ.h:g})",
-        propagated=("Q", "P"),
-        kernels=("symmetric_rigid_body.symmetric_momentum",),
-        save={"steps": steps, "save_every": every},
-        index=index,
-        cost=_fixed_step_cost(steps, 30.0 * n**3, per, " (a Newton solve of J_D(U) = hM a step)"),
-        modules=_MODULES + _SYMMETRIC_MAP_MODULES,
-    )
+    return _fixed_step_plan(
+        fixed, f"symrb.discrete_rigid_body_flow(h={integ.h:g})", ("Q", "P"),
+        ("symmetric_rigid_body.symmetric_momentum",),
+        _fixed_step_cost(steps, 30.0 * n**3, per, " (a Newton solve of J_D(U) = hM a step)"),
+        _MODULES + _SYMMETRIC_MAP_MODULES,
+    )  # fmt: skip
 
 
 _PlanFixed = Callable[[RigidBodyScene, list[tuple[str, str]], list[str], _Fixed], SystemPlan]

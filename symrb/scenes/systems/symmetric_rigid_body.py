@@ -24,6 +24,7 @@ from ..plan import (
     Plan,
     SystemPlan,
     _fixed_step_cost,
+    _fixed_step_plan,
     _fixed_step_save,
     diagnostic_kernels,
 )
@@ -142,15 +143,11 @@ class SymmetricRigidBodyScene(_ComparedBody):
                 raise _problem("integrator.kind", "the learning version (effect 'samples') has "
                                "no discrete map here", ["continuous"])  # fmt: skip
             per = 60e-6 + 30.0 * p.n**3 / 1.5e9
-            part = SystemPlan(
-                route=f"symrb.symmetric_flow(h={integ.h:g})",
-                propagated=("Q", "P"),
-                kernels=("symmetric_rigid_body.symmetric_momentum",),
-                save={"steps": steps, "save_every": every},
-                index=index,
-                cost=_fixed_step_cost(steps, 30.0 * p.n**3, per),
-                modules=_MODULES + _SYMMETRIC_MAP_MODULES,
-            )
+            part = _fixed_step_plan(
+                (steps, every, index), f"symrb.symmetric_flow(h={integ.h:g})", ("Q", "P"),
+                ("symmetric_rigid_body.symmetric_momentum",),
+                _fixed_step_cost(steps, 30.0 * p.n**3, per), _MODULES + _SYMMETRIC_MAP_MODULES,
+            )  # fmt: skip
         elif samples:
             part = body_continuous_plan(self, "MultiSampleSymmetricRigidBody", (
                 "symmetric_rigid_body.control_rhs", "symmetric_rigid_body.symmetric_momentum"),
