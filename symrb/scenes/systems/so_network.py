@@ -11,19 +11,23 @@ the three trainers of :mod:`symrb.learning`.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 from pydantic_core.core_schema import ValidationInfo
 
-from .._validate import Array
-from . import _core
+from ... import learning
+from ..._validate import Array
+from ...errors import InputError
+from ..plan import Plan, SystemPlan, _fmt_seconds
+from ..schema import TrainingHorizon, Vector, When, _invalid, _Model, _SceneBase, register_system
 
 __all__ = ["SONetworkScene"]
 
 
-class SONetworkParameters(_core._Model):
+class SONetworkParameters(_Model):
     r"""The task and the network: ``symrb.so_rotation_task(n, samples, angle, noise, seed)``
     (its defaults), ``layers`` controls :math:`U_k`, started from :math:`U_k = I`; with the
     effect ``running_cost`` its weight ``alpha`` (> 0, default 1) and the diagonal ``lam`` of
@@ -35,21 +39,21 @@ class SONetworkParameters(_core._Model):
     noise: float = Field(default=0.05, ge=0)
     seed: int = 0
     layers: int = Field(default=4, ge=1)
-    lam: _core.Vector | None = None
+    lam: Vector | None = None
     alpha: float | None = Field(default=None, gt=0)
 
     @field_validator("lam")
     @classmethod
-    def _lam_of_n(cls, value: _core.Vector | None, info: ValidationInfo) -> _core.Vector | None:
+    def _lam_of_n(cls, value: Vector | None, info: ValidationInfo) -> Vector | None:
         n = info.data.get("n")
         if value is not None and n is not None and len(value) != n:
-            raise ValueError(f"lam must have n = {n} entries, got {len(value)}")
+            raise InputError(f"lam must have n = {n} entries, got {len(value)}")
         if value is not None and not all(x > 0 for x in value):
-            raise ValueError(f"lam must be positive, got {list(value)}")
+            raise InputError(f"lam must be positive, got {list(value)}")
         return value
 
 
-class SOGradient(_core._Model):
+class SOGradient(_Model):
     """``symrb.train_so_gradient``: Riemannian gradient descent, step ``lr`` (the first trial
     step with ``line_search``, Armijo backtracking), heavy-ball ``momentum`` in [0, 1), the
     ``retraction`` (``"cayley"`` or ``"exp"``); stops when max_k ||G_k||_F <= ``tol``."""
@@ -62,7 +66,7 @@ class SOGradient(_core._Model):
     tol: float = Field(default=1e-10, gt=0)
 
 
-class SOMSA(_core._Model):
+class SOMSA(_Model):
     """``symrb.train_so_msa``: the extended method of successive approximations, penalty
     ``rho`` >= 0 (0: the basic MSA), each layer's step a Procrustes problem; stops when
     max_k ||G_k||_F <= ``tol``."""
@@ -72,7 +76,7 @@ class SOMSA(_core._Model):
     tol: float = Field(default=1e-10, gt=0)
 
 
-class SOShooting(_core._Model):
+class SOShooting(_Model):
     """``symrb.train_so_shooting``: the extremal equations solved for M_0 by Powell's hybrid
     method to the relative tolerance ``tol``; the horizon's ``steps`` is its budget of
     evaluations (``maxfev``)."""
@@ -84,7 +88,7 @@ class SOShooting(_core._Model):
     @classmethod
     def _maxfev_is_the_horizon(cls, data: Any) -> Any:
         if isinstance(data, dict) and "maxfev" in data:
-            raise _core._invalid(
+            raise _invalid(
                 ("maxfev",), "the budget of evaluations is the horizon: set horizon.steps = "
                 f"{data['maxfev']!r} instead", ["kind", "tol"],
             )  # fmt: skip
@@ -102,8 +106,8 @@ _SWEEP_KERNELS = (
 )
 
 
-@_core.register_system
-class SONetworkScene(_core._SceneBase):
+@register_system
+class SONetworkScene(_SceneBase):
     r"""The SO(n) network of the learning theorem (claim D9) trained on
     :func:`symrb.so_rotation_task` from :math:`U_k = I`.
 
@@ -166,21 +170,21 @@ class SONetworkScene(_core._SceneBase):
         "loss": "terminal_cost", "residual": None, "U": None, "Q": None, "costates": "costates",
         "extremal_residual": None, "iterations": None, "converged": None,
     }  # fmt: skip
-    # what the trainers return anyway (Q and extremal_residual cost sweeps of their own and are
-    # reported as not asked for; the costates have an entry of their own)
+    # what the trainers return anyway, and Q, which has an entry of its own among the skipped
+    # (extremal_residual costs sweeps of its own and is reported as not asked for)
     STATE_OBSERVABLES: ClassVar[tuple[str, ...]] = (
-        "U", "loss", "residual", "iterations", "converged", "costates",
+        "U", "loss", "residual", "iterations", "converged", "costates", "Q",
     )  # fmt: skip
     system: Literal["so_network"]
     parameters: SONetworkParameters = SONetworkParameters()
     integrator: Annotated[SOGradient | SOMSA | SOShooting, Field(discriminator="kind")]
-    horizon: _core.TrainingHorizon
+    horizon: TrainingHorizon
     observables: dict[
         Literal[
             "loss", "residual", "U", "Q", "costates", "extremal_residual", "iterations",
             "converged",
         ],
-        _core.When,
+        When,
     ]  # fmt: skip
 
     @model_validator(mode="after")
@@ -188,30 +192,30 @@ class SONetworkScene(_core._SceneBase):
         running = "running_cost" in self.effects
         for key in ("alpha", "lam"):
             if not running and key in self.parameters.model_fields_set:
-                raise _core._invalid(
+                raise _invalid(
                     ("parameters", key), f"{key} belongs to the running cost alpha tr(Lambda "
                     "(I - U_k)), which is off: add 'running_cost' to the effects",
                     [k for k in SONetworkParameters.model_fields if k not in ("alpha", "lam")],
                 )  # fmt: skip
         if isinstance(self.integrator, SOShooting):
             if not running:
-                raise _core._invalid(
+                raise _invalid(
                     ("integrator", "kind"), "shooting solves alpha J_D(U_k) = M_k for the "
                     "controls: it needs the effect 'running_cost' (alpha > 0)",
                     ["gradient", "msa"],
                 )  # fmt: skip
             if self.horizon.steps < 1:
-                raise _core._invalid(
+                raise _invalid(
                     ("horizon", "steps"), "shooting needs a budget of at least one evaluation"
                 )  # fmt: skip
         for name, when in self.observables.items():
             if name in _END_ONLY and not when.end:
-                raise _core._invalid(
+                raise _invalid(
                     ("observables", name), f"only the final controls are kept: record {name} "
                     "at the end", ["end"],
                 )  # fmt: skip
             if name not in _END_ONLY and not (when.end or when.every is not None):
-                raise _core._invalid(
+                raise _invalid(
                     ("observables", name), f"{name} is recorded per iteration: give every (or "
                     "end), not times or points", ["end", "every"],
                 )  # fmt: skip
@@ -226,131 +230,45 @@ class SONetworkScene(_core._SceneBase):
 
     def _inputs(self) -> dict[str, Any]:
         """``Q0``, ``targets`` (the task), ``lam``, ``alpha`` and the start ``U0`` (identities)."""
-        from ..learning import so_rotation_task
-
         p = self.parameters
-        Q0, targets = so_rotation_task(p.n, samples=p.samples, angle=p.angle, noise=p.noise,
+        Q0, targets = learning.so_rotation_task(p.n, samples=p.samples, angle=p.angle, noise=p.noise,
                                        seed=p.seed)  # fmt: skip
         lam = np.asarray(p.lam, dtype=float) if p.lam is not None else np.linspace(1.0, 2.0, p.n)
         return {"Q0": Q0, "targets": targets, "lam": lam, "alpha": self.alpha,
                 "U0": np.tile(np.eye(p.n), (p.layers, 1, 1))}  # fmt: skip
 
-    def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> _core.SystemPlan:
-        p, integ, steps = self.parameters, self.integrator, self.horizon.steps
-        n, N, M = p.n, p.layers, p.samples
+    def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> SystemPlan:
+        steps = self.horizon.steps
         asked = set(self.observables)
-        layer = 2.0 * M * n**3  # one layer, costate step or sample sum on the stacked samples
-        call = 5e-6  # the overhead of a kernel call
-        sweep = f"a forward sweep over the {N} layers and a backward costate sweep"
-        flops = 3 * N * layer
-        seconds = 3 * N * call
-        kernels: tuple[str, ...] = _SWEEP_KERNELS
-        modules: tuple[str, ...] = (
-            "scenes._so_network", "learning", "algebra", "_validate", "_progress",
-            "_generated.discrete_rigid_body",
-        )  # fmt: skip
-        propagated: tuple[str, ...] = (
-            f"layers Q^a_k ({M} samples x {N + 1} layers, stacked by rows)",
-            "costates P^a_k (backward sweep)", f"controls U_k ({N} in SO({n}))",
-        )  # fmt: skip
-        if isinstance(integ, SOGradient):
-            route = (f"symrb.train_so_gradient(steps={steps}, lr={integ.lr:g}, "
-                     f"line_search={integ.line_search}, momentum={integ.momentum:g}, "
-                     f"retraction={integ.retraction!r}, tol={integ.tol:g}) "
-                     "from U_k = I")  # fmt: skip
-            per = f"{sweep} (the gradients G_k), then U_k {integ.retraction}(-t G_k)"
-            flops += N * 10.0 * n**3
-            seconds += N * 2 * call
-            if integ.line_search:
-                per += " with Armijo backtracking (a forward sweep per trial step, ~1.5)"
-                flops += 1.5 * N * layer
-                seconds += 1.5 * N * call
-            what = "iteration"
-        elif isinstance(integ, SOMSA):
-            route = (f"symrb.train_so_msa(steps={steps}, rho={integ.rho:g}, tol={integ.tol:g}) "
-                     "from U_k = I")  # fmt: skip
-            per = (f"{sweep} keeping all {N + 1} costates, then per layer the Procrustes "
-                   "problem max tr(A_k U) over SO(n): one SVD (so_procrustes)")  # fmt: skip
-            flops += N * ((3 if integ.rho else 1) * layer + 30.0 * n**3)
-            seconds += N * 1e-4
-            what = "iteration"
-        else:
-            d = n * (n - 1) // 2
-            route = (f"symrb.train_so_shooting(layers={N}, tol={integ.tol:g}, maxfev={steps}) "
-                     f"from M_0 = 0 (U_k = I)")  # fmt: skip
-            per = (f"{N} Moser-Veselov solves alpha J_D(U_k) = M_k, M_(k+1) = U_k^T M_k U_k, "
-                   f"then {sweep} and the momentum of the costates at k = 0")  # fmt: skip
-            propagated = (f"momentum M_0 (n(n-1)/2 = {d} unknowns)", *propagated)
-            kernels = kernels + (
-                "discrete_rigid_body.jd",
-                "symmetric_rigid_body.symmetric_momentum",
-            )
-            modules += ("solvers", "errors", "_generated.symmetric_rigid_body")
-            flops += N * 60.0 * n**3
-            seconds += N * 8e-4
-            what = "evaluation"
-            notes.append(f"shooting's records count evaluations of F(M_0) on the {d} unknowns "
-                         "(hybr's finite-difference Jacobian included), not iterations; "
-                         f"horizon.steps = {steps} is its maxfev")  # fmt: skip
+        t = _trainer(self, notes)
+        kernels, modules = t.kernels, t.modules
         if "extremal_residual" in asked:
             kernels += ("symmetric_rigid_body.symmetric_momentum", "discrete_rigid_body.jd")
             modules += ("_generated.symmetric_rigid_body",)
-        kernels = tuple(dict.fromkeys(kernels))
-        if not isinstance(integ, SOShooting):
-            notes.append(f"stops once max_k ||G_k||_F <= tol = {integ.tol:g}: the records are "
-                         f"those of the iterations done, at most {steps} + 1")  # fmt: skip
-        notes.append(f"the trainer evaluates the loss and max_k ||G_k||_F at every {what} (its "
-                     "stopping test); only the records asked for are kept")  # fmt: skip
-        extra = []
-        if "extremal_residual" in asked:
-            extra.append("extremal_residual: a forward and a costate sweep and N momenta")
-        if "costates" in asked:
-            extra.append("costates (and Q): a forward and a costate sweep")
-        elif "Q" in asked:
-            extra.append("Q: a forward sweep")
-        if extra:
-            notes.append("at the final controls, " + "; ".join(extra))
-        if not {"Q", "costates"} & asked:
-            skipped.append(("Q (the final layers)", "not asked for: no forward sweep at the end"))
-        if "running_cost" not in self.effects:
-            skipped.append(("running cost alpha tr(Lambda (I - U_k))", "effect 'running_cost' "
-                            "not named: alpha = 0, the loss is the data term alone and fixes "
-                            "only the product U_0 ... U_(N-1)"))  # fmt: skip
-        if "costates" not in asked:
-            keep = ("at most two alive" if isinstance(integ, SOGradient)
-                    else "all N + 1 inside, for the step")  # fmt: skip
-            why = ("effect 'costates' not named" if "costates" not in self.effects
-                   else "not asked for")  # fmt: skip
-            skipped.append(("recording the costates P^a_k", f"{why}: the trainer's sweeps run "
-                            f"(they give G_k; {keep}), no costate leaves it"))  # fmt: skip
-        route += f": each {what} is {per}"
+        _notes_and_skips(self, skipped, notes, t.what)
         budget = max(steps, 1)
         index: dict[str, tuple[int, ...]] = {}
         for name, when in self.observables.items():
             every = when.every
             index[name] = tuple(range(0, steps + 1, every)) if every is not None else (steps,)
         cost = {
-            "flops": budget * flops,
-            "seconds": budget * (seconds + flops / 1.5e9),
-            "formula": f"at most {budget} {what}s x (~{flops:.2g} flops + "
-            f"~{_core._fmt_seconds(seconds)} of kernel calls); it stops at tol, usually much "
+            "flops": budget * t.flops,
+            "seconds": budget * (t.seconds + t.flops / 1.5e9),
+            "formula": f"at most {budget} {t.what}s x (~{t.flops:.2g} flops + "
+            f"~{_fmt_seconds(t.seconds)} of kernel calls); it stops at tol, usually much "
             "earlier",
         }
-        return _core.SystemPlan(
-            route=route,
-            propagated=propagated,
-            kernels=kernels,
+        return SystemPlan(
+            route=f"{t.route}: each {t.what} is {t.per}",
+            propagated=t.propagated,
+            kernels=tuple(dict.fromkeys(kernels)),
             save={"steps": steps},
             index=index,
             cost=cost,
             modules=tuple(dict.fromkeys(modules)),
         )
 
-    def _run(
-        self, plan: _core.Plan, x: dict[str, Any]
-    ) -> tuple[dict[str, Array], dict[str, Array], str]:
-        from .. import learning
-
+    def _run(self, plan: Plan, x: dict[str, Any]) -> tuple[dict[str, Array], dict[str, Array], str]:
         integ, steps = self.integrator, self.horizon.steps
         Q0, T, lam, alpha = x["Q0"], x["targets"], x["lam"], x["alpha"]
         if isinstance(integ, SOGradient):
@@ -397,3 +315,109 @@ class SONetworkScene(_core._SceneBase):
             else:
                 data[name] = np.array([int(res.converged)])
         return times, data, ""
+
+
+@dataclasses.dataclass(frozen=True)
+class _Trainer:
+    """A trainer's part of the plan: its call, one iteration (or evaluation) in words, and the
+    estimated flops and seconds of one."""
+
+    route: str
+    per: str
+    what: str
+    flops: float
+    seconds: float
+    propagated: tuple[str, ...]
+    kernels: tuple[str, ...]
+    modules: tuple[str, ...]
+
+
+def _trainer(sc: SONetworkScene, notes: list[str]) -> _Trainer:
+    """The plan of the scene's trainer (gradient descent, the MSA or shooting)."""
+    p, integ, steps = sc.parameters, sc.integrator, sc.horizon.steps
+    n, N, M = p.n, p.layers, p.samples
+    layer = 2.0 * M * n**3  # one layer, costate step or sample sum on the stacked samples
+    call = 5e-6  # the overhead of a kernel call
+    sweep = f"a forward sweep over the {N} layers and a backward costate sweep"
+    flops = 3 * N * layer
+    seconds = 3 * N * call
+    kernels: tuple[str, ...] = _SWEEP_KERNELS
+    modules: tuple[str, ...] = (
+        "scenes.systems.so_network", "learning", "algebra", "_validate", "_progress",
+        "_generated.discrete_rigid_body",
+    )  # fmt: skip
+    propagated: tuple[str, ...] = (
+        f"layers Q^a_k ({M} samples x {N + 1} layers, stacked by rows)",
+        "costates P^a_k (backward sweep)", f"controls U_k ({N} in SO({n}))",
+    )  # fmt: skip
+    if isinstance(integ, SOGradient):
+        route = (f"symrb.train_so_gradient(steps={steps}, lr={integ.lr:g}, "
+                 f"line_search={integ.line_search}, momentum={integ.momentum:g}, "
+                 f"retraction={integ.retraction!r}, tol={integ.tol:g}) "
+                 "from U_k = I")  # fmt: skip
+        per = f"{sweep} (the gradients G_k), then U_k {integ.retraction}(-t G_k)"
+        flops += N * 10.0 * n**3
+        seconds += N * 2 * call
+        if integ.line_search:
+            per += " with Armijo backtracking (a forward sweep per trial step, ~1.5)"
+            flops += 1.5 * N * layer
+            seconds += 1.5 * N * call
+        what = "iteration"
+    elif isinstance(integ, SOMSA):
+        route = (f"symrb.train_so_msa(steps={steps}, rho={integ.rho:g}, tol={integ.tol:g}) "
+                 "from U_k = I")  # fmt: skip
+        per = (f"{sweep} keeping all {N + 1} costates, then per layer the Procrustes "
+               "problem max tr(A_k U) over SO(n): one SVD (so_procrustes)")  # fmt: skip
+        flops += N * ((3 if integ.rho else 1) * layer + 30.0 * n**3)
+        seconds += N * 1e-4
+        what = "iteration"
+    else:
+        d = n * (n - 1) // 2
+        route = (f"symrb.train_so_shooting(layers={N}, tol={integ.tol:g}, maxfev={steps}) "
+                 f"from M_0 = 0 (U_k = I)")  # fmt: skip
+        per = (f"{N} Moser-Veselov solves alpha J_D(U_k) = M_k, M_(k+1) = U_k^T M_k U_k, "
+               f"then {sweep} and the momentum of the costates at k = 0")  # fmt: skip
+        propagated = (f"momentum M_0 (n(n-1)/2 = {d} unknowns)", *propagated)
+        kernels = kernels + ("discrete_rigid_body.jd", "symmetric_rigid_body.symmetric_momentum")
+        modules += ("solvers", "errors", "_generated.symmetric_rigid_body")
+        flops += N * 60.0 * n**3
+        seconds += N * 8e-4
+        what = "evaluation"
+        notes.append(f"shooting's records count evaluations of F(M_0) on the {d} unknowns "
+                     "(hybr's finite-difference Jacobian included), not iterations; "
+                     f"horizon.steps = {steps} is its maxfev")  # fmt: skip
+    return _Trainer(route, per, what, flops, seconds, propagated, kernels, modules)
+
+
+def _notes_and_skips(
+    sc: SONetworkScene, skipped: list[tuple[str, str]], notes: list[str], what: str
+) -> None:
+    """What the plan says about the stopping test, the sweeps at the end and what is skipped."""
+    integ, steps, asked = sc.integrator, sc.horizon.steps, set(sc.observables)
+    if not isinstance(integ, SOShooting):
+        notes.append(f"stops once max_k ||G_k||_F <= tol = {integ.tol:g}: the records are "
+                     f"those of the iterations done, at most {steps} + 1")  # fmt: skip
+    notes.append(f"the trainer evaluates the loss and max_k ||G_k||_F at every {what} (its "
+                 "stopping test); only the records asked for are kept")  # fmt: skip
+    extra = []
+    if "extremal_residual" in asked:
+        extra.append("extremal_residual: a forward and a costate sweep and N momenta")
+    if "costates" in asked:
+        extra.append("costates (and Q): a forward and a costate sweep")
+    elif "Q" in asked:
+        extra.append("Q: a forward sweep")
+    if extra:
+        notes.append("at the final controls, " + "; ".join(extra))
+    if not {"Q", "costates"} & asked:
+        skipped.append(("Q (the final layers)", "not asked for: no forward sweep at the end"))
+    if "running_cost" not in sc.effects:
+        skipped.append(("running cost alpha tr(Lambda (I - U_k))", "effect 'running_cost' "
+                        "not named: alpha = 0, the loss is the data term alone and fixes "
+                        "only the product U_0 ... U_(N-1)"))  # fmt: skip
+    if "costates" not in asked:
+        keep = ("at most two alive" if isinstance(integ, SOGradient)
+                else "all N + 1 inside, for the step")  # fmt: skip
+        why = ("effect 'costates' not named" if "costates" not in sc.effects
+               else "not asked for")  # fmt: skip
+        skipped.append(("recording the costates P^a_k", f"{why}: the trainer's sweeps run "
+                        f"(they give G_k; {keep}), no costate leaves it"))  # fmt: skip

@@ -9,13 +9,16 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from .._validate import Array
-from . import _core
+from ... import orbits
+from ..._validate import Array
+from ...errors import InputError, NotConvergedError
+from ..plan import Plan, SystemPlan, _continuous_save, _est_continuous
+from ..schema import TimeHorizon, When, _Model, _SceneBase, register_system
 
 __all__ = ["TodaScene"]
 
 
-class TodaParameters(_core._Model):
+class TodaParameters(_Model):
     """The Toda matrix L(0): its size ``k`` and either its diagonal ``a`` (k entries) and
     off-diagonal ``b`` (k - 1 entries), or a random draw from ``seed``:
     ``rng = numpy.random.default_rng(seed)``, ``a = rng.standard_normal(k)``, then
@@ -32,7 +35,7 @@ class TodaParameters(_core._Model):
     def _a_has_k(cls, value: tuple[float, ...] | None, info: ValidationInfo) -> Any:
         k = info.data.get("k")
         if value is not None and k is not None and len(value) != k:
-            raise ValueError(f"the diagonal needs k = {k} entries, got {len(value)}")
+            raise InputError(f"the diagonal needs k = {k} entries, got {len(value)}")
         return value
 
     @field_validator("b")
@@ -40,25 +43,25 @@ class TodaParameters(_core._Model):
     def _b_has_k_minus_1(cls, value: tuple[float, ...] | None, info: ValidationInfo) -> Any:
         k = info.data.get("k")
         if value is not None and k is not None and len(value) != k - 1:
-            raise ValueError(f"the off-diagonal needs k - 1 = {k - 1} entries, got {len(value)}")
+            raise InputError(f"the off-diagonal needs k - 1 = {k - 1} entries, got {len(value)}")
         return value
 
     @field_validator("seed")
     @classmethod
     def _seed_draws(cls, value: int, info: ValidationInfo) -> int:
         if info.data.get("a") is not None or info.data.get("b") is not None:
-            raise ValueError("a and b give L(0): seed draws nothing; remove seed")
+            raise InputError("a and b give L(0): seed draws nothing; remove seed")
         return value
 
     @model_validator(mode="after")
     def _both_or_neither(self) -> TodaParameters:
         if (self.a is None) != (self.b is None):
-            raise ValueError("give both a and b (the diagonal and the off-diagonal of L(0)), "
+            raise InputError("give both a and b (the diagonal and the off-diagonal of L(0)), "
                              "or neither (a random draw from seed)")  # fmt: skip
         return self
 
 
-class TodaIVP(_core._Model):
+class TodaIVP(_Model):
     """``symrb.toda_flow`` (``scipy.integrate.solve_ivp``, DOP853) with ``rtol``, ``atol``."""
 
     kind: Literal["continuous"]
@@ -66,8 +69,8 @@ class TodaIVP(_core._Model):
     atol: float = Field(default=1e-12, ge=0)
 
 
-@_core.register_system
-class TodaScene(_core._SceneBase):
+@register_system
+class TodaScene(_SceneBase):
     r"""The Toda lattice (claim S14): the double bracket flow :math:`\dot L = -[L, [L, D]]`,
     :math:`D = \operatorname{diag}(1, \dots, k)`, from a symmetric tridiagonal :math:`L(0)`
     (:func:`symrb.toda_flow`).
@@ -96,8 +99,8 @@ class TodaScene(_core._SceneBase):
     system: Literal["toda"]
     parameters: TodaParameters = TodaParameters()
     integrator: TodaIVP
-    horizon: _core.TimeHorizon
-    observables: dict[Literal["L", "a", "b", "spectrum", "off_band"], _core.When]
+    horizon: TimeHorizon
+    observables: dict[Literal["L", "a", "b", "spectrum", "off_band"], When]
 
     def _inputs(self) -> dict[str, Any]:
         """``a0``, ``b0`` (the band of L(0)) and ``L0``."""
@@ -110,11 +113,11 @@ class TodaScene(_core._SceneBase):
             b0 = rng.uniform(0.4, 1.0, p.k - 1)
         return {"a0": a0, "b0": b0, "L0": np.diag(a0) + np.diag(b0, 1) + np.diag(b0, -1)}
 
-    def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> _core.SystemPlan:
+    def _plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> SystemPlan:
         integ = self.integrator
-        t_eval, index = _core._continuous_save(self)
+        t_eval, index = _continuous_save(self)
         k = self.parameters.k
-        return _core.SystemPlan(
+        return SystemPlan(
             route=f"symrb.toda_flow(rtol={integ.rtol:g}, atol={integ.atol:g}): the double "
             f"bracket flow L' = -[L, [L, D]], D = diag(1, ..., {k}), on the whole {k} x {k} "
             "matrix",
@@ -122,21 +125,16 @@ class TodaScene(_core._SceneBase):
             kernels=("adjoint_orbits.double_bracket_rhs",),
             save={"t_eval": [float(t) for t in t_eval]},
             index=index,
-            cost=_core._est_continuous(self.horizon.T, integ.rtol, 1.0, 8.0 * k**3),
-            modules=("scenes._toda", "orbits", "_validate", "_generated.adjoint_orbits"),
+            cost=_est_continuous(self.horizon.T, integ.rtol, 1.0, 8.0 * k**3),
+            modules=("scenes.systems.toda", "orbits", "_validate", "_generated.adjoint_orbits"),
         )
 
-    def _run(
-        self, plan: _core.Plan, x: dict[str, Any]
-    ) -> tuple[dict[str, Array], dict[str, Array], str]:
-        from ..errors import NotConvergedError
-        from ..orbits import toda_flow
-
+    def _run(self, plan: Plan, x: dict[str, Any]) -> tuple[dict[str, Array], dict[str, Array], str]:
         t_eval = np.asarray(plan.save["t_eval"])
         integ = self.integrator
         failure = ""
         try:
-            Ls = toda_flow(x["a0"], x["b0"], t_eval, rtol=integ.rtol, atol=integ.atol)
+            Ls = orbits.toda_flow(x["a0"], x["b0"], t_eval, rtol=integ.rtol, atol=integ.atol)
         except NotConvergedError as exc:
             failure, t_eval = str(exc), t_eval[:0]
             Ls = np.empty((0,) + x["L0"].shape)
