@@ -14,15 +14,10 @@ from pydantic import Field, model_validator
 from ... import _validate as v
 from ..._validate import Array
 from ...algebra import J_inv, pairing, random_lam, random_SO, random_so
-from ...continuous import (
-    Flow,
-    gl_hamiltonian,
-    integrate,
-    multi_sample_control,
-    symmetric_momentum,
-)
+from ...continuous import Flow, integrate
 from ...errors import InputError
 from ...rigid_body import casimir_traces, kinetic_energy, manakov_integrals
+from ...symmetric import gl_hamiltonian, multi_sample_control, symmetric_momentum
 from ..plan import Plan, SystemPlan, _continuous_save, _est_continuous
 from ..schema import Matrix, SceneError, Vector, _Model, _SceneBase, _skew_from
 

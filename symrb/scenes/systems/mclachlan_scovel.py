@@ -7,7 +7,7 @@ import dataclasses
 from typing import Any, Literal
 
 from ..._validate import Array
-from ...continuous import McLachlanScovel
+from ...symmetric import McLachlanScovel
 from ..plan import Plan, SystemPlan, diagnostic_kernels
 from ..schema import TimeHorizon, When, register_system
 from ._body import (

@@ -17,9 +17,9 @@ from ..._generated import rigid_body as _rb
 from ..._validate import Array
 from ...algebra import _Jinv_weights
 from ...continuous import Flow, RigidBody
-from ...discrete import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2, symmetric_flow
 from ...engine import MVStepper, mv_flow
 from ...errors import NotConvergedError, OutOfDomainError
+from ...paper import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2, symmetric_flow
 from ..plan import (
     Plan,
     SystemPlan,

@@ -12,14 +12,14 @@ from pydantic import Field, model_validator
 
 from ..._validate import Array
 from ...algebra import random_SO
-from ...continuous import (
+from ...errors import InputError
+from ...paper import symmetric_flow
+from ...symmetric import (
     MultiSampleSymmetricRigidBody,
     P_from_M,
     SymmetricRigidBody,
     symmetric_momentum,
 )
-from ...discrete import symmetric_flow
-from ...errors import InputError
 from ..plan import (
     Plan,
     SystemPlan,
