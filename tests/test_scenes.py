@@ -438,6 +438,15 @@ def test_key_depends_on_the_code(monkeypatch) -> None:
     assert "engine" not in plan_scene(sc).modules
 
 
+def test_key_covers_every_file_of_a_package() -> None:
+    """A plan naming a package (orbits, learning, rigid_body) hashes all of its files, so an edit
+    of ``symrb/orbits/bvp.py`` changes the key of an orbit scene."""
+    import symrb.orbits
+
+    files = {Path(p).name for p in scenes_store._module_files(symrb.orbits)}
+    assert {"__init__.py", "bvp.py", "double_bracket.py"} <= files
+
+
 def test_damaged_entry_is_recomputed(tmp_path) -> None:
     sc = load_scene(BASE)
     a = run_scene(sc, cache=tmp_path)

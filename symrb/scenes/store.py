@@ -46,13 +46,22 @@ def _file_digest(path: str) -> str:
     return _DIGESTS[key]
 
 
+def _module_files(mod: object) -> list[str]:
+    """The source files of a module; of a package, every ``.py`` file under it."""
+    path = getattr(mod, "__file__", None)
+    if not path:
+        return []
+    if hasattr(mod, "__path__"):
+        return sorted(str(p) for p in Path(path).parent.rglob("*.py"))
+    return [path]
+
+
 def _code_digest(modules: Iterable[str]) -> str:
     h = hashlib.sha256()
     for name in sorted(modules):
         mod = importlib.import_module(f"symrb.{name}")
-        path = getattr(mod, "__file__", None)
         h.update(name.encode())
-        if path:
+        for path in _module_files(mod):
             h.update(_file_digest(path).encode())
     return h.hexdigest()
 

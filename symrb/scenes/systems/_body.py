@@ -22,10 +22,10 @@ from ..plan import Plan, SystemPlan, _continuous_save, _est_continuous
 from ..schema import Matrix, SceneError, Vector, _Model, _SceneBase, _skew_from
 
 #: the symrb modules of a body's run (their source enters the cache key)
-_RB_MODULES = ("continuous", "rigid_body", "algebra", "_validate", "_generated.rigid_body",
+_RB_MODULES = ("continuous", "symmetric", "rigid_body", "algebra", "_validate", "_generated.rigid_body",
                "_results", "scenes.systems._body")  # fmt: skip
 #: the modules of the symmetric representation's map (``symmetric_flow``)
-_SYMMETRIC_MAP_MODULES = ("discrete", "solvers", "_generated.discrete_rigid_body",
+_SYMMETRIC_MAP_MODULES = ("paper", "_stepping", "solvers", "_generated.discrete_rigid_body",
                           "_generated.symmetric_rigid_body", "_progress")  # fmt: skip
 
 

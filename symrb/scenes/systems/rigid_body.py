@@ -49,8 +49,21 @@ from ._compare import _Q_ONLY, Compares, _ComparedBody
 
 _MODULES = _RB_MODULES + ("scenes.systems._compare", "scenes.systems.rigid_body")
 #: the modules of the Moser-Veselov engine, and of the paper's MV-Algorithms
-_MV_MODULES = ("engine", "discrete", "solvers", "_compiled", "_generated.discrete_rigid_body")
-_MV_ALGORITHM_MODULES = ("discrete", "solvers", "_generated.discrete_rigid_body", "_progress")
+_MV_MODULES = (
+    "engine",
+    "paper",
+    "_stepping",
+    "solvers",
+    "_compiled",
+    "_generated.discrete_rigid_body",
+)
+_MV_ALGORITHM_MODULES = (
+    "paper",
+    "_stepping",
+    "solvers",
+    "_generated.discrete_rigid_body",
+    "_progress",
+)
 
 
 class RigidBodyMomentum(Flow):
