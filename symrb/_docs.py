@@ -8,7 +8,8 @@ alone, so LaTeX and format strings in the text need no escaping.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+import textwrap
+from collections.abc import Callable, Mapping
 from typing import TypeVar
 
 F = TypeVar("F", bound=Callable[..., object])
@@ -61,14 +62,43 @@ FRAGMENTS: dict[str, str] = {
 }
 
 
-def _indent(text: str, indent: str) -> str:
-    return "\n".join(indent + line if line else line for line in text.splitlines())
+def fill_doc(blocks: Mapping[str, str]) -> Callable[[F], F]:
+    """Decorator: each docstring line ``%(name)s`` becomes ``blocks[name]``, indented like it
+    (KeyError for an unknown name, so a typo fails at import).
+
+    Parameters
+    ----------
+    blocks : mapping of str to str
+        The blocks by name, unindented (a numpydoc entry: the header line, then its indented
+        description).
+
+    Returns
+    -------
+    callable
+        The decorator; it returns the object it decorates, its ``__doc__`` filled in.
+
+    Examples
+    --------
+    >>> from symrb._docs import fill_doc
+    >>> @fill_doc({"x": "x : float\\n    The input."})
+    ... def f(x):
+    ...     '''Parameters
+    ...     ----------
+    ...     %(x)s
+    ...     '''
+    >>> print(f.__doc__.splitlines()[2:4])
+    ['    x : float', '        The input.']
+    """
+
+    def fill_one(obj: F) -> F:
+        if obj.__doc__:
+            obj.__doc__ = _LINE.sub(
+                lambda m: textwrap.indent(blocks[m["name"]], m["indent"]), obj.__doc__
+            )
+        return obj
+
+    return fill_one
 
 
-def fill(obj: F) -> F:
-    """Replace each ``%(name)s`` line of ``obj.__doc__`` by the fragment ``name`` (KeyError for
-    an unknown name, so a typo fails at import)."""
-    doc = obj.__doc__
-    if doc:
-        obj.__doc__ = _LINE.sub(lambda m: _indent(FRAGMENTS[m["name"]], m["indent"]), doc)
-    return obj
+#: :func:`fill_doc` with the rigid-body fragments :data:`FRAGMENTS`
+fill = fill_doc(FRAGMENTS)

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as v
-from .._docfill import fill_doc
+from .._docs import fill_doc
 from .._generated import discrete_control as _gen
 from .._progress import progress_bar
 from .._validate import Array

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _validate as v
-from .._docfill import fill_doc
+from .._docs import fill_doc
 from .._generated import discrete_rigid_body as _gdr
 from .._generated import symmetric_rigid_body as _gsr
 from .._validate import Array

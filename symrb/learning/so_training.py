@@ -15,7 +15,7 @@ from scipy.linalg import expm, svd
 from scipy.optimize import root
 
 from .. import _validate as v
-from .._docfill import fill_doc
+from .._docs import fill_doc
 from .._generated import symmetric_rigid_body as _gsr
 from .._progress import progress_bar
 from .._validate import Array

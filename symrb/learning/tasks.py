@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from scipy.linalg import expm
 
 from .. import _validate as v
-from .._docfill import fill_doc
+from .._docs import fill_doc
 from .._validate import Array
 from ..algebra import as_generator, random_SO
 from ..errors import InputError

@@ -14,7 +14,7 @@ from scipy.optimize import OptimizeResult
 
 from .. import _conditioning as _cond
 from .. import _validate as v
-from .._docfill import fill_doc
+from .._docs import fill_doc
 from .._generated import adjoint_orbits as _gen
 from .._validate import Array
 from ..errors import InputError, NotConvergedError

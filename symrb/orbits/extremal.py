@@ -7,7 +7,7 @@ from __future__ import annotations
 from numpy.typing import ArrayLike
 
 from .. import _validate as v
-from .._docfill import fill_doc
+from .._docs import fill_doc
 from .._generated import adjoint_orbits as _gen
 from .._validate import Array
 from ._common import DOC, pair_xN
