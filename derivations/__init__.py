@@ -6,9 +6,11 @@
 * :mod:`derivations.symbolic`: the algebra the evidence works in (explicit matrices, noncommutative
   words, trace words) and the LaTeX of displayed formulas;
 * :mod:`derivations.reference`: independent float64 / high-precision references (never symrb);
-* :mod:`derivations.parts`: one module per part of the paper (``rigid_body`` is S1-S4, ...).
+* :mod:`derivations.claims`: the paper's claims, one module each, grouped by section
+  (``claims/section3/s02_rigid_body_equations.py`` is S2, ...); :mod:`derivations.methods`:
+  checks of symrb's own methods (ids M1..), apart from the paper's claims.
 
-How a part is written (``derivations/parts/rigid_body.py`` is the model):
+How a claim is written (``derivations/claims/section3/s02_rigid_body_equations.py`` is a model):
 
 1. **Declare a claim above its evidence** with :func:`~derivations.registry.claim`; register its
    evidence with the decorator ``@S2.check(level, tol=..., form=...)``.  The first paragraph of the
@@ -19,7 +21,7 @@ How a part is written (``derivations/parts/rigid_body.py`` is the model):
    math may name objects but not state a relation (``=``, ``<``, ``\\le``, ...), except a parameter
    value such as ``$n=3$``.
 3. **Emit what was verified.**  A :class:`~derivations.codegen.Kernel` holds the expressions of a
-   generated function (``target`` = the part module's name); evidence reads them with
+   generated function (``target`` = the generated module's name); evidence reads them with
    ``KERNEL["output"]`` (this records that the claim checked the kernel) and evaluates them with
    :func:`~derivations.symbolic.explicit` (fixed n) or :class:`~derivations.symbolic.Words`
    (every n).  Never type a kernel's formula a second time in an evidence function.

@@ -13,7 +13,7 @@ version, the reconstruction :math:`P = Q\exp(\sinh^{-1}(M/2))`, and a ``solve_iv
     \qquad\text{(learning version, Section 3.2)}
 
 The vector fields are generated in :mod:`symrb._generated.symmetric_rigid_body` by
-:mod:`derivations.parts.symmetric_rigid_body` (claims S5-S12); the functions here validate input and
+the claims S5-S12 of :mod:`derivations.claims.section3`; the functions here validate input and
 document the mathematics.  Flows (:class:`RigidBody`, :class:`SymmetricRigidBody`,
 :class:`McLachlanScovel`, :class:`MultiSampleSymmetricRigidBody`) are small objects naming their
 state variables; :func:`integrate` runs any of them through :func:`scipy.integrate.solve_ivp`.

@@ -252,7 +252,7 @@ def test_derivations_import_nothing_from_symrb_at_module_level() -> None:
         "import sys; sys.modules['symrb'] = None\n"
         "from derivations.registry import all_claims\n"
         "from derivations.codegen import collect\n"
-        "assert len(all_claims()) == 27\n"
+        "assert len(all_claims('paper')) == 27\n"
         "files = collect()\n"
         "print(len(files))\n"
     )

@@ -129,7 +129,7 @@ def test_a_displayed_sign_is_a_checked_sign() -> None:
     eq = c.formulas["J"]
     try:
         c.formulas["J"] = sp.Eq(eq.lhs, -eq.rhs, evaluate=False)
-        import derivations.parts.rigid_body as rb
+        import derivations.claims.section3.s02_rigid_body_equations as rb
 
         old, rb.J_DEF = rb.J_DEF, c.formulas["J"]
         after = verify_claim(c)

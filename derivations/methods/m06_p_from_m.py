@@ -41,9 +41,9 @@ M6 = claim(
 
 @M6.check(Level.FLOAT64, tol=1e-11)
 def m6_against_displayed_formulas() -> float:
-    """symrb.P_from_M (real Schur form) against the displayed corrected formula (Hermitian
-    eigen-decomposition and expm) and the displayed closed form (symmetric eigen-decomposition),
-    n = 3..6, ||M||_op from 0.1 to 0.995 times the displayed domain bound: max difference."""
+    """symrb.P_from_M (real Schur form) against S10's displayed corrected formula (Hermitian
+    eigen-decomposition and expm) and its displayed closed form (symmetric eigen-decomposition),
+    n = 3..6, ||M||_op from 0.1 to 0.995 times S10's displayed domain bound: max difference."""
     import symrb
 
     rng = np.random.default_rng(11)

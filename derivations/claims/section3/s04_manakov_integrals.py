@@ -153,7 +153,7 @@ def _integrals(max_degree: int, lam: list[sp.Expr], Ms: sp.Matrix) -> list[sp.Ex
     ]
 
 
-def _conservation(lam: list[sp.Expr], Ms: sp.Matrix, max_degree: int) -> sp.Expr:
+def conservation(lam: list[sp.Expr], Ms: sp.Matrix, max_degree: int) -> sp.Expr:
     k = Ms.rows
     Mdot = explicit(RIGID_BODY_RHS["Mdot"], {"Q": sp.eye(k), "M": Ms}, lam)
     total = sp.Integer(0)
@@ -168,7 +168,7 @@ def s4_integrals_conserved() -> sp.Expr:
     """d/dt F = <grad F, Mdot> vanishes identically for the emitted integrals of degree <= 4,
     with Mdot from the emitted rigid body field (symbolic M and Lambda, n = 4)."""
     lam, Ms = lam_symbols(4), skew_matrix("m", 4)
-    return _conservation(lam, Ms, 4)
+    return conservation(lam, Ms, 4)
 
 
 def _derivative_at_zero(values: list[sp.Rational]) -> sp.Rational:
