@@ -1,4 +1,4 @@
-"""Generated from ``derivations.claims.section3.s13_adjoint_orbits``, ``derivations.claims.section3.s14_brockett_toda``, ``derivations.claims.section3.s15_learning_on_orbits``; do not edit by hand.
+"""Generated from ``derivations.claims.section3.s13_adjoint_orbits``, ``derivations.claims.section3.s14_brockett_toda``, ``derivations.claims.section3.s15_learning_on_orbits``, ``derivations.claims.section3.s15_learning_on_orbits.so3``; do not edit by hand.
 
 Every function here is the expression that the evidence of the claims named in its
 docstring evaluated.  Regenerate with ``python -m derivations derive`` (or ``symrb
@@ -235,7 +235,7 @@ def one_sample_second_term(r, s, tau_0, T):
     Notes
     -----
     Checked by claim S15 (``symrb verify S15``);
-    expressions from ``derivations.claims.section3.s15_learning_on_orbits``.
+    expressions from ``derivations.claims.section3.s15_learning_on_orbits.so3``.
 
     Total ops per batch item: 14 scalar.
     """
@@ -271,7 +271,7 @@ def two_sample_bound(r_1, r_2, s, p_12):
     Notes
     -----
     Checked by claim S15 (``symrb verify S15``);
-    expressions from ``derivations.claims.section3.s15_learning_on_orbits``.
+    expressions from ``derivations.claims.section3.s15_learning_on_orbits.so3``.
 
     Total ops per batch item: 8 scalar.
     """

@@ -1,7 +1,7 @@
-"""The computations behind S15's evidence that do not read its displayed formulas: samples of a
-kernel, the so(3) data and boundary value problem runs of the one- and two-sample checks, the
-adjoint derivative of the learning cost against central differences, and the exact so(3) double
-bracket flow for a given phase."""
+"""The computations behind S15's evidence on so(3) that do not read its displayed formulas: the
+data and boundary value problem runs of the one- and two-sample checks, the adjoint derivative of
+the learning cost against central differences, and the exact so(3) double bracket flow for a
+given phase."""
 
 from __future__ import annotations
 
@@ -13,31 +13,8 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.claims.section3._orbits import (
-    np_comm,
-    np_norm2,
-    np_pair,
-    p,
-    plain,
-    u,
-    x,
-)
-from derivations.claims.section3.s13_adjoint_orbits import OPTIMAL_CONTROL
+from derivations.claims.section3._orbits import np_comm, np_norm2, np_pair, plain
 from derivations.symbolic import explicit
-from derivations.vocabulary import matrix
-
-
-def kernel_of_sample(expr: sp.Basic, k: int, control: sp.MatrixExpr | None = None) -> sp.Basic:
-    """A kernel output for sample k: x -> x^k, p -> p^k (and u -> ``control``)."""
-    reps = {x: matrix(f"x^{k}"), p: matrix(f"p^{k}")}
-    if control is not None:
-        reps[u] = control
-    return expr.xreplace(reps)
-
-
-def emitted_shared_control(count: int) -> sp.MatrixExpr:
-    """sum over the samples of the emitted optimal control (how solve_orbit_bvp computes u*)."""
-    return sp.MatAdd(*[kernel_of_sample(OPTIMAL_CONTROL["u"], k) for k in range(1, count + 1)])
 
 
 @functools.cache

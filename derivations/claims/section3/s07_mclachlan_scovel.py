@@ -17,23 +17,11 @@ import sympy as sp
 
 from derivations import reference as ref
 from derivations.claims.section3._inertia import ARG_LAM
-from derivations.claims.section3._symmetric import (
-    ARG_B,
-    ARG_Q,
-    MOMENTUM,
-    B,
-    Bdot,
-    P,
-    Q,
-    Qdot,
-)
+from derivations.claims.section3._symmetric import ARG_B, ARG_Q, MOMENTUM, B, Bdot, P, Q, Qdot
 from derivations.claims.section3._words import ddt, jinv_letters, reduce_words, rule
 from derivations.claims.section3.s05_maximum_principle import SYMMETRIC_RIGID_BODY_RHS
 from derivations.registry import Level, claim
-from derivations.symbolic import (
-    Words,
-    eq,
-)
+from derivations.symbolic import Words, eq
 from derivations.vocabulary import Jinv, Kernel, matrix
 
 S7 = claim(

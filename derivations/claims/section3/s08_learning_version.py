@@ -18,14 +18,7 @@ from derivations import reference as ref
 from derivations.claims.section3._display import GlPair
 from derivations.claims.section3._exact import count_nonzero
 from derivations.claims.section3._inertia import lam_symbols
-from derivations.claims.section3._symmetric import (
-    ARG_P,
-    ARG_Q,
-    ARG_U,
-    P,
-    Q,
-    U,
-)
+from derivations.claims.section3._symmetric import ARG_P, ARG_Q, ARG_U, P, Q, U
 from derivations.claims.section3.s05_maximum_principle import (
     COST,
     COSTATE,
@@ -37,12 +30,7 @@ from derivations.claims.section3.s05_maximum_principle import (
     unfold,
 )
 from derivations.registry import Level, claim
-from derivations.symbolic import (
-    eq,
-    explicit,
-    general_matrix,
-    skew_matrix,
-)
+from derivations.symbolic import eq, explicit, general_matrix, skew_matrix
 from derivations.vocabulary import Jinv, Kernel, matrix
 
 S8 = claim(

@@ -21,16 +21,10 @@ import sympy as sp
 
 from derivations import reference as ref
 from derivations.claims.section3._display import MatFn, OpNorm
-from derivations.claims.section3._symmetric import (
-    M,
-    P,
-    Q,
-)
+from derivations.claims.section3._symmetric import M, P, Q
 from derivations.claims.section3.s06_symmetric_to_rigid_body import SYMMETRIC_MOMENTUM
 from derivations.registry import Level, claim
-from derivations.symbolic import (
-    eq,
-)
+from derivations.symbolic import eq
 from derivations.vocabulary import n
 
 S10 = claim(

@@ -10,18 +10,12 @@ from __future__ import annotations
 import sympy as sp
 
 from derivations.claims.section3._display import Ddt
-from derivations.claims.section3._symmetric import (
-    M,
-    Q,
-)
+from derivations.claims.section3._symmetric import M, Q
 from derivations.claims.section3._words import ddt, jinv_letters
 from derivations.claims.section3.s05_maximum_principle import SYMMETRIC_RIGID_BODY_RHS
 from derivations.claims.section3.s06_symmetric_to_rigid_body import SYMMETRIC_MOMENTUM
 from derivations.registry import Level, claim
-from derivations.symbolic import (
-    Words,
-    eq,
-)
+from derivations.symbolic import Words, eq
 from derivations.vocabulary import Jinv, n
 
 S11 = claim(

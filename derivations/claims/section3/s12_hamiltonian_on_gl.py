@@ -19,25 +19,11 @@ from derivations import reference as ref
 from derivations.claims.section3._display import SymplecticForm
 from derivations.claims.section3._exact import count_nonzero
 from derivations.claims.section3._inertia import ARG_LAM, lam_symbols
-from derivations.claims.section3._symmetric import (
-    ARG_P,
-    ARG_Q,
-    MOMENTUM,
-    M,
-    P,
-    Q,
-)
+from derivations.claims.section3._symmetric import ARG_P, ARG_Q, MOMENTUM, M, P, Q
 from derivations.claims.section3._words import ddt, jinv_letters
 from derivations.claims.section3.s05_maximum_principle import H_SYM, SYMMETRIC_RIGID_BODY_RHS
 from derivations.registry import Level, claim
-from derivations.symbolic import (
-    Pair,
-    Words,
-    eq,
-    explicit,
-    general_matrix,
-    trace_residual,
-)
+from derivations.symbolic import Pair, Words, eq, explicit, general_matrix, trace_residual
 from derivations.vocabulary import Jinv, Kernel, matrix
 
 S12 = claim(

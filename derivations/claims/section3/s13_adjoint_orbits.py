@@ -22,10 +22,7 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.claims.section3._display import (
-    _Norm,
-    minus,
-)
+from derivations.claims.section3._display import _Norm, minus
 from derivations.claims.section3._orbits import (
     ARG_N,
     ARG_P,

@@ -16,9 +16,7 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.claims.section3._display import (
-    minus,
-)
+from derivations.claims.section3._display import minus
 from derivations.claims.section3._orbits import (
     ARG_N,
     ARG_P,
@@ -41,11 +39,7 @@ from derivations.claims.section3._orbits import (
     trace_poly,
     x,
 )
-from derivations.claims.section3.s13_adjoint_orbits import (
-    ORBIT_HAMILTONIAN,
-    PDOT_EQ,
-    XDOT_EQ,
-)
+from derivations.claims.section3.s13_adjoint_orbits import ORBIT_HAMILTONIAN, PDOT_EQ, XDOT_EQ
 from derivations.registry import Level, claim
 from derivations.symbolic import Bracket, Pair, Words, eq, explicit, residual, trace_residual
 from derivations.vocabulary import Kernel, matrix
