@@ -64,6 +64,7 @@ S14 = claim(
     "sign fails, see `tests/test_orbits.py`). On real symmetric $L$ the flow $\\dot L = "
     "[L,[L,D]]$ is the Toda flow run backwards in time; the compact form $x = iL$ reverses it.",
 )
+# the potential is built by _orbits.brockett, which S13's optimal Hamiltonian kernel also reads
 BROCKETT = S14.formula("V", eq(V(x), brockett(x)))
 BROCKETT_REWRITTEN = S14.formula("V_rewritten", eq(V(x), Pair(x, Bracket(N, Bracket(N, x))) / 2))
 BROCKETT_GRADIENT = S14.formula("V_x", eq(V_x, Bracket(N, Bracket(N, x))))
