@@ -11,6 +11,8 @@ read it from here).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import sympy as sp
 
@@ -126,7 +128,7 @@ def s6_flow_against_reference_rigid_body() -> float:
     Q0, M0 = ref.random_rotation(k, rng), ref.random_skew(k, rng, 0.4)
     P0 = _costate_for(Q0, M0, rng)
     ts = np.linspace(0.0, 5.0, 11)
-    kw = dict(method="DOP853", rtol=1e-12, atol=1e-12, t_eval=ts)
+    kw: dict[str, Any] = dict(method="DOP853", rtol=1e-12, atol=1e-12, t_eval=ts)
 
     def field(_t: float, y: np.ndarray) -> np.ndarray:
         dQ, dM = ref.rigid_body_field(y[: k * k].reshape(k, k), y[k * k :].reshape(k, k), lam)

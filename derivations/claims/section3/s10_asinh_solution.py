@@ -203,7 +203,7 @@ def near_boundary() -> tuple[np.ndarray, list[tuple[float, np.ndarray, Any]], fl
             E, V = mp.eigsy(S)
             return V * mp.diag([mp.sqrt(max(e, 0)) for e in E]) * V.T
 
-        ops = {
+        ops: dict[str, Callable[..., Any]] = {
             "mul": lambda a, b: a * b, "T": lambda a: a.T, "num": lambda c: mp.mpf(c.p) / c.q,
             "eye": lambda: mp.eye(4), "sqrt": sqrt_mp,
         }  # fmt: skip
