@@ -6,7 +6,7 @@ sinh^-1(M/2) (the reading that matches the domain ||M/2||_op < 1 of the series) 
 skew matrices exp(sinh^-1 X) = X + (I + X^2)^(1/2).  The evidence evaluates the displayed formulas
 on an eigenvalue (symbolic), with matrices (float64) and near the boundary of the domain in 60
 digits.  symrb's own solver of this equation, ``symrb.P_from_M``, is checked by M6
-(``derivations/methods/m06_p_from_m.py``) against the formulas displayed here.
+(``derivations/methods/p_from_m.py``) against the formulas displayed here.
 """
 
 from __future__ import annotations

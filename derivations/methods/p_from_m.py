@@ -27,7 +27,7 @@ from derivations.registry import Level, claim
 
 M6 = claim(
     "M6",
-    label="P_from_M",
+    label="",
     title="$P$ from $M$ on the real Schur form",
     statement="`symrb.P_from_M(Q, M)` returns the rotation $P$ of S10 for every skew $M$ with "
     "$\\|M\\|_{\\mathrm{op}}$ below 2, to rounding away from the boundary and within the "

@@ -17,7 +17,7 @@ from derivations.registry import Level, claim
 
 M5 = claim(
     "M5",
-    label="rigid_body_exact",
+    label="",
     title="The exact solution of the rigid body for $n = 3$",
     statement="`symrb.rigid_body_exact` returns the attitude and body momentum of the rigid body "
     "of S2 for $n = 3$ at the requested times, for every body with $J$ positive definite (a "
