@@ -1,14 +1,22 @@
 """Derivations of the paper's statements with SymPy (development time only; not in the wheel).
 
-* :mod:`derivations.registry`: the claim registry (IDs D1-D12, S1-S15 of CLAIMS.md);
-* :mod:`derivations.codegen`: :class:`~derivations.codegen.Kernel` and the printer that emits
-  ``symrb/_generated``;
+* :mod:`derivations.vocabulary`: symbols and shapes (``n``, ``matrix``, ``Lam``, ``W``) and the
+  :class:`~derivations.vocabulary.Kernel` declaration;
 * :mod:`derivations.symbolic`: the algebra the evidence works in (explicit matrices, noncommutative
   words, trace words) and the LaTeX of displayed formulas;
+* :mod:`derivations.registry`: the claim registry (IDs D1-D12, S1-S15 of CLAIMS.md, and the
+  checks M1.. of symrb's own methods), discovery of claims and kernels;
+* :mod:`derivations.printer`: CSE and the NumPy printer that emits ``symrb/_generated``;
+* :mod:`derivations.text` and :mod:`derivations.report`: claims as terminal text and as book
+  tables; :mod:`derivations.cli`: the commands ``claims``, ``show``, ``verify``, ``derive``;
 * :mod:`derivations.reference`: independent float64 / high-precision references (never symrb);
-* :mod:`derivations.claims`: the paper's claims, one module each, grouped by section
-  (``claims/section3/s02_rigid_body_equations.py`` is S2, ...); :mod:`derivations.methods`:
-  checks of symrb's own methods (ids M1..), apart from the paper's claims.
+* :mod:`derivations.claims`: one module per claim, by section (``section2.d10_moser_veselov``
+  is D10, ``section3.s02_rigid_body_equations`` is S2); code shared by a section's claims sits
+  in its underscore modules;
+* :mod:`derivations.methods`: checks of symrb's own methods (ids M1, ...), apart from the
+  paper's claims (``cayley_step`` is M1).
+
+Imports run one way: vocabulary <- symbolic <- registry <- printer <- text, report <- cli.
 
 How a claim is written (``derivations/claims/section3/s02_rigid_body_equations.py`` is a model):
 
@@ -20,7 +28,7 @@ How a claim is written (``derivations/claims/section3/s02_rigid_body_equations.p
    ``expr`` (``S2.formulas[key]`` or the module-level name it was bound to).  Hand-written ``$...$``
    math may name objects but not state a relation (``=``, ``<``, ``\\le``, ...), except a parameter
    value such as ``$n=3$``.
-3. **Emit what was verified.**  A :class:`~derivations.codegen.Kernel` holds the expressions of a
+3. **Emit what was verified.**  A :class:`~derivations.vocabulary.Kernel` holds the expressions of a
    generated function (``target`` = the generated module's name); evidence reads them with
    ``KERNEL["output"]`` (this records that the claim checked the kernel) and evaluates them with
    :func:`~derivations.symbolic.explicit` (fixed n) or :class:`~derivations.symbolic.Words`

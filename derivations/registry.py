@@ -29,8 +29,8 @@ hold), ``"printed"`` (the statement as printed, expected to *fail*: an erratum) 
 * ``fails``: some printed-form evidence fails and no correction is registered;
 * ``not checkable``: there is no evidence.
 
-Claims live in the modules of :mod:`derivations.parts`; the registry discovers every
-:class:`Claim` object there, so adding a part never edits this file.
+Claims live in the modules of the packages :data:`PACKAGES`; the registry discovers every
+:class:`Claim` object there, so adding a claim module never edits this file.
 """
 
 from __future__ import annotations
@@ -64,6 +64,9 @@ __all__ = [
     "verify_claim",
     "kernel_report",
     "OUTCOMES",
+    "GROUPS",
+    "GROUP_TITLES",
+    "grouped",
 ]
 
 OUTCOMES = ("holds", "holds after correction", "fails", "not checkable")
@@ -318,6 +321,16 @@ PACKAGES = ("derivations.claims", "derivations.methods", "derivations.parts")
 
 #: Claim groups: the paper's statements (D1.., S1..) and checks of symrb's own methods (M1..).
 GROUPS = {"D": "paper", "S": "paper", "M": "method"}
+
+#: The heading of each group where claims are listed (terminal tables, the book's claims page).
+GROUP_TITLES = {"paper": "The paper's claims", "method": "symrb's own methods"}
+
+
+def grouped(items: Sequence[Any], id_of: Callable[[Any], str]) -> list[tuple[str, list[Any]]]:
+    """``[(title, members), ...]``: ``items`` (claims, results, their dicts) by the group of their
+    ID ``id_of(item)``, in the order of :data:`GROUP_TITLES`, groups without members left out."""
+    out = [(t, [x for x in items if GROUPS[id_of(x)[0]] == g]) for g, t in GROUP_TITLES.items()]
+    return [(title, members) for title, members in out if members]
 
 
 def _claim_key(cid: str) -> tuple[int, int]:

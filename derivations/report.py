@@ -1,20 +1,35 @@
-"""How the book shows a claim: one function, so every page renders claims the same way.
+"""How the book shows claims: one module, so every page renders them the same way.
 
 ``check("S4")`` displays a claim's statement, the printed and corrected forms of an erratum, the
 note and a table of its evidence, from the one run of every claim's evidence that the build makes
 (``symrb verify --output book/_build/verify.json``, reused when it was written for the current
 code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
-which fails the book build.
+which fails the book build.  :func:`claims_table` and :func:`claims_summary` are the claims
+page, one table per claim group (:func:`by_group`: the paper's claims, then symrb's own methods).
 """
 
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 import re
-from collections.abc import Iterable, Mapping
+from collections import Counter
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
-from derivations.registry import ClaimResult, EvidenceResult, get_claim
+from derivations.registry import (
+    GROUPS,
+    OUTCOMES,
+    ClaimResult,
+    EvidenceResult,
+    all_claims,
+    get_claim,
+    grouped,
+    kernel_report,
+    verify,
+)
 
 __all__ = [
     "plain",
@@ -25,7 +40,11 @@ __all__ = [
     "claim_markdown",
     "check",
     "load_results",
+    "result_from_dict",
     "result_of",
+    "by_group",
+    "claims_table",
+    "claims_summary",
     "source_hash",
     "verify_json_path",
 ]
@@ -245,9 +264,6 @@ def claim_markdown(result: ClaimResult) -> str:
 def source_hash() -> str:
     """SHA-256 of every Python file of ``derivations`` and ``symrb`` (paths and contents): the
     code a verify run checked.  Results recorded with another hash are stale."""
-    import hashlib
-    from pathlib import Path
-
     root = Path(__file__).resolve().parent.parent
     h = hashlib.sha256()
     for package in ("derivations", "symrb"):
@@ -256,17 +272,13 @@ def source_hash() -> str:
     return h.hexdigest()
 
 
-def verify_json_path() -> Any:
+def verify_json_path() -> Path:
     """Where the book build writes ``symrb verify --output``: ``book/_build/verify.json``."""
-    from pathlib import Path
-
     return Path(__file__).resolve().parent.parent / "book" / "_build" / "verify.json"
 
 
 @functools.cache
 def _run_all() -> dict[str, Any]:
-    from derivations.registry import kernel_report, verify
-
     results = verify()
     return {
         "source_hash": source_hash(),
@@ -284,10 +296,6 @@ def load_results() -> tuple[dict[str, Any], str]:
     Returns ``(payload, source)`` with ``payload = {"claims": [...], "kernels": [...], ...}``
     and ``source`` saying where the results come from.
     """
-    import json
-
-    from derivations.registry import all_claims
-
     path = verify_json_path()
     payload = json.loads(path.read_text()) if path.exists() else None
     if payload is not None and payload.get("source_hash") == source_hash():
@@ -307,6 +315,11 @@ def result_of(cid: str) -> ClaimResult:
     """The recorded run of claim ``cid`` (see :func:`load_results`) as a :class:`ClaimResult`."""
     payload, _source = load_results()
     (r,) = [r for r in payload["claims"] if r["id"] == cid.upper()]
+    return result_from_dict(r)
+
+
+def result_from_dict(r: Mapping[str, Any]) -> ClaimResult:
+    """A :class:`ClaimResult` from its dict in ``verify --json`` (``ClaimResult.to_dict``)."""
     fields = ("level", "description", "form", "residual", "tol", "seconds", "name", "error")
     evidence = [EvidenceResult(**{k: e.get(k) for k in fields}) for e in r["evidence"]]
     return ClaimResult(
@@ -332,3 +345,92 @@ def check(cid: str, show: bool = True) -> ClaimResult:
         f"{cid}: outcome {result.outcome!r}, recorded {result.expected!r}; " + "; ".join(failing)
     )
     return result
+
+
+# ---------------------------------------------------------------------------------------------
+# the claims page: one table per group (the paper's claims, symrb's own methods)
+
+#: Evidence levels as the tables show them, strongest first.
+SHORT_LEVELS = {
+    "symbolic, general n": "symbolic (all n)",
+    "symbolic, fixed n": "symbolic (fixed n)",
+    "exact rational": "exact rational",
+    "float64": "float64",
+    "high precision": "high precision",
+}
+
+
+def by_group(results: Sequence[Mapping[str, Any]]) -> list[tuple[str, list[Any]]]:
+    """``[(title, results), ...]``: the results (dicts of ``verify --json``) of each claim group
+    that has any, in the order of :data:`~derivations.registry.GROUP_TITLES`."""
+    return grouped(results, lambda r: str(r["id"]))
+
+
+def _seconds_cell(s: float) -> str:
+    return f"{s:.2f}\N{NO-BREAK SPACE}s" if s >= 0.01 else f"{s * 1000:.1f}\N{NO-BREAK SPACE}ms"
+
+
+def _levels_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
+    """How many checks at each level, strongest first, on one line."""
+    counts = Counter(e["level"] for e in evidence)
+    return ", ".join(f"{counts[lv]} {short}" for lv, short in SHORT_LEVELS.items() if counts[lv])
+
+
+def _margin_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
+    """The closest call: the largest residual/tolerance among checks that must pass."""
+
+    def ratio(e: Mapping[str, Any]) -> float:
+        if e["tol"]:
+            return float(e["residual"] / e["tol"])
+        return 0.0 if e["residual"] == 0 else float("inf")
+
+    worst = max((e for e in evidence if e["form"] != "printed"), key=ratio)
+    if worst["tol"] == 0:
+        return "exact\N{NO-BREAK SPACE}(0)"
+    return f"{worst['residual']:.1e} ≤ {worst['tol']:.0e}"
+
+
+def _where_cell(cid: str) -> str:
+    text = get_claim(cid).where
+    return prose(short_where(text) if text else "(not recorded)", cell=True)
+
+
+def _id_cell(r: Mapping[str, Any]) -> str:
+    """The claim's ID; for an erratum, a link to its section on the errata page."""
+    if r["outcome"] in ("holds after correction", "fails"):
+        return f"{{ref}}`{r['id']} <erratum-{r['id'].lower()}>`"
+    return str(r["id"])
+
+
+def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
+    """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID,
+    title, where in the paper, outcome, checks by level, closest call, time."""
+    rows = [
+        "| ID | claim | where in the paper | outcome | checks "
+        "| closest call (residual ≤ tolerance) | time |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        outcome = r["outcome"]
+        if outcome != r["expected"]:
+            outcome += f" (recorded {r['expected']})"
+        rows.append(
+            f"| {_id_cell(r)} | {prose(r['title'], cell=True)} | {_where_cell(r['id'])} "
+            f"| {outcome} | {_levels_cell(r['evidence'])} | {_margin_cell(r['evidence'])} "
+            f"| {_seconds_cell(r['seconds'])} |"
+        )
+    return "\n".join(rows)
+
+
+def claims_summary(results: Sequence[Mapping[str, Any]]) -> str:
+    """``27 claims (20 holds, 7 holds after correction); every computed outcome equals the
+    recorded one. 180 checks ran in 40.0 s`` (``method checks`` for the methods group)."""
+    counts = Counter(r["outcome"] for r in results)
+    summary = ", ".join(f"{counts[o]} {o}" for o in OUTCOMES if counts[o])
+    total = sum(r["seconds"] for r in results)
+    nchecks = sum(len(r["evidence"]) for r in results)
+    paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
+    return (
+        f"{len(results)} {'claims' if paper else 'method checks'} ({summary}); every computed "
+        f"outcome equals the recorded one. {nchecks} checks ran in {total:.1f} s"
+    )

@@ -3,7 +3,7 @@
 * explicit matrices with symbolic entries (skew, diagonal, general) for fixed-n checks;
 * the pairing, hat/vee, commutators on explicit SymPy matrices;
 * noncommutative words: expansion of (A + l B)^k, reduction of trace words up to cyclic rotation
-  (and reversal for skew/symmetric letters), and conversion to matrix expressions for codegen.
+  (and reversal for skew/symmetric letters), and conversion to matrix expressions for the printer.
 """
 
 from __future__ import annotations
@@ -176,7 +176,7 @@ def explicit(
     values: dict[str, sp.Matrix | sp.Expr],
     lam: Sequence[sp.Expr] | None = None,
 ) -> sp.Matrix | sp.Expr:
-    """Evaluate a matrix expression of a :class:`~derivations.codegen.Kernel` (or a formula) on
+    """Evaluate a matrix expression of a :class:`~derivations.printer.Kernel` (or a formula) on
     explicit matrices.
 
     ``values`` maps a matrix symbol's name to an explicit SymPy matrix (or a scalar symbol's name

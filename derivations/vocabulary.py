@@ -4,10 +4,10 @@
 Every other module of :mod:`derivations` may import this one; it imports nothing of
 :mod:`derivations` itself, so it sits at the bottom of the one-way import graph::
 
-    vocabulary  <-  symbolic  <-  registry  <-  codegen (printer)  <-  text  <-  cli
+    vocabulary  <-  symbolic  <-  registry  <-  printer  <-  text/report  <-  cli
 
 A claim module declares its kernels here (:class:`Kernel`, :class:`Arg`, :func:`matrix`, ...);
-:mod:`derivations.codegen` prints them and :mod:`derivations.registry` finds them.
+:mod:`derivations.printer` prints them and :mod:`derivations.registry` finds them.
 """
 
 from __future__ import annotations

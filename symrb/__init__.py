@@ -21,18 +21,19 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
         "inertia_from_lam", "lam_from_inertia", "random_so", "random_SO", "random_lam",
         "as_generator",
     ),
+    "base_steps": ("MVStep", "MidpointStep", "RKMK4Step"),
+    "composition": ("composition_coefficients", "compose_steps"),
     "compose": (
-        "composition_coefficients", "compose_steps", "MVStep", "MidpointStep", "RKMK4Step",
         "composed_rigid_body_flow", "rkmk4_rigid_body_flow", "midpoint_rigid_body_flow",
         "benchmark_cost",
     ),
-    "continuous": (
+    "continuous": ("Flow", "RigidBody", "Trajectory", "FlowSolution", "integrate"),
+    "symmetric": (
         "symmetric_momentum", "symmetric_rigid_body_rhs", "mclachlan_scovel_rhs",
-        "multi_sample_control", "multi_sample_rhs", "gl_hamiltonian", "P_from_M", "PFromMInfo", "Flow",
-        "RigidBody", "SymmetricRigidBody", "McLachlanScovel", "MultiSampleSymmetricRigidBody",
-        "Trajectory", "FlowSolution", "integrate",
+        "multi_sample_control", "multi_sample_rhs", "gl_hamiltonian", "P_from_M", "PFromMInfo",
+        "SymmetricRigidBody", "McLachlanScovel", "MultiSampleSymmetricRigidBody",
     ),
-    "discrete": (
+    "paper": (
         "jd_residual", "symmetric_step", "symmetric_flow", "mv_algorithm1", "mv_algorithm2",
         "discrete_rigid_body_flow", "DiscreteFlowSolution",
     ),
@@ -60,7 +61,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     ),
     "rigid_body": (
         "rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals",
-        "euler_rhs_so3",
+        "euler_rhs_so3", "simulate", "RigidBodySolution",
     ),
     "solvers": ("MVSolveInfo", "solve_moser_veselov", "fold_scale"),
 }  # fmt: skip
@@ -87,27 +88,33 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # static type checkers see the eager imports
     from . import (  # noqa: F401
         algebra,
+        base_steps,
         compose,
+        composition,
         continuous,
-        discrete,
         engine,
         errors,
         exact,
         learning,
         orbits,
+        paper,
         rigid_body,
         scenes,
         solvers,
+        symmetric,
     )
     from .algebra import *  # noqa: F403
+    from .base_steps import *  # noqa: F403
     from .compose import *  # noqa: F403
+    from .composition import *  # noqa: F403
     from .continuous import *  # noqa: F403
-    from .discrete import *  # noqa: F403
     from .engine import *  # noqa: F403
     from .errors import *  # noqa: F403
     from .exact import *  # noqa: F403
     from .learning import *  # noqa: F403
     from .orbits import *  # noqa: F403
+    from .paper import *  # noqa: F403
     from .rigid_body import *  # noqa: F403
     from .scenes import *  # noqa: F403
     from .solvers import *  # noqa: F403
+    from .symmetric import *  # noqa: F403

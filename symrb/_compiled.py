@@ -2,7 +2,7 @@ r"""Optional compiled n = 3 Moser-Veselov loop: the generated kernels under numb
 
 ``numba`` is not a run-time dependency: :data:`AVAILABLE` is False without it and
 :func:`symrb.engine.mv_flow` then runs its NumPy path (the reference).  With it, the generated
-scalar kernels ``mv3_cayley_step`` and ``mv3_cayley_s_newton`` (claim D10) are compiled as they
+scalar kernels ``mv3_cayley_step`` and ``mv3_cayley_s_newton`` (method check M1) are compiled as they
 are (``numba.njit`` of the emitted Python functions, no fast-math, so the arithmetic is the
 NumPy path's, operation for operation) and called from a compiled loop over the steps of each
 body of a batch.  A step is the NumPy fast path's: one ``mv3_cayley_step`` at the previous

@@ -21,8 +21,8 @@ written :math:`U = \operatorname{cay}(X) = (I + X)(I - X)^{-1}` with :math:`X` s
   step is one call of the generated kernel ``mv3_cayley_step`` (one Newton step on :math:`p`,
   whose size is checked, then :math:`x`, :math:`U` and the update :math:`(QU, U^Tm)`); the first
   step, a changed ``h`` or a rejected check iterate ``mv3_cayley_s_newton`` and check the branch.
-  Claim D10 checks both kernels symbolically.  One body runs on Python floats, a batch on
-  structure-of-arrays component vectors.
+  Method check M1 checks both kernels symbolically (M2 checks this function's runs).  One body
+  runs on Python floats, a batch on structure-of-arrays component vectors.
 * general n: Newton's linear equation is the Lyapunov equation
   :math:`P\,dX + dX\,P^T = -G`, :math:`P = 2\Lambda - (I - X)B`, solved on the
   :math:`n(n-1)/2` skew unknowns as one batched dense system (``method="newton"``); or the
@@ -45,7 +45,7 @@ that one Moser-Veselov step of a body whose inertia is modified as a function of
 :math:`|m|^2` and of the energy, :math:`1/\tilde I_i = c/I_i + d`, is the step ``h`` of the
 original body's flow to order 4, 6, 8 or 10, in the momentum and the attitude.  The constants
 of :math:`c` and :math:`d` are the generated ``mv3_preprocessing_coefficients`` (computed once),
-the modified :math:`\tilde\Lambda` of a step the generated ``mv3_preprocessed_lam``; claim D10
+the modified :math:`\tilde\Lambda` of a step the generated ``mv3_preprocessed_lam``; method check M3
 checks the composition with exact rational power series in ``h`` against the Taylor series of
 the exact flow.  The cost of a step is one more kernel call; the map stays symplectic and
 conserves :math:`|m|` exactly (the modified body is a rigid body), the energy to the order.
@@ -61,10 +61,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _compiled
 from . import _validate as v
+from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
-from ._results import Trajectory
+from ._results import DiscreteFlowSolution, Trajectory
+from ._stepping import _check_h, _check_steps, _prepare
 from ._validate import Array
-from .discrete import DiscreteFlowSolution, _check_h, _check_steps, _prepare
 from .errors import InputError, NotConvergedError, OutOfDomainError
 from .solvers import solve_moser_veselov
 
@@ -293,6 +294,7 @@ def _on_branch(U: Array, lam: Array) -> NDArray[np.bool_]:
 # the stepper
 
 
+@fill
 class MVStepper:
     r"""One Moser-Veselov step :math:`(Q, M) \mapsto (Q_1, M_1)` with an internal warm start.
 
@@ -303,8 +305,7 @@ class MVStepper:
 
     Parameters
     ----------
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
+    %(lam_positive)s
     batch_shape : tuple of int, optional
         The batch axes of the states the stepper will be given (broadcast with those of
         ``lam``); ``()`` for one body.
@@ -527,6 +528,7 @@ def _check_modified(lam_k: Any, h: float, order: int) -> None:
 # the flow
 
 
+@fill
 def mv_flow(
     Q0: ArrayLike,
     M0: ArrayLike,
@@ -548,18 +550,12 @@ def mv_flow(
 
     Parameters
     ----------
-    Q0 : array_like, shape (..., n, n)
-        The initial attitude, in SO(n).
-    M0 : array_like, shape (..., n, n)
-        The initial body momentum (skew-symmetric, continuous scale).
-    lam : array_like, shape (..., n)
-        The diagonal of :math:`\Lambda`, all entries > 0.
-    h : float
-        The time step, > 0.
-    steps : int
-        The number of steps, >= 0.
-    save_every : int, optional
-        Keep the states :math:`k = 0, s, 2s, \dots` (``s = save_every``).
+    %(Q0)s
+    %(M0)s
+    %(lam_positive)s
+    %(h)s
+    %(steps)s
+    %(save_every)s
     method : str, optional
         One of ``"auto"``, ``"newton"``, ``"fixed-point"``, ``"numpy"``, ``"numba"``: the solver
         for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or for
@@ -618,7 +614,6 @@ def mv_flow(
     M = 0.5 * (M - np.swapaxes(M, -1, -2))
     stepper = MVStepper(L, batch, method=method if method in _SOLVERS else "auto")
     n = L.shape[-1]
-    size = stepper.size
     if order != 2 and n != 3:
         raise InputError(
             f"order {order} (the preprocessed Moser-Veselov method) needs n = 3, got n = {n}; "
@@ -631,108 +626,141 @@ def mv_flow(
         )
     use_numba = n == 3 and (
         method == "numba"
-        or (method == "auto" and _compiled.AVAILABLE and steps * size >= _NUMBA_MIN_WORK)
+        or (method == "auto" and _compiled.AVAILABLE and steps * stepper.size >= _NUMBA_MIN_WORK)
     )
-    ks: list[int] = [0]
-    Qs: list[Array] = [Q.copy()]
-    Ms: list[Array] = [M.copy()]
-    iters = np.ones(steps, dtype=np.int64) * (1 if n == 3 else 0)
+    run = _FlowRun(Q, M, stepper, steps, save_every)
     failure = ""
-    k = 0
-    if n == 3:
-        # the state in the kernels' layout: floats (one body) or component vectors (batch)
-        if size == 1:
-            q: Any = tuple(Q.reshape(9).tolist())
-            mm = M.reshape(9).tolist()
-            m: Any = (mm[7], mm[2], mm[3])
-        else:
-            Mf, Qf = M.reshape(-1, 3, 3), Q.reshape(-1, 3, 3)
-            m = tuple(_vee_cols(Mf))
-            q = tuple(Qf[:, i, j].copy() for i in range(3) for j in range(3))
-
-        def save_n3() -> None:
-            if size == 1:
-                Qs.append(np.array(q).reshape(Q.shape))
-                Ms.append(_hat_cols([np.array(c) for c in m]).reshape(M.shape))
-            else:
-                Qs.append(np.stack(q, axis=-1).reshape(Q.shape))
-                Ms.append(_hat_cols(list(m)).reshape(M.shape))
-
-    Qk, Mk = Q, M
     try:
         if n == 3:
-            # fast path: h is fixed and s = b.x is conserved by the map, so the previous step's
-            # s is the root to rounding and one fused kernel call (one Newton step on p, the
-            # update) is the whole step; |ds| > tol (first step, rounding trouble) takes the
-            # stepper's slow path
-            lam_c, tol = stepper._lam_c, stepper._tol_max
-            coef = _preprocessing(order, lam_c)
-            s: Any = None
-            for k in range(1, (min(steps, 1) if use_numba else steps) + 1):
-                out = None
-                lam_k = lam_c if coef is None else _gen.mv3_preprocessed_lam(h, *m, *lam_c, *coef)
-                if s is not None:
-                    out = _step3(s, h, *m, *lam_k, *q)
-                    ds = out[1]
-                    if not (abs(ds) if size == 1 else np.abs(ds).max()) <= tol:
-                        out = None
-                if out is None:
-                    if coef is not None:
-                        _check_modified(lam_k, h, order)
-                    out = stepper._step3(h, m, q, lam_k)
-                    iters[k - 1] = stepper.iterations
-                s, m, q = out[0], out[2:5], out[5:]
-                if k % save_every == 0:
-                    ks.append(k)
-                    save_n3()
-            iters *= size
-            if use_numba and steps > 1:
-                k = 1
-                st = np.broadcast_to(np.asarray(s, dtype=float), (size,))
-                mv, qv = _columns(m, size), _columns(q, size)
-                tv = np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,))
-                cv = None if coef is None else _columns(coef, size)
-                ms, qs, fail, extra = _compiled.run_mv3(
-                    st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1, coef=cv
+            run.loop3(h, order, use_numba)
+            if use_numba and steps > 1 and not run.compiled(h):
+                # the NumPy path has the Riccati fallback and the fold diagnosis
+                return mv_flow(
+                    Q0, M0, lam, h, steps, save_every=save_every, method="numpy", order=order
                 )
-                if fail.any():  # the NumPy path has the Riccati fallback and the fold diagnosis
-                    return mv_flow(
-                        Q0, M0, lam, h, steps, save_every=save_every, method="numpy", order=order
-                    )
-                iters[1:] += extra
-                for j, kj in enumerate(range(max(save_every, 2), steps + 1, save_every)):
-                    ks.append(kj)
-                    Qs.append(qs[j].reshape(Q.shape))
-                    Ms.append(_hat_cols([ms[j, :, 0], ms[j, :, 1], ms[j, :, 2]]).reshape(M.shape))
-                k = steps
         else:
-            for k in range(1, steps + 1):
-                Qk, Mk = stepper.step(Qk, Mk, h)
-                iters[k - 1] = stepper.iterations * size
-                if k % save_every == 0:
-                    ks.append(k)
-                    Qs.append(Qk)
-                    Ms.append(Mk)
+            run.loop_n(h)
     except (OutOfDomainError, NotConvergedError) as exc:
-        failure = f"step {k} of {steps} failed: {exc}"
-        k -= 1
-        if ks[-1] != k:  # the state before the failed step
-            ks.append(k)
-            if n == 3:
-                save_n3()
-            else:
-                Qs.append(Qk)
-                Ms.append(Mk)
-    kk = np.asarray(ks, dtype=np.int64)
-    return DiscreteFlowSolution(
-        t=kk.astype(np.float64) * h,
-        k=kk,
-        y=Trajectory({"Q": np.stack(Qs), "M": np.stack(Ms)}),
-        iterations=iters[: max(k, 0)] if failure else iters,
-        success=not failure,
-        status=-1 if failure else 0,
-        message=failure or f"all {steps} steps taken",
-        method="Moser-Veselov, Cayley-Newton engine"
-        + (f", preprocessed to order {order}" if order != 2 else ""),
-        h=h,
-    )
+        failure = f"step {run.k} of {steps} failed: {exc}"
+        run.k -= 1
+        if run.ks[-1] != run.k:  # the state before the failed step
+            run.save()
+    return run.result(h, order, failure)
+
+
+class _FlowRun:
+    """The state of one :func:`mv_flow` run and the states it saved.  For n = 3 the state is
+    kept in the kernels' layout: floats (one body) or component vectors (a batch)."""
+
+    def __init__(self, Q: Array, M: Array, stepper: MVStepper, steps: int, save_every: int):
+        self.shapes = (Q.shape, M.shape)
+        self.stepper, self.size, self.n = stepper, stepper.size, Q.shape[-1]
+        self.steps, self.save_every = steps, save_every
+        self.ks: list[int] = [0]
+        self.Qs: list[Array] = [Q.copy()]
+        self.Ms: list[Array] = [M.copy()]
+        self.iters = np.ones(steps, dtype=np.int64) * (1 if self.n == 3 else 0)
+        self.k = 0
+        self.Qk, self.Mk = Q, M
+        self.s: Any = None
+        self.coef: tuple[Any, ...] | None = None
+        if self.n != 3:
+            return
+        if self.size == 1:
+            self.q: Any = tuple(Q.reshape(9).tolist())
+            mm = M.reshape(9).tolist()
+            self.m: Any = (mm[7], mm[2], mm[3])
+        else:
+            Mf, Qf = M.reshape(-1, 3, 3), Q.reshape(-1, 3, 3)
+            self.m = tuple(_vee_cols(Mf))
+            self.q = tuple(Qf[:, i, j].copy() for i in range(3) for j in range(3))
+
+    def save(self) -> None:
+        """Keep the current state, at step ``self.k``."""
+        self.ks.append(self.k)
+        Qshape, Mshape = self.shapes
+        if self.n != 3:
+            self.Qs.append(self.Qk)
+            self.Ms.append(self.Mk)
+        elif self.size == 1:
+            self.Qs.append(np.array(self.q).reshape(Qshape))
+            self.Ms.append(_hat_cols([np.array(c) for c in self.m]).reshape(Mshape))
+        else:
+            self.Qs.append(np.stack(self.q, axis=-1).reshape(Qshape))
+            self.Ms.append(_hat_cols(list(self.m)).reshape(Mshape))
+
+    def loop3(self, h: float, order: int, use_numba: bool) -> None:
+        """n = 3 (only the first step when the compiled loop takes the rest).  Fast path: h is
+        fixed and s = b.x is conserved by the map, so the previous step's s is the root to
+        rounding and one fused kernel call (one Newton step on p, the update) is the whole
+        step; |ds| > tol (first step, rounding trouble) takes the stepper's slow path."""
+        stepper, size = self.stepper, self.size
+        lam_c, tol = stepper._lam_c, stepper._tol_max
+        coef = self.coef = _preprocessing(order, lam_c)
+        for k in range(1, (min(self.steps, 1) if use_numba else self.steps) + 1):
+            self.k = k
+            out = None
+            m, q = self.m, self.q
+            lam_k = lam_c if coef is None else _gen.mv3_preprocessed_lam(h, *m, *lam_c, *coef)
+            if self.s is not None:
+                out = _step3(self.s, h, *m, *lam_k, *q)
+                ds = out[1]
+                if not (abs(ds) if size == 1 else np.abs(ds).max()) <= tol:
+                    out = None
+            if out is None:
+                if coef is not None:
+                    _check_modified(lam_k, h, order)
+                out = stepper._step3(h, m, q, lam_k)
+                self.iters[k - 1] = stepper.iterations
+            self.s, self.m, self.q = out[0], out[2:5], out[5:]
+            if k % self.save_every == 0:
+                self.save()
+        self.iters *= size
+
+    def compiled(self, h: float) -> bool:
+        """Steps 2.. by the compiled loop of :mod:`symrb._compiled`; False if an item failed."""
+        stepper, size, steps, save_every = self.stepper, self.size, self.steps, self.save_every
+        Qshape, Mshape = self.shapes
+        self.k = 1
+        coef = self.coef
+        st = np.broadcast_to(np.asarray(self.s, dtype=float), (size,))
+        mv, qv = _columns(self.m, size), _columns(self.q, size)
+        tv = np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,))
+        cv = None if coef is None else _columns(coef, size)
+        ms, qs, fail, extra = _compiled.run_mv3(
+            st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1, coef=cv
+        )
+        if fail.any():
+            return False
+        self.iters[1:] += extra
+        for j, kj in enumerate(range(max(save_every, 2), steps + 1, save_every)):
+            self.ks.append(kj)
+            self.Qs.append(qs[j].reshape(Qshape))
+            self.Ms.append(_hat_cols([ms[j, :, 0], ms[j, :, 1], ms[j, :, 2]]).reshape(Mshape))
+        self.k = steps
+        return True
+
+    def loop_n(self, h: float) -> None:
+        """General n: one :meth:`MVStepper.step` a step."""
+        for k in range(1, self.steps + 1):
+            self.k = k
+            self.Qk, self.Mk = self.stepper.step(self.Qk, self.Mk, h)
+            self.iters[k - 1] = self.stepper.iterations * self.size
+            if k % self.save_every == 0:
+                self.save()
+
+    def result(self, h: float, order: int, failure: str) -> DiscreteFlowSolution:
+        kk = np.asarray(self.ks, dtype=np.int64)
+        k = self.k
+        return DiscreteFlowSolution(
+            t=kk.astype(np.float64) * h,
+            k=kk,
+            y=Trajectory({"Q": np.stack(self.Qs), "M": np.stack(self.Ms)}),
+            iterations=self.iters[: max(k, 0)] if failure else self.iters,
+            success=not failure,
+            status=-1 if failure else 0,
+            message=failure or f"all {self.steps} steps taken",
+            method="Moser-Veselov, Cayley-Newton engine"
+            + (f", preprocessed to order {order}" if order != 2 else ""),
+            h=h,
+        )

@@ -271,6 +271,34 @@ def _frame(m: list[float], mu: float, psi: float) -> Array:
     )
 
 
+def _exact_input(
+    Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike, check: bool
+) -> tuple[Array, Array, Array, Array, tuple[int, ...]]:
+    """The input of :func:`rigid_body_exact` as float arrays (validated with ``check``), the
+    times flattened to 1-D, and the broadcast batch shape."""
+    if check:
+        L = v.inertia(lam)
+        Qa = v.orthogonal(Q0, "Q0")
+        Ma = v.skew(M0, "M0")
+        tt = v.as_float_array(t, "t")
+    else:
+        L, Qa, Ma, tt = (np.asarray(x, dtype=float) for x in (lam, Q0, M0, t))
+    for name, x, want in (("lam", L, (3,)), ("Q0", Qa, (3, 3)), ("M0", Ma, (3, 3))):
+        if x.shape[x.ndim - len(want) :] != want:
+            raise InputError(
+                f"rigid_body_exact is for n = 3: {name} must have shape (..., "
+                f"{', '.join(map(str, want))}), got {x.shape}"
+            )
+    if tt.ndim > 1:
+        raise InputError(f"t must be a scalar or a 1-D array of times, got shape {tt.shape}")
+    tt = tt.reshape(-1)
+    try:
+        batch = np.broadcast_shapes(Qa.shape[:-2], Ma.shape[:-2], L.shape[:-1])
+    except ValueError as exc:
+        raise InputError(f"Q0, M0 and lam batch shapes do not broadcast: {exc}") from None
+    return L, Qa, Ma, tt, batch
+
+
 def rigid_body_exact(
     Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, t: ArrayLike, *, check: bool = True
 ) -> ExactSolution:
@@ -329,26 +357,7 @@ def rigid_body_exact(
     >>> float(np.ptp(symrb.kinetic_energy(sol.y.M, lam))) < 1e-14
     True
     """
-    if check:
-        L = v.inertia(lam)
-        Qa = v.orthogonal(Q0, "Q0")
-        Ma = v.skew(M0, "M0")
-        tt = v.as_float_array(t, "t")
-    else:
-        L, Qa, Ma, tt = (np.asarray(x, dtype=float) for x in (lam, Q0, M0, t))
-    for name, x, want in (("lam", L, (3,)), ("Q0", Qa, (3, 3)), ("M0", Ma, (3, 3))):
-        if x.shape[x.ndim - len(want) :] != want:
-            raise InputError(
-                f"rigid_body_exact is for n = 3: {name} must have shape (..., "
-                f"{', '.join(map(str, want))}), got {x.shape}"
-            )
-    if tt.ndim > 1:
-        raise InputError(f"t must be a scalar or a 1-D array of times, got shape {tt.shape}")
-    tt = tt.reshape(-1)
-    try:
-        batch = np.broadcast_shapes(Qa.shape[:-2], Ma.shape[:-2], L.shape[:-1])
-    except ValueError as exc:
-        raise InputError(f"Q0, M0 and lam batch shapes do not broadcast: {exc}") from None
+    L, Qa, Ma, tt, batch = _exact_input(Q0, M0, lam, t, check)
     if batch == () and len(tt) <= _SCALAR_MAX_TIMES:
         one = _one_body(Qa, Ma, L, tt)
         if one is not None:

@@ -1,4 +1,4 @@
-"""``symrb.bench`` and ``symrb bench``: the JSON schema with its goals, a tiny run of every
+"""``benchmarks.harness`` and ``symrb bench``: the JSON schema with its goals, a tiny run of every
 section, the exit statuses, errors measured against an independent reference, and the order fit.
 
 Nothing here is timed: the benchmark's speed is what it reports, not what these tests check.
@@ -20,7 +20,9 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 import symrb
-from symrb import bench
+from benchmarks import harness as bench
+from benchmarks.harness import cli as bench_cli
+from benchmarks.harness import config, goals, precision, problems, runner, timing
 from symrb import cli as launcher
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -158,16 +160,18 @@ def test_every_section_measured_something(tiny: bench.BenchResult) -> None:
 def test_preprocessed_methods_reach_their_orders_and_skip_n_other_than_3() -> None:
     """MV-pre4 and MV-pre8 (mv_flow(order=...)) in a work-precision sweep at n = 3 show their
     orders against the exact solution; at n = 4 they are not applicable (no failure noted)."""
-    p = dict(bench._QUICK, rounds=1, min_time=0.0005, wp_h={4: (0.2, 0.1), 8: (0.4, 0.2)})
+    p = dict(config._QUICK, rounds=1, min_time=0.0005, wp_h={4: (0.2, 0.1), 8: (0.4, 0.2)})
     notes: list[str] = []
-    wp = bench._work_precision(
-        3, 4.0, p, ["MV-pre4", "MV-pre8"], bench._modules(), notes, lambda _m: None
+    wp = precision._work_precision(
+        3, 4.0, p, ["MV-pre4", "MV-pre8"], problems._modules(), notes, lambda _m: None
     )
     assert wp["backend"] in ("numpy", "numba")
     assert wp["reference"].startswith("symrb.exact") and wp["exact_vs_mv_pre10"] < 1e-13
     for name, order in (("MV-pre4", 4), ("MV-pre8", 8)):
         assert abs(wp["methods"][name]["order"] - order) < 0.3, wp["methods"][name]
-    wp4 = bench._work_precision(4, 1.0, p, ["MV-pre4"], bench._modules(), notes, lambda _m: None)
+    wp4 = precision._work_precision(
+        4, 1.0, p, ["MV-pre4"], problems._modules(), notes, lambda _m: None
+    )
     assert wp4["methods"]["MV-pre4"] == {"available": False}
     assert not notes, notes
 
@@ -199,7 +203,7 @@ def test_bad_arguments_raise_input_error() -> None:
 def _euler_reference(T: float) -> np.ndarray:
     """m(T) of Euler's equations in vector form, m' = m x (m / I): another route than the
     matrix field the benchmark integrates."""
-    lam, _Q0, M0 = bench._problem(3, 0)
+    lam, _Q0, M0 = problems._problem(3, 0)
     inertia = symrb.inertia_from_lam(lam)
     sol = solve_ivp(
         lambda _t, m: np.cross(m, m / inertia),
@@ -213,30 +217,30 @@ def _euler_reference(T: float) -> np.ndarray:
 
 
 def test_the_reference_agrees_with_an_independent_integration() -> None:
-    lam, Q0, M0 = bench._problem(3, 0)
-    _Q, M = bench._solve_ivp_end(lam, Q0, M0, 5.0, "DOP853", 1e-13)()
+    lam, Q0, M0 = problems._problem(3, 0)
+    _Q, M = problems._solve_ivp_end(lam, Q0, M0, 5.0, "DOP853", 1e-13)()
     assert np.abs(symrb.vee(M) - _euler_reference(5.0)).max() < 1e-9
 
 
 def test_a_wrong_method_gets_a_large_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    right = symrb.discrete.discrete_rigid_body_flow
+    right = symrb.paper.discrete_rigid_body_flow
 
     def wrong(Q0, M0, lam, h, steps, **kw):  # the inertia in the wrong order
         return right(Q0, M0, np.asarray(lam)[::-1], h, steps, **kw)
 
     def measured() -> dict[str, Any]:
-        wp = bench._work_precision(
-            3, 2.0, dict(bench._QUICK, **TINY), ["MV"], {}, [], lambda _m: None
+        wp = precision._work_precision(
+            3, 2.0, dict(config._QUICK, **TINY), ["MV"], {}, [], lambda _m: None
         )
         return {p["h"]: p["error"] for p in wp["methods"]["MV"]["points"]}
 
     good = measured()
-    monkeypatch.setattr(symrb.discrete, "discrete_rigid_body_flow", wrong)
+    monkeypatch.setattr(symrb.paper, "discrete_rigid_body_flow", wrong)
     bad = measured()
     assert max(good.values()) < 0.05
     assert min(bad.values()) > 0.1
     # the good errors are those of an independent comparison
-    lam, Q0, M0 = bench._problem(3, 0)
+    lam, Q0, M0 = problems._problem(3, 0)
     sol = right(Q0, M0, lam, 0.1, 20, save_every=20)
     m_end = _euler_reference(2.0)
     assert good[0.1] >= np.abs(symrb.vee(sol.y.M[-1]) - m_end).max() * (1 - 1e-6)
@@ -269,11 +273,11 @@ def test_cost_at_an_error_interpolates_and_extrapolates() -> None:
     h = np.array([0.1, 0.05, 0.025])
     err, cost = 2.0 * h**2, 1e-4 / h  # cost ~ 1/h, error ~ h^2
     target = 2.0 * 0.07**2
-    got, how = bench._cost_at(err, cost, target, 2.0)
+    got, how = timing._cost_at(err, cost, target, 2.0)
     assert how == "interpolated" and got == pytest.approx(1e-4 / 0.07, rel=1e-12)
-    got, how = bench._cost_at(err, cost, 2.0 * 0.001**2, 2.0)
+    got, how = timing._cost_at(err, cost, 2.0 * 0.001**2, 2.0)
     assert how.startswith("extrapolated") and got == pytest.approx(1e-4 / 0.001, rel=1e-12)
-    assert bench._cost_at(err, cost, 1e-12, None)[0] is None
+    assert timing._cost_at(err, cost, 1e-12, None)[0] is None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -295,7 +299,7 @@ def test_cli_help_and_usage_errors(capsys: pytest.CaptureFixture[str]) -> None:
 def test_cli_runs_and_writes_json(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr(bench, "_QUICK", dict(bench._QUICK, **TINY))
+    monkeypatch.setattr(runner, "_QUICK", dict(config._QUICK, **TINY))
     path = tmp_path / "out.json"
     argv = ["bench", "--quick", "--only", "cost-vs-n", "--no-progress", "--json", str(path)]
     assert launcher.main(argv) == 0
@@ -308,13 +312,13 @@ def test_cli_strict_exits_1_on_an_unmet_goal(monkeypatch: pytest.MonkeyPatch) ->
     def fake(met: bool | None):
         def run(**_kw: Any) -> bench.BenchResult:
             res = bench.BenchResult(machine={}, parameters={})
-            res.goals = [bench._goal("g", 1.0, "<= 0", met, "")]
+            res.goals = [goals._goal("g", 1.0, "<= 0", met, "")]
             return res
 
         return run
 
     for met, plain, strict in ((False, 0, 1), (True, 0, 0), (None, 0, 0)):
-        monkeypatch.setattr(bench, "run", fake(met))
+        monkeypatch.setattr(bench_cli, "run", fake(met))
         assert launcher.main(["bench", "--no-progress"]) == plain
         assert launcher.main(["bench", "--no-progress", "--strict"]) == strict
 
@@ -326,9 +330,9 @@ def test_bench_needs_neither_sympy_nor_the_derivations() -> None:
         "from symrb.cli import main\n"
         "assert main(['bench', '--help']) == 0\n"
         "assert main(['bench', '--bogus']) == 2\n"
-        "import symrb.bench\n"
-        "r = symrb.bench.run(quick=True, sections=['cost-vs-n'], progress=False,\n"
-        "                    config={'cost_n': (3,), 'rounds': 1, 'min_time': 0.001})\n"
+        "import benchmarks.harness\n"
+        "r = benchmarks.harness.run(quick=True, sections=['cost-vs-n'], progress=False,\n"
+        "                           config={'cost_n': (3,), 'rounds': 1, 'min_time': 0.001})\n"
         "assert r.measurements['cost-vs-n']['rows'][0]['n'] == 3\n"
     )
     env = dict(os.environ, PYTHONPATH=str(ROOT))
@@ -336,6 +340,21 @@ def test_bench_needs_neither_sympy_nor_the_derivations() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_bench_without_the_harness_exits_2_and_says_why() -> None:
+    """In a wheel there is no ``benchmarks`` package: ``symrb bench`` says it needs a checkout."""
+    code = (
+        "import sys; sys.modules['benchmarks'] = None\n"
+        "from symrb.cli import main\n"
+        "sys.exit(main(['bench', '--quick']))\n"
+    )
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env
+    )
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "source checkout" in proc.stderr and "pip install -e '.[bench]'" in proc.stderr
 
 
 def test_committed_results_carry_no_path_of_the_machine() -> None:

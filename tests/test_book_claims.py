@@ -96,7 +96,7 @@ def test_prose_in_a_table_cell_has_no_bare_pipe() -> None:
 
 
 def test_every_claim_says_where_it_is_in_the_paper() -> None:
-    for c in CLAIMS:
+    for c in (c for c in CLAIMS if c.group == "paper"):
         assert re.match(r"Section [23](\.\d)?[ ,]", c.where), f"{c.id}: where={c.where!r}"
         short = short_where(c.where)
         section = re.match(r"Section [\d.]+", c.where)

@@ -21,7 +21,7 @@ import pytest
 import sympy as sp
 
 import derivations.registry as registry
-from derivations import cli as dcli
+from derivations import text
 from derivations.registry import ClaimResult, EvidenceResult, all_claims, get_claim
 from derivations.symbolic import Bracket, Pair
 from derivations.vocabulary import W
@@ -108,11 +108,12 @@ def test_bad_usage_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
 
 @pytest.mark.parametrize("argv", [["claims"], ["show", "S1"], ["verify", "S1"], ["derive"]])
 def test_without_sympy_every_command_exits_2_and_says_what_to_install(argv: list[str]) -> None:
-    for module in ("symrb.cli", "derivations.cli"):
-        code = (
-            f"import sys; sys.modules['sympy'] = None; from {module} import main; "
-            "sys.exit(main(sys.argv[1:]))"
-        )
+    launchers = (
+        "from symrb.cli import main; sys.exit(main(sys.argv[1:]))",
+        "import runpy; runpy.run_module('derivations', run_name='__main__')",
+    )
+    for launcher_code in launchers:
+        code = "import sys; sys.modules['sympy'] = None; " + launcher_code
         proc = _run(code, *argv)
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert "pip install -e '.[derive]'" in proc.stderr
@@ -146,7 +147,7 @@ def test_claims_lists_every_claim_on_one_line_within_100_columns(
     monkeypatch.setattr(registry, "_run_evidence", no_evidence)
     code, out, _ = _call(capsys, "claims")
     assert code == 0
-    rows = [line for line in out.splitlines() if re.match(r"[DS]\d+ ", line)]
+    rows = [line for line in out.splitlines() if re.match(r"[DSM]\d+ ", line)]
     assert [r.split()[0] for r in rows] == IDS
     for row, c in zip(rows, CLAIMS, strict=True):
         assert row[5:].startswith(c.expected + " "), row
@@ -164,12 +165,12 @@ def test_claims_json(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
-# plain text of formulas and LaTeX
+# text of formulas and LaTeX
 
 #: What must not reach a reader: placeholders, LaTeX, control characters, Python powers, SymPy
 #: class names printed as calls.
 _LEFTOVERS = re.compile(
-    r"\[\[[A-Za-z_]\w*\]\]|\$|\\|[\x00-\x02\x1f]|\*\*"
+    r"\[\[[A-Za-z_]\w*\]\]|\$|\\|[\x00-\x02\x1e\x1f]|\*\*"
     r"|\b(Bracket|Pair|GlPair|HadamardProduct|Transpose|Eq|Derivative|Sum|Integral|Subs|Trace"
     r"|Indexed|MatFn|OpNorm|Ddt|Lambda\(|_[A-Z][A-Za-z]+)\("
 )
@@ -180,57 +181,79 @@ def test_every_claim_text_renders_as_plain_text(claim: Any) -> None:
     for which in ("title", "statement", "printed", "corrected", "note"):
         if not getattr(claim, which):
             continue
-        text = dcli.claim_text(claim, which)
-        bad = _LEFTOVERS.search(re.sub(r"`[^`]*`", "", text))  # quoted source may hold LaTeX
-        assert bad is None, f"{claim.id} {which}: {bad.group()!r} in {text}"
+        shown = text.paragraph(text.claim_text(claim, which), width=100)
+        bad = _LEFTOVERS.search(re.sub(r"`[^`]*`", "", shown))  # quoted source may hold LaTeX
+        assert bad is None, f"{claim.id} {which}: {bad.group()!r} in {shown}"
+        assert not _too_wide(shown), f"{claim.id} {which}: {_too_wide(shown)}"
     for key, expr in claim.formulas.items():
-        text = dcli.formula_text(expr)
-        assert text and _LEFTOVERS.search(text) is None, f"{claim.id} [[{key}]]: {text}"
+        drawn = text.formula_text(expr)
+        assert drawn and _LEFTOVERS.search(drawn) is None, f"{claim.id} [[{key}]]: {drawn}"
 
 
-def test_formula_text_writes_the_papers_notation() -> None:
+def _lines(drawn: str) -> list[str]:
+    return drawn.splitlines()
+
+
+def test_formula_text_is_sympys_pretty_printer_with_our_display_objects() -> None:
     n = sp.Symbol("n")
     Q, P, M, X = (sp.MatrixSymbol(s, n, n) for s in "QPMX")
     m_def = sp.Eq(M, Q.T * P - P.T * Q, evaluate=False)
-    assert dcli.formula_text(m_def) == "M = Q^T P - P^T Q"
-    assert dcli.formula_text(Bracket(M, X)) == "[M, X]"
-    assert dcli.formula_text(Pair(M, X)) == "<M, X>"
-    assert dcli.formula_text(sp.HadamardProduct(W, M)) == "J^-1(M)"
-    assert dcli.formula_text(sp.HadamardProduct(M, X)) == "M o X"
-    assert dcli.formula_text(sp.Transpose(Q * X)) == "(Q X)^T"
-    assert dcli.formula_text((Q * X).T) == "X^T Q^T"
-    assert dcli.formula_text(sp.Rational(1, 2) * Q * M) == "(1/2) Q M"
+    pretty = sp.pretty(m_def, use_unicode=True, order="none")
+    assert _lines(text.formula_text(m_def)) == [line.rstrip() for line in pretty.splitlines()]
+    assert text.formula_text(Bracket(M, X)) == "[M, X]"
+    assert text.formula_text(Pair(M, X)) == "⟨M, X⟩"
+    assert text.formula_text(sp.HadamardProduct(W, M)) == "J⁻¹(M)"
+    assert text.formula_text(sp.HadamardProduct(W, Bracket(M, X))) == "J⁻¹([M, X])"
+    assert text.formula_text(sp.HadamardProduct(M, X)) == "M∘X"
+    assert text.formula_text(Pair(M, Bracket(M, X))) == "⟨M, [M, X]⟩"
+    assert _lines(text.formula_text(sp.Transpose(Q * X))) == ["     T", "(Q⋅X)"]
     k, N = sp.symbols("k N", integer=True)
     x = sp.IndexedBase("x")
-    assert dcli.formula_text(sp.Sum(x[k + 1], (k, 0, N - 1))) == "sum_{k=0..N-1} x_{k+1}"
+    total = _lines(text.formula_text(sp.Sum(x[k + 1], (k, 0, N - 1))))
+    assert total[0].strip() == "N - 1" and total[-1].strip() == "k = 0"
+    assert "x[k + 1]" in total[len(total) // 2]
     y = sp.Symbol("y")
     f = sp.Function("f")(y)
-    assert dcli.formula_text(sp.Derivative(f, y)) == "d/dy f(y)"
-    assert dcli.formula_text((Q, P)) == "Q,  P"
+    assert _lines(text.formula_text(sp.Derivative(f, y))) == ["d", "──(f(y))", "dy"]
+    assert text.formula_text((Q, P)) == "Q,  P"
+    assert text.formula_text(sp.Symbol(r"\hat{H}")) == "Ĥ"  # a name written in LaTeX
+    assert text.formula_text(sp.Function(r"\phi")(y)) == "ϕ(y)"
+
+
+def test_a_tall_formula_is_set_apart_and_a_flat_one_stays_in_the_sentence() -> None:
+    k, N = sp.symbols("k N", integer=True)
+    x = sp.IndexedBase("x")
+    formulas = {"flat": sp.Eq(x[k], 0, evaluate=False), "tall": sp.Sum(x[k], (k, 0, N - 1))}
+    raw = "If [[flat]] for every $k\\le N$, then [[tall]]. So it is."
+    shown = text.paragraph(text.text_of(raw, formulas), indent="  ", width=60)
+    lines = shown.splitlines()
+    assert lines[0] == "  If x[k] = 0 for every k ≤ N, then"
+    assert lines[-1] == "  So it is."
+    assert any(line.startswith("      ") and "x[k]" in line for line in lines[1:-1])
+    assert [line for line in lines if line.endswith(".")] == [lines[len(lines) // 2], lines[-1]]
+    with pytest.raises(KeyError, match=r"\[\[missing\]\]"):
+        text.text_of("[[missing]]", formulas, "S0")
 
 
 @pytest.mark.parametrize(
-    ("latex", "text"),
+    ("latex", "shown"),
     [
-        (r"\left\|M\right\|_{\rm op} < 2", "||M||_op < 2"),
-        (r"Q, P\in SO(n)", "Q, P in SO(n)"),
-        (r"\mathfrak{so}(n)", "so(n)"),
-        (r"\hat H", "Hhat"),
-        (r"\dot{x}^a", "xdot^a"),
+        (r"\left\|M\right\|_{\rm op} < 2", "‖M‖_{op} < 2"),
+        (r"Q, P\in SO(n)", "Q, P ∈ SO(n)"),
+        (r"\mathfrak{so}(n)", "𝔰𝔬(n)"),
+        (r"\hat H", "Ĥ"),
         (r"\frac{d}{dt}\left(Q M Q^{T}\right)", "d/dt(Q M Q^T)"),
-        (r"\left(I + X^2\right)^{1/2}", "(I + X^2)^(1/2)"),
         (r"p_{k+1}", "p_{k+1}"),
-        (r"\partial\phi/\partial Q", "dphi/dQ"),
-        (r"U_k\Lambda", "U_k Lambda"),
-        (r"\sum_a\phi(Q^a_T)", "sum_a phi(Q^a_T)"),
-        (r"Q^TB", "Q^T B"),
-        (r"\left\langle x, y \right\rangle", "<x, y>"),
-        (r"a\quad b", "a  b"),
-        (r"\sinh^{-1}M", "sinh^-1 M"),
+        (r"\partial\phi/\partial Q", "∂ϕ/∂Q"),
+        (r"\left\langle x, y \right\rangle", "⟨x, y⟩"),
+        (r"0 \le k \le N-1", "0 ≤ k ≤ N-1"),
+        (r"\operatorname{tr}(A)", "tr(A)"),
+        (r"\tfrac{1}{2} M", "1/2 M"),
+        (r"\left.\partial f/\partial x\right|_{K=0}", "∂f/∂x|_{K=0}"),
     ],
 )
-def test_latex_to_text(latex: str, text: str) -> None:
-    assert dcli.latex_to_text(latex) == text
+def test_latex_text(latex: str, shown: str) -> None:
+    assert text.latex_text(latex) == shown
 
 
 # ---------------------------------------------------------------------------------------------
@@ -248,13 +271,16 @@ def test_show_an_erratum(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = _call(capsys, "show", "s10", "--run")
     assert code == 0
     _assert_readable(out)
-    assert out.startswith("S10: " + dcli.claim_text(claim, "title"))
+    assert out.startswith("S10: " + text.claim_text(claim, "title"))
     heads = [line for line in out.splitlines() if line and not line.startswith(" ")]
     for head in ("Statement", "Printed in the paper", "Corrected", "Note", "Evidence"):
         assert head in heads, head
     assert "Run now in" in out
     flat = " ".join(out.split())
-    assert dcli.claim_text(claim, "corrected") in flat
+    assert " ".join(text.claim_text(claim, "corrected").split()) in flat
+    for key in claim.placeholders():  # every displayed formula, line by line
+        for line in text.formula_text(claim.formulas[key], 90).splitlines():
+            assert line.strip() in out, (key, line)
     assert f"Computed outcome: {claim.expected}, as recorded." in flat
     checks = re.findall(r"^ +\d+\. \[(\w+)\] (.+?), .*?: residual (\S+) (<=|>) tolerance (\S+)",
                         out, re.M)  # fmt: skip
@@ -385,11 +411,50 @@ def test_verify_table_fits_100_columns_with_every_kind_of_line() -> None:
                     evidence=[dataclasses.replace(bad, form="claim", residual=3e-11, tol=1e-9)]),
     ]  # fmt: skip
     unchecked = [{"kernel": "rigid_body." + long, "claims": ["S1", "S2"], "checked_by": []}]
-    lines = dcli.verify_table(results, unchecked)
+    lines = text.verify_table(results, unchecked)
     assert not [line for line in lines if len(line) > 100]
-    text = "\n".join(lines)
+    shown = "\n".join(lines)
     assert re.search(r"^S15 +holds +yes +1 +3\.0e-11 / 1e-09 +symbolic, general n +12\.5 s$",
-                     text, re.M), text  # fmt: skip
-    assert "D12 [printed] symbolic, general n: residual 0 <= tolerance 0: passes" in text
-    assert "error: ValueError" in text
-    assert "kernel rigid_body." + long + " names claims S1, S2 but no claim evaluated" in text
+                     shown, re.M), shown  # fmt: skip
+    assert "D12 [printed] symbolic, general n: residual 0 <= tolerance 0: passes" in shown
+    assert "error: ValueError" in shown
+    assert "kernel rigid_body." + long + " names claims S1, S2 but no claim evaluated" in shown
+
+
+def test_verify_table_and_claims_list_set_the_methods_apart() -> None:
+    ev = EvidenceResult(level="float64", description="d", form="claim", residual=0.0, tol=1e-12,
+                        seconds=0.01)  # fmt: skip
+    results = [
+        ClaimResult(id=cid, label="l", title="t", expected="holds", outcome="holds", evidence=[ev])
+        for cid in ("S1", "M1", "D2")
+    ]
+    lines = text.verify_table(results, [])
+    heads = [lines.index(t) for t in registry.GROUP_TITLES.values()]
+    rows = [i for i, line in enumerate(lines) if re.match(r"[DSM]\d+ ", line)]
+    ids = [lines[i].split()[0] for i in rows]
+    assert ids == ["S1", "D2", "M1"]
+    assert heads[0] < rows[0] < rows[1] < heads[1] < rows[2]
+    assert text.verify_table(results[:1], [])[2].startswith("S1 ")  # one group: no heading
+    paper = [c for c in CLAIMS if c.group == "paper"][:2]
+    method = dataclasses.replace(paper[0], id="M1", evidence=[], formulas={})
+    listed = text.claims_lines([*paper, method])
+    assert listed.index("symrb's own methods") < [r[:2] for r in listed].index("M1")
+
+
+def test_verify_group_runs_only_that_group(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    ran: list[list[str]] = []
+
+    def record(claims: Any, *args: Any) -> Any:
+        ran.append([c.id for c in claims])
+        return iter([])
+
+    monkeypatch.setattr("derivations.cli._run", record)
+    for argv, group in ((["--paper"], "paper"), (["--group", "method"], "method"), ([], None)):
+        code, _, _ = _call(capsys, "verify", "--quiet", *argv)
+        assert code == 0 and ran == [[c.id for c in all_claims(group=group)]], (argv, ran)
+        ran.clear()
+    assert all_claims(group="paper") == CLAIMS[: len(all_claims(group="paper"))]
+    code, _, err = _call(capsys, "verify", "--paper", "--group", "method")
+    assert code == 2 and "not allowed with" in err

@@ -15,16 +15,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import symrb
+from symrb.base_steps import MidpointStep, MVStep, RKMK4Step
 from symrb.compose import (
-    MidpointStep,
-    MVStep,
-    RKMK4Step,
-    compose_steps,
     composed_rigid_body_flow,
-    composition_coefficients,
     midpoint_rigid_body_flow,
     rkmk4_rigid_body_flow,
 )
+from symrb.composition import compose_steps, composition_coefficients
 from symrb.errors import InputError
 
 LAM = np.array([0.7, 1.1, 1.6])

@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 import symrb
 from symrb import learning
 from symrb.exact import rigid_body_exact
-from symrb.orbits import _pack
+from symrb.orbits.bvp import _pack
 from symrb.testing import attitudes, dimensions, inertias, seeds
 
 EPS = float(np.finfo(float).eps)

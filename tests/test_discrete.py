@@ -1,4 +1,4 @@
-"""Tests of symrb.discrete: symmetric representation, MV-Algorithms 1 and 2, time-step scaling.
+"""Tests of symrb.paper: symmetric representation, MV-Algorithms 1 and 2, time-step scaling.
 
 The long-run agreement of the three maps and their order of accuracy are experiments of the book
 (symrb.experiments.discrete), tested once in tests/test_experiments_discrete.py.
@@ -187,7 +187,8 @@ def test_a_solve_past_the_fold_stops_the_run_with_a_message():
 def test_a_failure_mid_run_keeps_the_states_reached(monkeypatch, flow):
     """The fourth solve raises: the run returns the states up to the last completed step (appended
     when save_every would have skipped it), the iterations of the solves done, and the reason."""
-    import symrb.discrete as dm
+    import symrb._stepping as dm
+    from symrb.errors import OutOfDomainError
 
     original = dm._Stepper.solve
     calls = {"n": 0}
@@ -195,7 +196,7 @@ def test_a_failure_mid_run_keeps_the_states_reached(monkeypatch, flow):
     def failing(self, M):
         calls["n"] += 1
         if calls["n"] == 4:
-            raise dm.OutOfDomainError("no solution (test)")
+            raise OutOfDomainError("no solution (test)")
         return original(self, M)
 
     monkeypatch.setattr(dm._Stepper, "solve", failing)

@@ -27,7 +27,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 import symrb
-from derivations import codegen
+from derivations import printer
 from derivations.registry import all_kernels
 from derivations.vocabulary import AUXILIARIES, Kernel, n
 
@@ -155,29 +155,29 @@ def test_kernels_are_emitted_once_and_used() -> None:
 
 def test_every_kernel_names_a_claim() -> None:
     for k in KERNELS:
-        assert k.claims and all(re.fullmatch(r"[DS]\d+", c) for c in k.claims), k
+        assert k.claims and all(re.fullmatch(r"[DSM]\d+", c) for c in k.claims), k
 
 
 def test_derive_check_is_clean() -> None:
-    assert codegen.emit_all(check=True, out=sys.stderr) == 0
+    assert printer.emit_all(check=True, out=sys.stderr) == 0
 
 
 def test_hand_edit_is_detected(tmp_path: Path) -> None:
     """Copy the generated tree, edit one kernel by hand: derive --check must fail with a diff."""
     target = tmp_path / "_generated"
-    shutil.copytree(codegen.generated_dir(), target)
+    shutil.copytree(printer.generated_dir(), target)
     f = target / "rigid_body.py"
     text = f.read_text()
     edited = text.replace("W = 1.0 / (", "W = 2.0 / (", 1)
     assert edited != text
     f.write_text(edited)
     buf = io.StringIO()
-    assert codegen.emit_all(check=True, out=buf, target=target) == 1
+    assert printer.emit_all(check=True, out=buf, target=target) == 1
     assert "-    W = 2.0 / (" in buf.getvalue()
     f.write_text(text)
     (target / "orphan.py").write_text("x = 1\n")
     buf = io.StringIO()
-    assert codegen.emit_all(check=True, out=buf, target=target) == 1 and "stale" in buf.getvalue()
+    assert printer.emit_all(check=True, out=buf, target=target) == 1 and "stale" in buf.getvalue()
 
 
 def _tracked_copy(dest: Path) -> None:
@@ -220,7 +220,7 @@ def test_generate_into_empty_directory_by_script_without_ruff_on_path(tmp_path: 
 
 def test_generation_does_not_depend_on_hash_seed() -> None:
     code = (
-        "import hashlib; from derivations.codegen import collect; f = collect(); "
+        "import hashlib; from derivations.printer import collect; f = collect(); "
         "print(hashlib.sha256(''.join(k + f[k] for k in sorted(f)).encode()).hexdigest())"
     )
     digests = set()
@@ -231,7 +231,7 @@ def test_generation_does_not_depend_on_hash_seed() -> None:
             check=True,
         )  # fmt: skip
         digests.add(out.stdout.strip())
-    committed = {p.name: p.read_text() for p in codegen.generated_dir().glob("*.py")}
+    committed = {p.name: p.read_text() for p in printer.generated_dir().glob("*.py")}
     expect = hashlib.sha256(
         "".join(k + committed[k] for k in sorted(committed)).encode()
     ).hexdigest()
@@ -239,7 +239,7 @@ def test_generation_does_not_depend_on_hash_seed() -> None:
 
 
 def test_generated_files_have_header() -> None:
-    for path in sorted(codegen.generated_dir().glob("*.py")):
+    for path in sorted(printer.generated_dir().glob("*.py")):
         head = path.read_text().splitlines()[0]
         assert "do not edit by hand" in head, path.name
         if path.name != "__init__.py":
@@ -251,7 +251,7 @@ def test_derivations_import_nothing_from_symrb_at_module_level() -> None:
     code = (
         "import sys; sys.modules['symrb'] = None\n"
         "from derivations.registry import all_claims\n"
-        "from derivations.codegen import collect\n"
+        "from derivations.printer import collect\n"
         "assert len(all_claims('paper')) == 27\n"
         "files = collect()\n"
         "print(len(files))\n"
@@ -291,7 +291,7 @@ def test_exports_table_matches_the_modules() -> None:
 def test_auxiliaries_print_their_entry_formula() -> None:
     """The code printed for W equals W's entry formula evaluated in NumPy."""
     lam = np.array([[0.5, 1.25, 2.0], [1.0, 3.0, 0.25]])
-    code = codegen._aux_code(AUXILIARIES["W"])
+    code = printer._aux_code(AUXILIARIES["W"])
     got = eval(code, {"numpy": np, "lam": lam})  # noqa: S307 - our own printed code
     li, lj = sp.symbols("li lj")
     entry = sp.lambdify([li, lj], AUXILIARIES["W"].entry(li, lj, sp.Integer(0)))

@@ -240,7 +240,7 @@ def test_extend_guess():
         calls.append(np.array(s))
         return np.stack([s, 2 * s])
 
-    t, y = orbits._extend(sol, 2.0, 5.0, 11)
+    t, y = orbits.bvp._extend(sol, 2.0, 5.0, 11)
     np.testing.assert_allclose(t, np.linspace(0.0, 5.0, 11))
     source = calls[0]
     np.testing.assert_allclose(source[t < 1.0], t[t < 1.0])

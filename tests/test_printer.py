@@ -3,7 +3,7 @@
 Hypothesis builds expressions from matrix symbols, the auxiliaries Lambda (diagonal) and W, sums,
 products, transposes, Hadamard products, powers, traces and scalar coefficients (numbers, batched
 traces, and sums of them, which need parentheses and batch alignment).  Each expression is printed
-by :func:`derivations.codegen.render_kernel` exactly as a kernel would be, run on batched NumPy
+by :func:`derivations.printer.render_kernel` exactly as a kernel would be, run on batched NumPy
 arrays, and compared item by item with SymPy evaluating the same expression on explicit matrices.
 """
 
@@ -15,7 +15,7 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from derivations import codegen
+from derivations import printer
 from derivations.vocabulary import AUXILIARIES, Arg, Kernel, Lam, W, matrix, n
 
 SIZE = 3
@@ -64,7 +64,7 @@ def _compile(outputs: dict[str, sp.Basic]) -> object:
         claims=("S1",), register=False,
     )  # fmt: skip
     namespace: dict[str, object] = {"numpy": np}
-    exec(codegen.render_kernel(k), namespace)  # noqa: S102 - our own printed code
+    exec(printer.render_kernel(k), namespace)  # noqa: S102 - our own printed code
     return namespace["k"]
 
 
@@ -146,6 +146,6 @@ def test_repeated_products_are_shared() -> None:
         outputs={f"t{p}": sp.Trace(sp.MatPow(M, p)) for p in (2, 4, 6)},
         doc="Test kernel.", claims=("S1",), stack=True, register=False,
     )  # fmt: skip
-    text = codegen.render_kernel(k)
+    text = printer.render_kernel(k)
     assert text.count(" @ ") == 2, text
     assert "Total ops per batch item: 2 matrix products" in text

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import re
 
 import pytest
@@ -93,8 +94,15 @@ def test_unknown_id() -> None:
 
 
 def test_registry_ids_are_those_of_claims_md() -> None:
-    ids = [c.id for c in all_claims("paper")]
-    assert ids == [f"D{i}" for i in range(1, 13)] + [f"S{i}" for i in range(1, 16)]
+    paper = [c.id for c in all_claims(group="paper")]
+    assert paper == [f"D{i}" for i in range(1, 13)] + [f"S{i}" for i in range(1, 16)]
+    methods = [c.id for c in all_claims(group="method")]
+    assert methods == [f"M{i}" for i in range(1, len(methods) + 1)]
+    assert [c.id for c in CLAIMS] == paper + methods
+    assert {c.group for c in CLAIMS} <= {"paper", "method"}
+    with pytest.raises(ValueError, match="group must be one of"):
+        all_claims(group="nonsense")
+    assert all(c.section == "symrb" and c.where for c in CLAIMS if c.group == "method")
 
 
 @pytest.mark.parametrize("c", CLAIMS, ids=[c.id for c in CLAIMS])
@@ -129,8 +137,7 @@ def test_a_displayed_sign_is_a_checked_sign() -> None:
     eq = c.formulas["J"]
     try:
         c.formulas["J"] = sp.Eq(eq.lhs, -eq.rhs, evaluate=False)
-        import derivations.claims.section3.s02_rigid_body_equations as rb
-
+        rb = importlib.import_module(c.module)  # wherever S2 is declared
         old, rb.J_DEF = rb.J_DEF, c.formulas["J"]
         after = verify_claim(c)
     finally:

@@ -30,7 +30,8 @@ from symrb.scenes import (
     scene_inputs,
     sweep,
 )
-from symrb.scenes import _core as scenes_core
+from symrb.scenes import run as scenes_run
+from symrb.scenes import store as scenes_store
 
 ROOT = Path(__file__).resolve().parents[1]
 BOOK_SCENES = sorted((ROOT / "book" / "scenes").glob("*.toml"))
@@ -403,13 +404,13 @@ def test_inputs_are_not_mutated_and_scenes_are_frozen() -> None:
 
 def test_second_run_loads_and_recomputes_nothing(tmp_path, monkeypatch) -> None:
     calls = []
-    real = scenes_core._execute
+    real = scenes_run._execute
 
     def counting(sc, plan):
         calls.append(sc.system)
         return real(sc, plan)
 
-    monkeypatch.setattr(scenes_core, "_execute", counting)
+    monkeypatch.setattr(scenes_run, "_execute", counting)
     sc = load_scene(BASE)
     a = run_scene(sc, cache=tmp_path)
     b = run_scene(sc, cache=tmp_path)
@@ -429,8 +430,8 @@ def test_second_run_loads_and_recomputes_nothing(tmp_path, monkeypatch) -> None:
 def test_key_depends_on_the_code(monkeypatch) -> None:
     sc = load_scene(BASE)
     key = scenes.scene_key(sc)
-    real = scenes_core._code_digest
-    monkeypatch.setattr(scenes_core, "_code_digest", lambda mods: real(mods) + "changed")
+    real = scenes_store._code_digest
+    monkeypatch.setattr(scenes_store, "_code_digest", lambda mods: real(mods) + "changed")
     assert scenes.scene_key(sc) != key
     # and on the modules the plan uses: the engine's source enters an MV scene's key only
     assert "engine" in plan_scene(_rb(n=3, integrator={"kind": "mv", "h": 0.1})).modules

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import replaced_experiments as discrete_experiments
+import replaced_experiments as smooth_experiments
 from scene_helpers import problems as _problems
 from scene_helpers import same as _same
 
 import symrb
-from symrb.experiments import discrete as discrete_experiments
-from symrb.experiments import smooth as smooth_experiments
 from symrb.scenes import (
     SceneResult,
     SceneStore,

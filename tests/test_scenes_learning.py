@@ -278,7 +278,7 @@ def test_plan_names_the_trainer_and_what_an_iteration_costs() -> None:
     assert "discrete_rigid_body.jd" in shoot.kernels
     assert any("evaluations" in n and "maxfev" in n for n in shoot.notes)
     for plan in (gd, msa, shoot):
-        assert "scenes._so_network" in plan.modules and "learning" in plan.modules
+        assert "scenes.systems.so_network" in plan.modules and "learning" in plan.modules
         assert plan.save == {"steps": plan.index["U"][0]}
 
 

@@ -28,7 +28,7 @@ from symrb.scenes import (
     scene_inputs,
     sweep,
 )
-from symrb.scenes import _core as scenes_core
+from symrb.scenes.systems import orbit_extremal as scenes_orbit_extremal
 
 ROOT = Path(__file__).resolve().parents[1]
 BOOK_SCENES = ROOT / "book" / "scenes"
@@ -129,7 +129,7 @@ def test_toda_plan_propagates_L_and_names_what_it_skips() -> None:
     assert plan.system == "toda" and plan.propagated == ("L",)
     assert plan.route.startswith("symrb.toda_flow(rtol=1e-09, atol=1e-10)")
     assert plan.kernels == ("adjoint_orbits.double_bracket_rhs",)
-    assert {"scenes._core", "scenes._toda", "orbits", "_generated.adjoint_orbits"} <= set(
+    assert {"scenes.plan", "scenes.systems.toda", "orbits", "_generated.adjoint_orbits"} <= set(
         plan.modules
     )
     # the diagnostic not asked for is named; the state variables L, b are not diagnostics
@@ -280,8 +280,8 @@ def test_extra_runs_only_when_asked_for(db_calls, monkeypatch) -> None:
     def forbidden(*args, **kwargs):
         raise AssertionError("evaluated without being asked for")
 
-    monkeypatch.setattr(scenes_core, "_second_term", forbidden)
-    monkeypatch.setattr(scenes_core, "_pairing_norm", forbidden)
+    monkeypatch.setattr(scenes_orbit_extremal, "_second_term", forbidden)
+    monkeypatch.setattr(scenes_orbit_extremal, "_pairing_norm", forbidden)
     r = run_scene(base, cache=False)
     assert db_calls == [] and set(r.data) == {"pairing"}
     with_db = plan_scene({**base, "observables": {"db_distance": "end"}})

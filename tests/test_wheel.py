@@ -1,10 +1,10 @@
 """Build the wheel, install it into a clean virtual environment, and import symrb there.
 
-Checks that the wheel holds ``symrb`` only (no ``derivations``), that the package works from it
+Checks that the wheel holds ``symrb`` only (no ``derivations``, no ``benchmarks``), that the package works from it
 with only its declared run-time dependencies (NumPy and SciPy, fetched by pip from the package
 index), that neither importing symrb, nor calling it, nor importing every generated kernel module
-pulls in SymPy, and that ``symrb derive`` / ``symrb verify`` there exit with status 2 and say what
-to install.
+pulls in SymPy, and that ``symrb derive`` / ``symrb verify`` / ``symrb bench`` there exit with
+status 2 and say what to install.
 """
 
 from __future__ import annotations
@@ -130,3 +130,9 @@ def test_wheel_in_clean_venv(tmp_path: Path) -> None:
         )
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert "pip install -e '.[derive]'" in proc.stderr
+    # the bench harness (benchmarks/) is not in the wheel either
+    proc = subprocess.run(
+        [str(script), "bench", "--quick"], capture_output=True, text=True, env=env, cwd=tmp_path
+    )
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "source checkout" in proc.stderr

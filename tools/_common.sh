@@ -7,6 +7,9 @@
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 PYTHONHASHSEED=0
 export PYDEVD_DISABLE_FILE_VALIDATION=1
+# The book's own code (book/lib/symrb_book, not part of the wheel) is importable by the pages'
+# kernels, which inherit this environment.
+export PYTHONPATH="$PWD/book/lib${PYTHONPATH:+:$PYTHONPATH}"
 # Notebook kernels start from tools/jupyter/kernels/python3, which only lowers the kernel's own
 # log level (no "Kernel is running over TCP without encryption" once per page).
 export JUPYTER_PATH="$PWD/tools/jupyter${JUPYTER_PATH:+:$JUPYTER_PATH}"

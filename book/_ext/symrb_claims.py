@@ -30,15 +30,20 @@ from sphinx.errors import ExtensionError
 from sphinx.util.docutils import SphinxDirective
 from sphinx.util.nodes import nested_parse_with_titles
 
+from derivations.registry import GROUPS, get_claim
+from derivations.report import (
+    SHORT_LEVELS,
+    breakable,
+    load_results,
+    plain,
+    prose,
+    short_where,
+    verify_json_path,
+)
+
 ERRATA = ("holds after correction", "fails")
 STACKED_PAGES = {"claims", "errata"}
-LEVELS = {  # evidence levels as the tables show them, strongest first
-    "symbolic, general n": "symbolic (all n)",
-    "symbolic, fixed n": "symbolic (fixed n)",
-    "exact rational": "exact rational",
-    "float64": "float64",
-    "high precision": "high precision",
-}
+LEVELS = SHORT_LEVELS  # evidence levels as the tables show them, strongest first
 _MATH = re.compile(r"(\$[^$]+\$)")
 
 
@@ -71,8 +76,6 @@ def summary_of(note: str) -> tuple[str, str]:
 
 def _cell(text: str) -> str:
     """Markdown with math for a narrow table cell: formulas cut where a line may break."""
-    from derivations.report import breakable, prose
-
     return prose(breakable(text, limit=12), cell=True)
 
 
@@ -107,8 +110,6 @@ def verdict(e: Mapping[str, Any]) -> str:
 def evidence_rows(evidence: Sequence[Mapping[str, Any]]) -> list[str]:
     """A Markdown table of checks: form and level, what is checked, the residual against the
     tolerance, and what that means."""
-    from derivations.report import plain
-
     rows = [
         "| check | what is checked | residual vs tolerance | result |",
         "|---|---|---|---|",
@@ -153,10 +154,9 @@ def check_erratum(result: Mapping[str, Any], note: str) -> None:
 
 
 def errata_markdown(results: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The summary table and one section per erratum, as MyST Markdown lines."""
-    from derivations.registry import get_claim
-    from derivations.report import breakable, prose, short_where
-
+    """The summary table and one section per erratum, as MyST Markdown lines (the paper's claims
+    only: the checks of symrb's own methods have no printed form)."""
+    results = [r for r in results if GROUPS[r["id"][0]] == "paper"]
     errata = [r for r in results if r["outcome"] in ERRATA]
     lines = [
         "## Summary",
@@ -238,8 +238,6 @@ class SymrbErrata(SphinxDirective):
     has_content = False
 
     def run(self) -> list[nodes.Node]:
-        from derivations.report import load_results, verify_json_path
-
         self.env.note_dependency(str(verify_json_path()))
         payload, _source = load_results()
         lines = errata_markdown(payload["claims"])

@@ -1,1 +1,1 @@
-"""The paper's claims, one module each, grouped by section."""
+"""The paper's claims, one module per claim, grouped by section (``section2``, ``section3``)."""

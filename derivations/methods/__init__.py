@@ -1,1 +1,1 @@
-"""Checks of symrb's own methods (ids M1..), apart from the paper's claims."""
+"""Checks of symrb's own methods (ids M1, M2, ...), apart from the paper's claims."""

@@ -1,4 +1,4 @@
-"""Generated from ``derivations.parts.discrete_control``; do not edit by hand.
+"""Generated from ``derivations.claims.section2.d06_backprop``; do not edit by hand.
 
 Every function here is the expression that the evidence of the claims named in its
 docstring evaluated.  Regenerate with ``python -m derivations derive`` (or ``symrb
@@ -42,7 +42,7 @@ def resnet_step_tanh(K, beta, x):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 1 matrix product (n^3), 3 elementwise (n^2).
     """
@@ -78,7 +78,7 @@ def resnet_adjoint_tanh(K, beta, x, p):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 3 matrix products (n^3), 4 elementwise (n^2).
     """
@@ -111,7 +111,7 @@ def resnet_step_tanh_plain(K, beta, x):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 1 matrix product (n^3), 2 elementwise (n^2).
     """
@@ -147,7 +147,7 @@ def resnet_adjoint_tanh_plain(K, beta, x, p):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 3 matrix products (n^3), 3 elementwise (n^2).
     """
@@ -180,7 +180,7 @@ def resnet_step_logistic(K, beta, x):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 1 matrix product (n^3), 3 elementwise (n^2).
     """
@@ -216,7 +216,7 @@ def resnet_adjoint_logistic(K, beta, x, p):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 3 matrix products (n^3), 4 elementwise (n^2).
     """
@@ -249,7 +249,7 @@ def resnet_step_logistic_plain(K, beta, x):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 1 matrix product (n^3), 2 elementwise (n^2).
     """
@@ -285,7 +285,7 @@ def resnet_adjoint_logistic_plain(K, beta, x, p):
     Notes
     -----
     Checked by claim D6 (``symrb verify D6``);
-    expressions from ``derivations.parts.discrete_control``.
+    expressions from ``derivations.claims.section2.d06_backprop``.
 
     Total ops per batch item: 3 matrix products (n^3), 3 elementwise (n^2).
     """

@@ -1,4 +1,4 @@
-"""Generated from ``derivations.parts.discrete_rigid_body``; do not edit by hand.
+"""Generated from ``derivations.claims.section2.d07_optimal_control_on_so_n``, ``derivations.claims.section2.d09_learning_version``, ``derivations.claims.section2.d10_moser_veselov``, ``derivations.methods.cayley_step``, ``derivations.methods.preprocessed_mv``; do not edit by hand.
 
 Every function here is the expression that the evidence of the claims named in its
 docstring evaluated.  Regenerate with ``python -m derivations derive`` (or ``symrb
@@ -11,12 +11,12 @@ import numpy
 
 __all__ = [
     "jd",
-    "mv_momentum",
-    "mv_transport",
     "so_network_layer",
     "so_network_endpoint",
     "so_network_costate",
     "so_network_gradient",
+    "mv_momentum",
+    "mv_transport",
     "mv3_cayley_s_newton",
     "mv3_cayley_step",
     "mv3_preprocessing_coefficients",
@@ -43,65 +43,13 @@ def jd(U, lam):
     Notes
     -----
     Checked by claims D7, D8, D10, D12 (``symrb verify D7 D8 D10 D12``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    expressions from ``derivations.claims.section2.d07_optimal_control_on_so_n``.
 
     Total ops per batch item: 3 elementwise (n^2).
     """
     U = numpy.asarray(U, dtype=float)
     lam = numpy.asarray(lam, dtype=float)
     return (U * lam[..., None, :]) - (lam[..., :, None] * numpy.swapaxes(U, -1, -2))
-
-
-def mv_momentum(Omega, lam):
-    r"""Second Moser-Veselov equation (paper, Section 2.2): M_k = Omega_k^T Lambda - Lambda Omega_k.
-
-    Parameters
-    ----------
-    Omega : array, shape (..., n, n)
-        discrete body angular velocity, in SO(n)
-    lam : array, shape (..., n)
-        diagonal of Lambda, positive
-
-    Returns
-    -------
-    M : array
-
-    Notes
-    -----
-    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
-
-    Total ops per batch item: 3 elementwise (n^2).
-    """
-    Omega = numpy.asarray(Omega, dtype=float)
-    lam = numpy.asarray(lam, dtype=float)
-    return (numpy.swapaxes(Omega, -1, -2) * lam[..., None, :]) - (lam[..., :, None] * Omega)
-
-
-def mv_transport(Omega, M):
-    r"""Third Moser-Veselov equation (paper, Section 2.2): M_{k+1} = Omega_k M_k Omega_k^T.
-
-    Parameters
-    ----------
-    Omega : array, shape (..., n, n)
-        discrete body angular velocity, in SO(n)
-    M : array, shape (..., n, n)
-        discrete body angular momentum, skew
-
-    Returns
-    -------
-    M_next : array
-
-    Notes
-    -----
-    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
-
-    Total ops per batch item: 2 matrix products (n^3).
-    """
-    Omega = numpy.asarray(Omega, dtype=float)
-    M = numpy.asarray(M, dtype=float)
-    return (Omega @ M) @ numpy.swapaxes(Omega, -1, -2)
 
 
 def so_network_layer(Q, U):
@@ -121,7 +69,7 @@ def so_network_layer(Q, U):
     Notes
     -----
     Checked by claim D9 (``symrb verify D9``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    expressions from ``derivations.claims.section2.d09_learning_version``.
 
     Total ops per batch item: 1 matrix product (n^3).
     """
@@ -147,7 +95,7 @@ def so_network_endpoint(Q, T):
     Notes
     -----
     Checked by claim D9 (``symrb verify D9``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    expressions from ``derivations.claims.section2.d09_learning_version``.
 
     Total ops per batch item: 1 elementwise (n^2).
     """
@@ -173,7 +121,7 @@ def so_network_costate(P_next, U):
     Notes
     -----
     Checked by claim D9 (``symrb verify D9``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    expressions from ``derivations.claims.section2.d09_learning_version``.
 
     Total ops per batch item: 1 matrix product (n^3).
     """
@@ -208,7 +156,7 @@ def so_network_gradient(P_next, Q_next, U, lam):
     Notes
     -----
     Checked by claim D9 (``symrb verify D9``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    expressions from ``derivations.claims.section2.d09_learning_version``.
 
     Total ops per batch item: 1 matrix product (n^3), 8 elementwise (n^2).
     """
@@ -220,6 +168,58 @@ def so_network_gradient(P_next, Q_next, U, lam):
     return (
         (0.5 * (lam[..., :, None] * U)) - (0.5 * (numpy.swapaxes(U, -1, -2) * lam[..., None, :]))
     ) + (0.5 * (t0 - numpy.swapaxes(t0, -1, -2)))
+
+
+def mv_momentum(Omega, lam):
+    r"""Second Moser-Veselov equation (paper, Section 2.2): M_k = Omega_k^T Lambda - Lambda Omega_k.
+
+    Parameters
+    ----------
+    Omega : array, shape (..., n, n)
+        discrete body angular velocity, in SO(n)
+    lam : array, shape (..., n)
+        diagonal of Lambda, positive
+
+    Returns
+    -------
+    M : array
+
+    Notes
+    -----
+    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``);
+    expressions from ``derivations.claims.section2.d10_moser_veselov``.
+
+    Total ops per batch item: 3 elementwise (n^2).
+    """
+    Omega = numpy.asarray(Omega, dtype=float)
+    lam = numpy.asarray(lam, dtype=float)
+    return (numpy.swapaxes(Omega, -1, -2) * lam[..., None, :]) - (lam[..., :, None] * Omega)
+
+
+def mv_transport(Omega, M):
+    r"""Third Moser-Veselov equation (paper, Section 2.2): M_{k+1} = Omega_k M_k Omega_k^T.
+
+    Parameters
+    ----------
+    Omega : array, shape (..., n, n)
+        discrete body angular velocity, in SO(n)
+    M : array, shape (..., n, n)
+        discrete body angular momentum, skew
+
+    Returns
+    -------
+    M_next : array
+
+    Notes
+    -----
+    Checked by claims D10, D11, D12 (``symrb verify D10 D11 D12``);
+    expressions from ``derivations.claims.section2.d10_moser_veselov``.
+
+    Total ops per batch item: 2 matrix products (n^3).
+    """
+    Omega = numpy.asarray(Omega, dtype=float)
+    M = numpy.asarray(M, dtype=float)
+    return (Omega @ M) @ numpy.swapaxes(Omega, -1, -2)
 
 
 def mv3_cayley_s_newton(s, h, m1, m2, m3, l1, l2, l3):
@@ -256,8 +256,8 @@ def mv3_cayley_s_newton(s, h, m1, m2, m3, l1, l2, l3):
 
     Notes
     -----
-    Checked by claim D10 (``symrb verify D10``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    Checked by claim M1 (``symrb verify M1``);
+    expressions from ``derivations.methods.cayley_step``.
 
     Total ops per batch item: 62 scalar.
     """
@@ -356,8 +356,8 @@ def mv3_cayley_step(s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, 
 
     Notes
     -----
-    Checked by claim D10 (``symrb verify D10``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    Checked by claim M1 (``symrb verify M1``);
+    expressions from ``derivations.methods.cayley_step``.
 
     Total ops per batch item: 216 scalar.
     """
@@ -499,8 +499,8 @@ def mv3_preprocessing_coefficients(l1, l2, l3):
 
     Notes
     -----
-    Checked by claim D10 (``symrb verify D10``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    Checked by claim M3 (``symrb verify M3``);
+    expressions from ``derivations.methods.preprocessed_mv``.
 
     Total ops per batch item: 407 scalar.
     """
@@ -774,8 +774,8 @@ def mv3_preprocessed_lam(
 
     Notes
     -----
-    Checked by claim D10 (``symrb verify D10``);
-    expressions from ``derivations.parts.discrete_rigid_body``.
+    Checked by claim M3 (``symrb verify M3``);
+    expressions from ``derivations.methods.preprocessed_mv``.
 
     Total ops per batch item: 126 scalar.
     """

@@ -38,6 +38,14 @@ nothing recomputes nothing.  :func:`sweep` runs a grid of scenes, in-process or 
 cluster (``dask.distributed``, imported only there), and returns one pandas table plus the
 results.
 
+Where each stage lives: ``schema`` (what every system shares: :class:`SceneError`,
+:class:`When`, the base model with its hooks, :func:`register_system`), ``parse``
+(:func:`parse_scene`, :func:`load_scene`, the errors with their TOML lines), ``plan``
+(:class:`Plan`, :func:`plan_scene`), ``run`` (:func:`scene_inputs`, :func:`run_scene`),
+``result`` (:class:`SceneResult`), ``store`` (:func:`scene_key`, :class:`SceneStore`), ``sweeps``
+(:func:`expand_grid`, :func:`sweep`), and ``systems/``, one module per system with its model and
+its hooks ``_inputs``, ``_plan``, ``_run`` (a new system is a new module there).
+
 The systems (``system = ...``) and what each offers:
 
 =====================  ==============================  =============================================
@@ -62,39 +70,35 @@ toda                   (none)                          L, a, b, spectrum, off_ba
 
 from __future__ import annotations
 
-from ._core import (
+try:
+    import pydantic  # noqa: F401 - the schema's models; checked first for a clear message
+except ImportError as exc:  # pragma: no cover - exercised in the clean-venv wheel test
+    raise ImportError(
+        "symrb.scenes needs pydantic, which comes with the scenes extra: "
+        "pip install 'symrb[scenes]' (or pip install pydantic)"
+    ) from exc
+
+from .parse import load_scene, parse_scene
+from .plan import Plan, plan_scene
+from .result import SceneResult
+from .run import run_scene, scene_inputs
+from .schema import Scene as Scene
+from .schema import SceneError, When
+from .schema import register_system as register_system
+from .store import SceneStore
+from .store import scene_key as scene_key
+from .sweeps import SweepResult, expand_grid, sweep
+from .systems import (
     DoubleBracketScene,
     McLachlanScovelScene,
     OrbitExtremalScene,
-    Plan,
     ResNetScene,
     RigidBodyMomentum,
     RigidBodyScene,
-    SceneError,
-    SceneResult,
-    SceneStore,
-    SweepResult,
+    SONetworkScene,
     SymmetricRigidBodyScene,
-    When,
-    expand_grid,
-    load_scene,
-    parse_scene,
-    plan_scene,
-    run_scene,
-    scene_inputs,
-    sweep,
+    TodaScene,
 )
-from ._core import (
-    Scene as Scene,
-)
-from ._core import (
-    register_system as register_system,
-)
-from ._core import (
-    scene_key as scene_key,
-)
-from ._so_network import SONetworkScene
-from ._toda import TodaScene
 
 __all__ = [
     "SceneError",
@@ -124,6 +128,6 @@ __all__ = [
 # the public classes name this package as their home (in reprs, tracebacks and pickles)
 for _name in __all__:
     _obj = globals()[_name]
-    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}._"):
+    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}."):
         _obj.__module__ = __name__
 del _name, _obj

@@ -1,0 +1,52 @@
+r"""Benchmarks of symrb's rigid body integrators, with the speed and accuracy goals of issue 9.
+
+:func:`run` measures, in one process and one run (``symrb bench`` on the command line, from a
+source checkout: the harness is not part of the ``symrb`` wheel):
+
+1. **work-precision** (n = 3, T = 10 and 100): the largest entry of the error in :math:`M(T)` and
+   :math:`Q(T)` against a reference, versus process CPU time, for SciPy's ``solve_ivp`` (RK45,
+   DOP853, LSODA, called directly on a plain NumPy field built from the generated kernel
+   :func:`symrb._generated.rigid_body.rigid_body_rhs`), :func:`symrb.integrate` (DOP853, to measure
+   its overhead on the same field), :func:`symrb.discrete_rigid_body_flow` at several steps h, and
+   the optional methods found by import (the fast Moser-Veselov engine ``symrb.engine.mv_flow``,
+   the compositions and RKMK4/implicit midpoint of ``symrb.compose``, the exact solution
+   ``symrb.exact.rigid_body_exact``).  The reference is DOP853 at ``rtol = atol = 1e-13`` and,
+   when ``symrb.exact`` imports and agrees with it, the exact solution.  Each fixed-step method's
+   order is the slope of :math:`\log(\text{error})` against :math:`\log h`.
+2. **long-time invariants**: relative energy and Casimir (:math:`\operatorname{tr}M^2`) errors and
+   :math:`\|Q^TQ - I\|` of the Moser-Veselov flow against the step number N (running maxima),
+   with the line :math:`\varepsilon\sqrt N` of a random walk of rounding errors and the fitted
+   slope of :math:`\log(\text{error})` against :math:`\log N`.
+3. **throughput**: body-steps per second of a Moser-Veselov step on batches of 1 to :math:`10^4`
+   bodies (n = 3) next to a batched 3x3 matrix product, and a cold start against a warm step.
+4. **cost against n**: one step of a single body for n = 3, 5, 10, 20, 50 in units of one
+   n x n matrix product.
+5. **evidence**: the time of each evidence level of ``symrb verify --json`` (read from a file)
+   next to what that level certifies.
+
+Timing discipline: every configuration is timed once per round and the rounds are interleaved
+(drifts of a shared machine hit all configurations alike); a timing repeats its call until it
+lasts ``min_time`` (far above the resolution of :func:`time.process_time`); medians are reported
+with the min and max over the rounds; the garbage collector is paused while timing; BLAS is pinned
+to one thread with ``threadpoolctl`` (without it a warning is recorded).  All times are process
+CPU time (:func:`time.process_time`).
+
+The goals are returned as ``{name, measured, target, met, note}``; a goal whose method is not
+available, or that needs a long run skipped by ``quick=True``, has ``met = None`` and a note.
+
+The modules: :mod:`~benchmarks.harness.config` (sections, methods, parameters),
+:mod:`~benchmarks.harness.timing` (interleaved timing, slopes), :mod:`~benchmarks.harness.problems`
+(the bodies and the methods), :mod:`~benchmarks.harness.precision` (sections 1 and 2),
+:mod:`~benchmarks.harness.speed` (sections 3 to 5), :mod:`~benchmarks.harness.goals`,
+:mod:`~benchmarks.harness.result` and :mod:`~benchmarks.harness.plots`,
+:mod:`~benchmarks.harness.runner` (:func:`run`) and :mod:`~benchmarks.harness.cli`.
+"""
+
+from .cli import build_parser, main
+from .config import SECTIONS
+from .result import BenchResult, load
+from .runner import run
+from .timing import fit_slope, time_interleaved
+
+__all__ = ["SECTIONS", "BenchResult", "run", "load", "time_interleaved", "fit_slope", "main",
+           "build_parser"]  # fmt: skip

@@ -1,0 +1,167 @@
+"""The diagrams of the sections run (matplotlib, imported when a figure is asked for)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symrb.errors import InputError
+
+from .config import EPS
+
+
+def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
+    """Work-precision: error against CPU time, one panel per problem (None if not run)."""
+    wps = list(ms.get("work-precision", {}).get("n3", []))
+    if ms.get("work-precision", {}).get("n10"):
+        wps.append(ms["work-precision"]["n10"])
+    if not wps:
+        return None
+    # one panel under another, so that each stays legible at a page's width
+    fig, axes = plt.subplots(len(wps), 1, figsize=(7.5, 5.2 * len(wps)), squeeze=False)
+    for ax, w in zip(axes[:, 0], wps, strict=True):
+        for i, (m, e) in enumerate(w["methods"].items()):
+            if not e.get("available"):
+                continue
+            # SciPy's methods dashed, symrb's solid; twelve methods, twelve colours
+            style = {
+                "color": plt.get_cmap("tab20")(i % 20),
+                "marker": "osD^v<>ph*XP"[i % 12],
+                "ls": "--" if m in ("RK45", "DOP853", "LSODA", "integrate") else "-",
+            }
+            pts = sorted(e["points"], key=lambda q: q["error"])
+            err = [max(q["error"], 1e-17) for q in pts]
+            med = [q["cpu"]["median"] for q in pts]
+            lo = [q["cpu"]["median"] - q["cpu"]["min"] for q in pts]
+            hi = [q["cpu"]["max"] - q["cpu"]["median"] for q in pts]
+            ax.errorbar(err, med, yerr=[lo, hi], ms=5, capsize=2, label=m, **style)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("error: largest entry of M(T) and Q(T) minus the reference")
+        ax.set_ylabel("CPU time per run [s] (median, min-max)")
+        ax.set_title(f"work-precision, n = {w['n']}, T = {w['T']:g}")
+        ax.grid(True, which="major", alpha=0.3)
+        ax.legend(fontsize=8, ncol=2)
+    return fig
+
+
+def _long_time_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
+    """The invariants' errors against the step number, one panel per n (None if not run)."""
+    lts = ms.get("long-time", [])
+    if not lts:
+        return None
+    fig, axes = plt.subplots(len(lts), 1, figsize=(7.5, 4.6 * len(lts)), squeeze=False)
+    for ax, d in zip(axes[:, 0], lts, strict=True):
+        N = np.asarray(d["N"], dtype=float)
+        for key, vals in d["errors"].items():
+            s = d["slope"][key]
+            lab = f"{key} (slope {s:.2f})" if s is not None else key
+            ax.loglog(N, np.maximum(vals, 1e-18), marker=".", label=lab)
+        ax.loglog(N, EPS * np.sqrt(N), "k--", label="eps sqrt(N)")
+        ax.loglog(N, 10 * EPS * np.sqrt(N), "k:", label="10 eps sqrt(N)")
+        ax.set_xlabel("step number N")
+        ax.set_ylabel("largest relative error up to step N")
+        ax.set_title(f"long-time invariants, n = {d['n']}, h = {d['h']:g} ({d['flow']})")
+        ax.legend(fontsize=8)
+    return fig
+
+
+def _throughput_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
+    """Body-steps per second against the batch size (None if not run)."""
+    thr = ms.get("throughput")
+    if not thr:
+        return None
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    B = [r["batch"] for r in thr["rows"]]
+    ax.loglog(
+        B,
+        [r["step_body_steps_per_s"] for r in thr["rows"]],
+        "o-",
+        label="MVStepper.step (one call)",
+    )
+    for be, mk in (("numpy", "^-"), ("numba", "v-")):
+        key = f"flow_{be}_body_steps_per_s"
+        if all(key in r for r in thr["rows"]):
+            lab = f"mv_flow, {'NumPy path' if be == 'numpy' else 'compiled (numba)'}"
+            ax.loglog(B, [r[key] for r in thr["rows"]], mk, label=lab)
+    ax.loglog(
+        B, [r["matmul_products_per_s"] for r in thr["rows"]], "s-", label="batched 3x3 matmul"
+    )
+    ax.axhline(5e6, color="gray", ls=":", label="goal 5e6")
+    ax.set_xlabel("batch size (bodies)")
+    ax.set_ylabel("body-steps (or products) per CPU second")
+    ax.set_title("throughput, n = 3")
+    ax.legend(fontsize=8)
+    return fig
+
+
+def _cost_vs_n_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
+    """The cost of a step against n in matrix products (None if not run)."""
+    cost = ms.get("cost-vs-n")
+    if not cost:
+        return None
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    ns = [r["n"] for r in cost["rows"]]
+    ax.loglog(
+        ns, [r["matmul_equivalents"] for r in cost["rows"]], "o-", label="one MV step (NumPy)"
+    )
+    comp = cost.get("compiled_n3")
+    if comp:
+        ax.loglog([3], [comp["matmul_equivalents"]], "v", ms=9, label="n = 3, compiled (numba)")
+    ax.set_xlabel("n")
+    ax.set_ylabel("CPU time in units of one n x n matmul")
+    ax.set_title("per-step cost against n (single body)")
+    ax.legend(fontsize=8)
+    return fig
+
+
+#: The figures by name, in the order they are drawn.
+_FIGURES: dict[str, Callable[[Any, Mapping[str, Any]], Any]] = {
+    "work_precision": _work_precision_figure,
+    "long_time": _long_time_figure,
+    "throughput": _throughput_figure,
+    "cost_vs_n": _cost_vs_n_figure,
+}
+
+
+def _figures(ms: Mapping[str, Any], names: set[str] | None = None) -> dict[str, Any]:
+    """The figures of the sections in the measurements ``ms`` that are among ``names`` (all when
+    ``names`` is empty), by name."""
+    import matplotlib.pyplot as plt
+
+    unknown = (names or set()) - set(_FIGURES)
+    if unknown:
+        raise InputError(
+            f"figures: names must be among work_precision, long_time, throughput, cost_vs_n; "
+            f"got {sorted(unknown)}"
+        )
+    figs: dict[str, Any] = {}
+    for stem, draw in _FIGURES.items():
+        if names and stem not in names:
+            continue
+        fig = draw(plt, ms)
+        if fig is not None:
+            fig.tight_layout()
+            figs[stem] = fig
+    return figs
+
+
+def _plot(ms: Mapping[str, Any], directory: Path) -> list[Path]:
+    """The figures of :func:`_figures` as PNG and SVG files in ``directory`` (Agg backend)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    directory.mkdir(parents=True, exist_ok=True)
+    files: list[Path] = []
+    for stem, fig in _figures(ms).items():
+        for ext in ("png", "svg"):
+            path = directory / f"{stem}.{ext}"
+            fig.savefig(path, dpi=120)
+            files.append(path)
+        plt.close(fig)
+    return files

@@ -1,0 +1,315 @@
+"""Sections 1 and 2: work-precision diagrams and the long-time invariants of the Moser-Veselov
+flow."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from symrb._progress import progress_bar
+from symrb._validate import Array
+from symrb.continuous import RigidBody, integrate
+from symrb.paper import mv_algorithm2
+from symrb.rigid_body import casimir_traces, kinetic_energy
+
+from .config import _SCIPY, _STEP_ORDERS, EPS
+from .problems import (
+    _backend,
+    _find,
+    _fixed_step_runner,
+    _last,
+    _NotApplicable,
+    _problem,
+    _solve_ivp_end,
+)
+from .timing import _cost_at, fit_slope, time_interleaved
+
+
+def _errors(got: tuple[Array, Array], ref: tuple[Array, Array]) -> dict[str, float]:
+    eQ = float(np.abs(got[0] - ref[0]).max())
+    eM = float(np.abs(got[1] - ref[1]).max())
+    return {"error_Q": eQ, "error_M": eM, "error": max(eQ, eM)}
+
+
+def _exact_reference(
+    lam: Array,
+    Q0: Array,
+    M0: Array,
+    T: float,
+    mods: dict[str, Any],
+    out: dict[str, Any],
+    ref_dop: tuple[Array, Array],
+    notes: list[str],
+) -> tuple[tuple[Array, Array], Callable[[], tuple[Array, Array]] | None]:
+    """(the reference, the exact solution's thunk or None): the exact solution (n = 3) replaces
+    DOP853 as the reference when it agrees with it to 1e-9; ``out`` records how they compare."""
+    exact = _find(mods.get("exact"), ["rigid_body_exact"])
+    if exact is None or lam.shape[-1] != 3:
+        return ref_dop, None
+
+    def exact_go() -> tuple[Array, Array]:
+        return _last(exact(Q0, M0, lam, np.array([T])), 3)
+
+    try:
+        ex = exact_go()
+        agree = _errors(ex, ref_dop)["error"]
+        out["exact_vs_dop853"] = agree
+        mv = _find(mods.get("engine"), ["mv_flow"])
+        if mv is not None:
+            # an independent check at rounding level: the preprocessed method of order 10 at
+            # h = 0.02 (truncation error ~ 1e-20 here; what is left is rounding)
+            k = round(T / 0.02)
+            pre = mv(Q0, M0, lam, T / k, k, save_every=k, order=10, method="numpy")
+            out["exact_vs_mv_pre10"] = _errors(ex, _last(pre, 3))["error"]
+            out["mv_pre10_h"] = T / k
+        if agree < 1e-9:
+            out["reference"] = "symrb.exact.rigid_body_exact (agrees with DOP853 1e-13 to "
+            out["reference"] += f"{agree:.1e})"
+            return ex, exact_go
+        notes.append(
+            f"symrb.exact disagrees with DOP853 at T = {T} by {agree:.1e}; the reference is DOP853"
+        )
+        return ref_dop, exact_go
+    except Exception as exc:  # noqa: BLE001
+        notes.append(f"symrb.exact failed ({type(exc).__name__}: {exc})")
+        return ref_dop, None
+
+
+def _configurations(
+    lam: Array,
+    Q0: Array,
+    M0: Array,
+    T: float,
+    p: dict[str, Any],
+    methods: Sequence[str],
+    mods: dict[str, Any],
+    exact_go: Callable[[], Any] | None,
+    out: dict[str, Any],
+) -> tuple[dict[str, Callable[[], Any]], dict[str, dict[str, Any]]]:
+    """(the thunks timed, by key; what each is: method, rtol or h); a method that is not
+    available is recorded in ``out["methods"]``."""
+    n = lam.shape[-1]
+    configs: dict[str, Callable[[], Any]] = {}
+    meta: dict[str, dict[str, Any]] = {}
+    for m in methods:
+        if m in _SCIPY:
+            for r in p["wp_rtols"]:
+                configs[f"{m} rtol={r:.0e}"] = _solve_ivp_end(lam, Q0, M0, T, m, r)
+                meta[f"{m} rtol={r:.0e}"] = {"method": m, "rtol": r}
+        elif m == "integrate":
+            for r in p["wp_rtols"]:
+
+                def go(r: float = r) -> tuple[Array, Array]:
+                    sol = integrate(
+                        RigidBody, (0.0, T), {"Q": Q0, "M": M0}, lam=lam, rtol=r, atol=r
+                    )
+                    return _last(sol, n)
+
+                configs[f"integrate rtol={r:.0e}"] = go
+                meta[f"integrate rtol={r:.0e}"] = {"method": m, "rtol": r}
+        elif m in _STEP_ORDERS:
+            make = _fixed_step_runner(m, mods)
+            if make is None:
+                out["methods"][m] = {"available": False}
+                continue
+            for h in p["wp_h"].get(_STEP_ORDERS[m], ()):
+                key = f"{m} h={h:g}"
+                configs[key] = make(lam, Q0, M0, T, h)
+                meta[key] = {"method": m, "h": T / max(1, round(T / h))}
+        elif m == "exact":
+            if exact_go is None:
+                out["methods"][m] = {"available": False}
+                continue
+            configs["exact"] = exact_go
+            meta["exact"] = {"method": m}
+    return configs, meta
+
+
+def _accuracy(
+    configs: dict[str, Callable[[], Any]],
+    meta: dict[str, dict[str, Any]],
+    refs: tuple[tuple[Array, Array], tuple[Array, Array]],
+    out: dict[str, Any],
+    notes: list[str],
+) -> None:
+    """Each configuration's error (its first call) in ``meta``; configurations that fail or do
+    not apply are dropped from ``configs`` and recorded in ``out["methods"]``."""
+    ref, ref_dop = refs
+    for key in list(configs):
+        try:
+            got = configs[key]()
+        except _NotApplicable:
+            del configs[key]
+            out["methods"].setdefault(meta[key]["method"], {"available": False})
+            continue
+        except Exception as exc:  # noqa: BLE001
+            notes.append(
+                f"{key} (n = {out['n']}, T = {out['T']}) failed: {type(exc).__name__}: {exc}"
+            )
+            del configs[key]
+            out["methods"].setdefault(meta[key]["method"], {"available": False})
+            out["methods"][meta[key]["method"]].setdefault("failures", []).append(str(exc))
+            continue
+        # the exact solution is checked against DOP853, never against itself
+        meta[key].update(_errors(got, ref_dop if key == "exact" else ref))
+
+
+def _method_entry(m: str, rows: list[dict[str, Any]], out: dict[str, Any]) -> dict[str, Any]:
+    """A method's points with its fitted order (fixed step) or error-against-work slope."""
+    entry: dict[str, Any] = {"available": True, "points": rows}
+    if m in _STEP_ORDERS:
+        # fit where errors are well above the reference's own error: 100x DOP853's estimated
+        # error, or 20x the exact solution's distance from the order-10 method at rounding
+        if out["reference"].startswith("symrb.exact") and "exact_vs_mv_pre10" in out:
+            floor = 20 * max(out["exact_vs_mv_pre10"], EPS)
+        else:
+            floor = 100 * max(out["reference_error_estimate"], EPS)
+        entry["nominal_order"] = _STEP_ORDERS[m]
+        entry["order"] = fit_slope([r["h"] for r in rows], [r["error"] for r in rows], floor=floor)
+    elif m != "exact":  # adaptive: error against work, err ~ cost^-slope
+        entry["error_vs_cpu_slope"] = fit_slope(
+            [r["cpu"]["median"] for r in rows], [r["error"] for r in rows], floor=1e-13
+        )
+    return entry
+
+
+def _work_precision(
+    n: int,
+    T: float,
+    p: dict[str, Any],
+    methods: Sequence[str],
+    mods: dict[str, Any],
+    notes: list[str],
+    log: Callable[[str], None],
+) -> dict[str, Any]:
+    """One work-precision diagram: every configuration's error and CPU time."""
+    lam, Q0, M0 = _problem(n, p["seed"])
+    ref_dop = _solve_ivp_end(lam, Q0, M0, T, "DOP853", 1e-13)()
+    # the reference's own error, estimated against a tighter run (rtol near its floor 100 eps)
+    tighter = _solve_ivp_end(lam, Q0, M0, T, "DOP853", 3e-14)()
+    out: dict[str, Any] = {
+        "n": n,
+        "T": T,
+        "lam": lam.tolist(),
+        "reference": "scipy DOP853, rtol = atol = 1e-13",
+        "reference_error_estimate": _errors(ref_dop, tighter)["error"],
+        "backend": _backend(),
+        "methods": {},
+    }
+    ref, exact_go = _exact_reference(lam, Q0, M0, T, mods, out, ref_dop, notes)
+    configs, meta = _configurations(lam, Q0, M0, T, p, methods, mods, exact_go, out)
+    _accuracy(configs, meta, (ref, ref_dop), out, notes)
+    log(f"work-precision n = {n}, T = {T:g}: timing {len(configs)} configurations")
+    timing = time_interleaved(configs, rounds=p["rounds"], min_time=p["min_time"])
+    for key, t in timing.items():
+        meta[key]["cpu"] = t
+    for m in methods:
+        rows = [meta[k] for k in configs if meta[k]["method"] == m]
+        if not rows:
+            out["methods"].setdefault(m, {"available": False})
+            continue
+        out["methods"][m] = _method_entry(m, rows, out)
+    return out
+
+
+def _cost_table(wp: dict[str, Any], target: float) -> dict[str, dict[str, Any]]:
+    table = {}
+    for m, entry in wp["methods"].items():
+        if not entry.get("available") or m == "exact":
+            continue
+        pts = entry["points"]
+        cost, how = _cost_at(
+            [r["error"] for r in pts], [r["cpu"]["median"] for r in pts], target, entry.get("order")
+        )
+        table[m] = {"cpu": cost, "how": how}
+    return table
+
+
+def _mv_flow_function(mods: dict[str, Any]) -> tuple[Callable[..., Any], str, bool]:
+    """(flow(Q, M, lam, h, steps, save_every), name, takes continuous momenta)."""
+    fast = _find(mods.get("engine"), ["mv_flow"])
+    if fast is not None:
+        return fast, "symrb.engine.mv_flow", True
+
+    def slow(Q: Array, M: Array, lam: Array, _h: float, steps: int, *, save_every: int) -> Any:
+        return mv_algorithm2(Q, M, lam, steps, save_every=save_every)
+
+    return slow, "symrb.mv_algorithm2", False
+
+
+def _long_time(
+    n: int, p: dict[str, Any], mods: dict[str, Any], progress: bool, log: Callable[[str], None]
+) -> dict[str, Any]:
+    flow, name, continuous = _mv_flow_function(mods)
+    lam, Q, M0 = _problem(n, p["seed"] + 1)
+    h, total = float(p["long_h"]), int(p["long_steps"])
+    M = M0.copy() if continuous else h * M0
+    H0 = float(kinetic_energy(M, lam))
+    C0 = float(casimir_traces(M)[0])
+    marks = np.unique(np.round(np.logspace(0, math.log10(total), 8 * int(math.log10(total)) + 1)))
+    marks = marks.astype(np.int64)
+    Ns: list[int] = []
+    energy: list[float] = []
+    casimir: list[float] = []
+    orth: list[float] = []
+    run_max = [0.0, 0.0, 0.0]
+    done = 0
+    cpu = 0.0
+    log(f"long-time n = {n}: {total} steps of {name}")
+    bar = progress_bar(total, f"long run n={n}", progress)
+    try:
+        for mark in marks:
+            chunk = int(mark) - done
+            if chunk <= 0:
+                continue
+            every = max(1, chunk // 16)
+            t0 = time.process_time()
+            sol = flow(Q, M, lam, h, chunk, save_every=every)
+            cpu += time.process_time() - t0
+            if not sol.success:
+                raise RuntimeError(f"the long run stopped at step {done}: {sol.message}")
+            Qs = np.asarray(sol.y["Q"])[1:]
+            Ms = np.asarray(sol.y["M"])[1:]
+            eH = np.abs(kinetic_energy(Ms, lam) - H0) / abs(H0)
+            eC = np.abs(casimir_traces(Ms)[..., 0] - C0) / abs(C0)
+            eO = np.abs(np.swapaxes(Qs, -1, -2) @ Qs - np.eye(n)).max(axis=(-2, -1))
+            run_max = [
+                max(run_max[0], eH.max()),
+                max(run_max[1], eC.max()),
+                max(run_max[2], eO.max()),
+            ]
+            done = int(mark)
+            Ns.append(done)
+            energy.append(float(run_max[0]))
+            casimir.append(float(run_max[1]))
+            orth.append(float(run_max[2]))
+            Q, M = Qs[-1], Ms[-1]
+            if bar.bar is not None:
+                bar.bar.update(chunk)
+    finally:
+        bar.close()
+    Na = np.asarray(Ns, dtype=float)
+    series = {"energy": energy, "casimir": casimir, "orthogonality": orth}
+    fit_from = Na >= min(100.0, Na[-1] / 10)
+    out: dict[str, Any] = {
+        "n": n,
+        "h": h,
+        "steps": total,
+        "flow": name,
+        "cpu_seconds": cpu,
+        "cpu_per_step": cpu / total,
+        "N": Ns,
+        "errors": series,
+        "eps_sqrt_N": (EPS * np.sqrt(Na)).tolist(),
+        "slope": {},
+        "max_ratio_to_eps_sqrt_N": {},
+    }
+    for key, vals in series.items():
+        va = np.asarray(vals)
+        out["slope"][key] = fit_slope(Na[fit_from], va[fit_from], floor=0.0)
+        out["max_ratio_to_eps_sqrt_N"][key] = float(np.max(va / (EPS * np.sqrt(Na))))
+    return out

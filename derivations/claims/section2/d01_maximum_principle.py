@@ -1,0 +1,298 @@
+r"""D1: the discrete maximum principle with fixed endpoints (paper, Section 2).
+
+Where: Section 2, the first definition (prob8.1: minimise the running cost subject to the
+dynamics, with :math:`x_0`, :math:`x_N` given and the constraint :math:`h(u_k) = 0`) and the first
+proposition (gendiscprop, eq8.3-eq8.6: the extremal equations of :math:`H` and :math:`\hat H`),
+with its proof.
+
+The claim: a solution satisfies the extremal equations, the critical points of an augmented
+functional :math:`V`.  Recorded outcome: holds after correction.  The costate equation holds for
+:math:`1 \le k \le N-1` only (:math:`p_N` is free for a fixed endpoint), :math:`V` needs one
+multiplier :math:`\sigma_k` per step, and the proof's rewriting of :math:`V` with the sum up to
+:math:`N` adds :math:`\hat H(0, x_N, u_N, \sigma)`.
+
+Evidence, from the displayed formulas only (independent of symrb): the derivatives of the
+displayed :math:`V` with undefined :math:`f, g, h` are the displayed equations; exact examples at
+their exact minimisers separate the printed forms from the corrected ones.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import sympy as sp
+
+from derivations.claims.section2._hamiltonians import (
+    _C,
+    _H,
+    _V,
+    H_DEF,
+    HHAT_DEF,
+    _f,
+    _g,
+    _generic,
+    _h,
+    _Hhat,
+    _p,
+    _sig,
+    _sigma1,
+    _u,
+    _with_hamiltonians,
+    _x,
+)
+from derivations.claims.section2._indexed import (
+    _N,
+    _N1,
+    _coverage_defect,
+    _Dot,
+    _grad,
+    _instance,
+    _k,
+    _k1,
+    _key,
+    _least_squares_residual,
+    _minus,
+    _Nm1,
+    _nonzero,
+    _plus,
+    _Steps,
+    _substituted,
+    _value,
+    _vec,
+)
+from derivations.registry import Level, claim
+from derivations.symbolic import eq
+
+D1 = claim(
+    "D1",
+    label="prob8.1, gendiscprop, eq8.3-eq8.6",
+    title="Discrete maximum principle (fixed endpoints, control constraint)",
+    statement="The discrete maximum principle (the first proposition of Section 2): a solution of the problem of minimising [[cost]] subject to "
+    "[[dynamics]], with $x_0$ and $x_N$ given, and [[constraint]] satisfies the extremal equations "
+    "of [[H]] and [[Hhat]], the critical points of an augmented functional $V$.",
+    printed="The costate equation is stated for every step up to $N$, [[costate_printed]], with "
+    "[[terminal_printed]]; the proof's functional has one multiplier for all steps, "
+    "[[V_printed]], and the proof rewrites it as [[rewrite_printed]].",
+    corrected="[[state]]; [[costate]] only (the equation at step 0 merely defines $p_0$, and $p_N$ "
+    "is a free unknown fixed by the endpoint $x_N$); [[stationary]] with one multiplier $\\sigma_k$ "
+    "per step. These are exactly the critical points of [[V]], which equals [[rewrite]].",
+    expected="holds after correction",
+    section="2",
+    where="Section 2, the first definition (the problem with fixed endpoints $x_0$, $x_N$ and the "
+    "constraint $h(u_k) = 0$) and the first proposition (the extremal equations with $H = "
+    "\\langle p_{k+1}, f(x_k, u_k)\\rangle - g(x_k, u_k)$ and the multiplier $\\sigma$), with its "
+    "proof",
+    note="The costate equation is stated up to $k = N$ and the proof uses one multiplier "
+    "$\\sigma$ for all steps. Corrected: the costate equation holds for $1 \\le k \\le N-1$ only, "
+    "$p_N$ is a free unknown, and there is one multiplier $\\sigma_k$ per step. The structure of "
+    "the principle is right, but three details are not. (i) The costate equation at $k = N$ with "
+    "$p_{N+1} = 0$ would force $p_N = -\\partial g/\\partial x(x_N, u_N)$ for a phantom control "
+    "$u_N$; for a fixed endpoint $p_N$ is free (exact example $f = x + u$, $g = u^2/2$, $x_0 = "
+    "0$, $x_2 = 1$: $p_2 = 1/2$ while the printed equation gives $0$). (ii) The proof's $V$ needs "
+    "one multiplier per step (the proposition's $\\sigma = \\sigma(p_{k+1}, x_k)$ already allows "
+    "that; $V$ does not): in an exact example the minimiser has $\\sigma_0 = -3/7$, $\\sigma_1 = "
+    "-1/7$, and with one shared $\\sigma$ the stationarity equations at the minimiser have no "
+    "solution. (iii) The proof's rewriting with the sum up to $N$ adds $\\hat H(0, x_N, u_N, "
+    "\\sigma) = -g(x_N, u_N) + \\langle \\sigma, h(u_N)\\rangle$.",
+)
+COST = D1.formula("cost", eq(_C, sp.Sum(_g(_x[_k], _u[_k]), (_k, 0, _Nm1))))
+DYNAMICS = D1.formula("dynamics", _Steps([eq(_x[_k1], _f(_x[_k], _u[_k]))], _k, 0, _Nm1))
+CONSTRAINT = D1.formula("constraint", _Steps([eq(_h(_u[_k]), 0)], _k, 0, _Nm1))
+D1.formula("H", H_DEF)
+D1.formula("Hhat", HHAT_DEF)
+_H_k = _H(_p[_k1], _x[_k], _u[_k])
+STATE = D1.formula("state", _Steps([eq(_x[_k1], sp.Derivative(_H_k, _p[_k1]))], _k, 0, _Nm1))
+_COSTATE_EQ = eq(_p[_k], sp.Derivative(_H_k, _x[_k]))
+COSTATE = D1.formula("costate", _Steps([_COSTATE_EQ], _k, 1, _Nm1))
+COSTATE_PRINTED = D1.formula("costate_printed", _Steps([_COSTATE_EQ], _k, 0, _N))
+TERMINAL_PRINTED = D1.formula("terminal_printed", eq(_p[_N1], 0))
+STATIONARY = D1.formula(
+    "stationary",
+    _Steps([eq(sp.Derivative(_Hhat(_p[_k1], _x[_k], _u[_k], _sig[_k]), _u[_k]), 0)], _k, 0, _Nm1),
+)
+
+
+def _functional(multiplier: sp.Basic) -> sp.Sum:
+    term = _plus(
+        _Dot(_p[_k1], _plus(_f(_x[_k], _u[_k]), -_x[_k1])),
+        _Dot(multiplier, _h(_u[_k])),
+        -_g(_x[_k], _u[_k]),
+    )
+    return sp.Sum(term, (_k, 0, _Nm1))
+
+
+V_DEF = D1.formula("V", eq(_V, _functional(_sig[_k])))
+V_PRINTED = D1.formula("V_printed", eq(_V, _functional(_sigma1)))
+
+
+def _rewrite(multiplier: sp.Basic, last: sp.Expr) -> sp.Expr:
+    term = _plus(-_Dot(_p[_k], _x[_k]), _Hhat(_p[_k1], _x[_k], _u[_k], multiplier))
+    return _plus(_Dot(_p[0], _x[0]), sp.Sum(term, (_k, 0, last)))
+
+
+REWRITE = D1.formula("rewrite", eq(_V, _plus(_rewrite(_sig[_k], _Nm1), -_Dot(_p[_N], _x[_N]))))
+REWRITE_PRINTED = D1.formula("rewrite_printed", eq(_V, _rewrite(_sigma1, _N)))
+
+
+def _d1_variables(N: int, nx: int, nu: int, nl: int, phantom: bool = False) -> dict[Any, Any]:
+    """Symbolic vectors x_0..x_N, u_k, p_0..p_{N+1}, sigma_k and one sigma (u_N with phantom)."""
+    values: dict[Any, Any] = {"N": N, "sigma": _vec("s", nl)}
+    for k in range(N + 2):
+        values[("p", k)] = _vec(f"p{k}", nx)
+    for k in range(N + 1):
+        values[("x", k)] = _vec(f"x{k}", nx)
+    for k in range(N + 1 if phantom else N):
+        values[("u", k)] = _vec(f"u{k}", nu)
+        values[(r"\sigma", k)] = _vec(f"s{k}", nl)
+    return values
+
+
+@D1.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d1_stationarity() -> sp.Expr:
+    """The derivatives of the displayed V (one multiplier per step, x_0 and x_N fixed) in p_{k+1},
+    x_k, u_k and sigma_k are the displayed state, costate, stationarity and constraint equations
+    over their displayed ranges, and these cover every variable of V once (undefined f, g, h;
+    n = m = 2, l = 1, N = 3)."""
+    N = 3
+    values = _d1_variables(N, 2, 2, 1)
+    fn = _with_hamiltonians(_generic(2, 2, 1))
+    V = _value(V_DEF.rhs, values, fn)
+    total = sp.Integer(0)
+    covered = []
+    # dV/dvar is rhs - lhs of "x_{k+1} = dH/dp" and lhs - rhs of "dHhat/du = 0"
+    for steps, var, sign in ((STATE, _p[_k + 1], -1), (COSTATE, _x[_k], -1),
+                             (STATIONARY, _u[_k], 1), (CONSTRAINT, _sig[_k], 1)):  # fmt: skip
+        for k in steps.steps(N):
+            lhs, rhs = steps.at(k)
+            key = _key(var.xreplace({_k: k}))
+            covered.append(key)
+            side = _minus(_value(lhs, values, fn), _value(rhs, values, fn))
+            total += _nonzero(_minus(_grad(V, values[key]), sign * side))
+    fixed = {("x", 0), ("x", N)}
+    total += _coverage_defect(V, values, fixed, covered)
+    return total
+
+
+def _d1_costate_range_defect(costate: _Steps) -> sp.Expr:
+    """Minimise u_0^2/2 + u_1^2/2 with x_{k+1} = x_k + u_k, x_0 = 0, x_2 = 1 (n = m = 1); take
+    p_1, p_2 from the displayed stationarity conditions at the minimiser and p_3 from the printed
+    terminal convention; return sum |lhs - rhs| of the costate equation over its displayed steps
+    k >= 1 (p_0 does not occur in V: the equation at k = 0 defines it)."""
+    N, v, uN = 2, sp.Symbol("v"), sp.Symbol("u_N")
+    fn = _with_hamiltonians(
+        {"f": lambda x, u: x + u, "g": lambda x, u: u[0] ** 2 / 2, "h": lambda u: sp.zeros(1, 1)}
+    )
+    values: dict[Any, Any] = {"N": N, ("x", 0): sp.Matrix([0])}
+    values.update(
+        {("u", 0): sp.Matrix([v]), ("u", 1): sp.Matrix([1 - v]), ("u", N): sp.Matrix([uN])}
+    )
+    for k in DYNAMICS.steps(N):
+        lhs, rhs = DYNAMICS.at(k)
+        values[_key(lhs)] = _value(rhs, values, fn)
+    best = sp.solve(sp.diff(_value(COST.rhs, values, fn), v), v)[0]
+    values = _substituted(values, {v: best})
+    ps = sp.symbols("P1:3")
+    values.update({("p", k + 1): sp.Matrix([ps[k]]) for k in range(N)})
+    values.update({(r"\sigma", k): sp.zeros(1, 1) for k in range(N)})
+    eqs = []
+    for k in STATIONARY.steps(N):
+        lhs, rhs = STATIONARY.at(k)
+        eqs += list(_value(lhs, values, fn) - sp.Matrix([_value(rhs, values, fn)]))
+    sol = sp.solve(eqs, ps, dict=True)[0]
+    values.update({("p", k + 1): sp.Matrix([sol[ps[k]]]) for k in range(N)})
+    lhs, rhs = _instance(TERMINAL_PRINTED, {_N: N})
+    values[_key(lhs)] = sp.Matrix([_value(rhs, values, fn)])
+    total = sp.Integer(0)
+    for k in costate.steps(N):
+        if k >= 1:
+            lhs, rhs = costate.at(k)
+            total += sum(abs(e) for e in _value(lhs, values, fn) - _value(rhs, values, fn))
+    return sp.nsimplify(total)
+
+
+@D1.check(Level.EXACT_RATIONAL, form="printed")
+def d1_printed_costate_at_N() -> sp.Expr:
+    """f = x + u, g = u^2/2, x_0 = 0, x_2 = 1 (n = m = 1): at the exact minimiser, with p_1, p_2
+    from the stationarity conditions, the printed costate equation over its range up to N (with
+    p_3 = 0 and a phantom u_2) is off by |p_2 - dH/dx(0, x_2, u_2)| = 1/2."""
+    return _d1_costate_range_defect(COSTATE_PRINTED)
+
+
+@D1.check(Level.EXACT_RATIONAL, form="corrected")
+def d1_corrected_costate_range() -> sp.Expr:
+    """The same computation with the corrected range 1 <= k <= N - 1: the costate equation holds
+    at the minimiser."""
+    return _d1_costate_range_defect(COSTATE)
+
+
+def _d1_multiplier_defect(functional: sp.Eq) -> sp.Expr:
+    """f = x + u_1, g = (u_1^2 + (u_2 - x)^2)/2, h = u_1 - u_2, N = 2, x_0 = 0, x_2 = 1 (n = 1,
+    m = 2, l = 1).  At the exact minimiser (from the displayed cost, dynamics and constraint), the
+    derivatives of the given V in x_1, u_0, u_1 are linear in the costates and multipliers;
+    returns the least-squares residual of that linear system (0 exactly when multipliers exist)."""
+    N = 2
+    fn = _with_hamiltonians({
+        "f": lambda x, u: x + sp.Matrix([u[0]]),
+        "g": lambda x, u: (u[0] ** 2 + (u[1] - x[0]) ** 2) / 2,
+        "h": lambda u: sp.Matrix([u[0] - u[1]]),
+    })  # fmt: skip
+    values = _d1_variables(N, 1, 2, 1)
+    values[("x", 0)], values[("x", 2)] = sp.Matrix([0]), sp.Matrix([1])
+    # the minimiser: u_k on h(u_k) = 0, v_0 + v_1 fixed by x_2 = 1
+    v = sp.Symbol("v")
+    point = dict(values)
+    for k, vk in enumerate((v, 1 - v)):
+        w = sp.Symbol("w")
+        point[("u", k)] = sp.Matrix([vk, w])
+        lhs, _rhs = CONSTRAINT.at(k)
+        point[("u", k)] = point[("u", k)].subs(w, sp.solve(_value(lhs, point, fn)[0], w)[0])
+    point[("x", 1)] = _value(DYNAMICS.at(0)[1], point, fn)
+    best = sp.solve(sp.diff(_value(COST.rhs, point, fn), v), v)[0]
+    at_min = {values[key][i]: point[key][i].subs(v, best)
+              for key in (("x", 1), ("u", 0), ("u", 1)) for i in range(values[key].rows)}  # fmt: skip
+    V = _value(functional.rhs, values, fn)
+    eqs = []
+    for key in (("x", 1), ("u", 0), ("u", 1)):
+        eqs += [e.xreplace(at_min) for e in _grad(V, values[key])]
+    unknowns = sorted({s for e in eqs for s in e.free_symbols}, key=str)
+    return _least_squares_residual(eqs, unknowns)
+
+
+@D1.check(Level.EXACT_RATIONAL, form="printed")
+def d1_printed_single_multiplier() -> sp.Expr:
+    """f = x + u_1, g = (u_1^2 + (u_2 - x)^2)/2, h = u_1 - u_2, N = 2, x_0 = 0, x_2 = 1: at the
+    exact minimiser, the stationarity equations of the printed V (one sigma) in x_1, u_0, u_1 have
+    no solution for (p_1, p_2, sigma): least-squares residual of that linear system."""
+    return _d1_multiplier_defect(V_PRINTED)
+
+
+@D1.check(Level.EXACT_RATIONAL, form="corrected")
+def d1_corrected_multipliers() -> sp.Expr:
+    """The same with the corrected V (sigma_k per step): the linear system for (p_1, p_2, sigma_0,
+    sigma_1) is solvable at the minimiser (residual 0)."""
+    return _d1_multiplier_defect(V_DEF)
+
+
+def _d1_rewrite_defect(functional: sp.Eq, rewrite: sp.Eq) -> sp.Expr:
+    """The displayed functional minus its displayed rewrite, for undefined f, g, h, N = 2,
+    n = m = 2, l = 1 (p_{N+1} and a phantom u_N from the printed terminal convention)."""
+    N = 2
+    values = _d1_variables(N, 2, 2, 1, phantom=True)
+    fn = _with_hamiltonians(_generic(2, 2, 1))
+    lhs, rhs = _instance(TERMINAL_PRINTED, {_N: N})
+    values[_key(lhs)] = _value(rhs, values, fn) * sp.ones(2, 1)
+    return _nonzero(_value(functional.rhs, values, fn) - _value(rewrite.rhs, values, fn))
+
+
+@D1.check(Level.SYMBOLIC_FIXED_N, form="printed")
+def d1_printed_rewrite() -> sp.Expr:
+    """The printed V minus the proof's rewrite with the sum up to N and p_{N+1} = 0 does not
+    vanish: it is -Hhat(0, x_N, u_N, sigma) (undefined f, g, h, N = 2)."""
+    return _d1_rewrite_defect(V_PRINTED, REWRITE_PRINTED)
+
+
+@D1.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d1_corrected_rewrite() -> sp.Expr:
+    """The corrected V minus the corrected rewrite (sum up to N - 1, minus <p_N, x_N>) vanishes
+    identically (undefined f, g, h, N = 2)."""
+    return _d1_rewrite_defect(V_DEF, REWRITE)

@@ -1,0 +1,312 @@
+r"""D5: the multi-sample problem with terminal cost (paper, Section 2, second proposition).
+
+Where: Section 2, the second definition (prob8.1m: samples :math:`a = 1, \dots, M`, shared
+controls, terminal cost :math:`\phi`) and the second proposition (gendiscpropm, eq8.3m-eq8.6m and
+the endpoint condition m8), with its proof.
+
+Recorded outcome: holds after correction.  The endpoint is free, the costate equation uses
+:math:`x^a_k`, and the endpoint condition is :math:`p^a_N = -\partial\phi/\partial x^a_N` for
+:math:`H = \langle p, f\rangle - g`.  Evidence: the derivatives of the displayed :math:`V`
+(undefined :math:`f, g, h, \phi`) are the displayed equations; exact examples at their exact
+minimisers separate the printed forms; independent of symrb.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import sympy as sp
+
+from derivations.claims.section2._hamiltonians import (
+    _C,
+    _H,
+    _V,
+    H_DEF,
+    _f,
+    _g,
+    _generic,
+    _h,
+    _pa,
+    _phi,
+    _sig,
+    _u,
+    _with_hamiltonians,
+    _x,
+    _xa,
+)
+from derivations.claims.section2._indexed import (
+    _M,
+    _N,
+    _a,
+    _coverage_defect,
+    _Dot,
+    _grad,
+    _instance,
+    _k,
+    _k1,
+    _key,
+    _minus,
+    _Nm1,
+    _nonzero,
+    _plus,
+    _Steps,
+    _substituted,
+    _value,
+    _vec,
+)
+from derivations.registry import Level, claim
+from derivations.symbolic import eq
+
+D5 = claim(
+    "D5",
+    label="prob8.1m, gendiscpropm, eq8.3m-eq8.6m, m8",
+    title="Multi-sample problem with terminal cost: shared controls, per-sample costates",
+    statement="The multi-sample maximum principle (the second proposition of Section 2): for the problem of minimising [[cost]] subject to "
+    "[[dynamics]] and the control constraint, with controls shared by the samples, the "
+    "extremal equations of [[H]] have per-sample costates and an endpoint condition.",
+    printed="The multi-sample problem also fixes the endpoints $x^a_N$; its costate equation is "
+    "[[costate_printed]] with the un-indexed $x_k$; its endpoint condition is [[m8]].",
+    corrected="The endpoint is free. The extremal equations are the critical points of [[V]]: "
+    "[[state]], [[costate]], [[stationary]] with one multiplier per step, and [[endpoint]] for this "
+    "$H$ (equivalently the costates are minus the gradients of the cost, D6).",
+    expected="holds after correction",
+    section="2",
+    where="Section 2, the second definition (several samples $a = 1, \\dots, M$ and an endpoint "
+    "cost $\\phi$) and the second proposition (extremal equations and the endpoint condition "
+    "$p^a_N = \\partial\\phi/\\partial x^a_N$), with its proof",
+    note="The problem fixes the endpoints $x^a_N$, the costate equation uses the un-indexed "
+    "$x_k$, and the endpoint condition has the wrong sign. Corrected: the endpoint is free, the "
+    "costate equation uses $x^a_k$, and $p^a_N = -\\partial\\phi/\\partial x^a_N$ for $H = "
+    "\\langle p, f\\rangle - g$. With $H = \\langle p, f\\rangle - g$ and a minimisation, $V = "
+    "-(\\text{cost}) + \\langle p, f - x\\rangle + \\langle \\sigma, h\\rangle$, so $\\partial "
+    "V/\\partial x^a_N = -p^a_N - \\phi'(x^a_N)$: the endpoint sign is minus (the paper's $V$ "
+    "carries $+\\phi$ and an extra $-p_N x_N$). If $x^a_N$ is fixed, $\\phi(x^a_N)$ is a constant "
+    "and no endpoint condition follows. The term $-\\phi(x^a_N)$ inside the proposition's "
+    "Hamiltonian is harmless (constant in the variables of $H$). The proof's $V$ needs "
+    "$\\sigma_k$ per step, as in D1 (checked there).",
+)
+COST5 = D5.formula(
+    "cost",
+    eq(
+        _C,
+        _plus(
+            sp.Sum(sp.Sum(_g(_xa(_a, _k), _u[_k]), (_k, 0, _Nm1)), (_a, 1, _M)),
+            sp.Sum(_phi(_xa(_a, _N)), (_a, 1, _M)),
+        ),
+    ),
+)
+DYNAMICS5 = D5.formula("dynamics", _Steps([eq(_xa(_a, _k1), _f(_xa(_a, _k), _u[_k]))], _k, 0, _Nm1))
+D5.formula("H", H_DEF)
+_H_ak = _H(_pa(_a, _k1), _xa(_a, _k), _u[_k])
+V5 = D5.formula(
+    "V",
+    eq(
+        _V,
+        _plus(
+            sp.Sum(
+                sp.Sum(_plus(_Dot(_pa(_a, _k1), _plus(_f(_xa(_a, _k), _u[_k]), -_xa(_a, _k1))),
+                             -_g(_xa(_a, _k), _u[_k])), (_k, 0, _Nm1)),
+                (_a, 1, _M),
+            ),
+            sp.Sum(_Dot(_sig[_k], _h(_u[_k])), (_k, 0, _Nm1)),
+            -sp.Sum(_phi(_xa(_a, _N)), (_a, 1, _M)),
+        ),
+    ),
+)  # fmt: skip
+STATE5 = D5.formula(
+    "state", _Steps([eq(_xa(_a, _k1), sp.Derivative(_H_ak, _pa(_a, _k1)))], _k, 0, _Nm1)
+)
+_COSTATE5_EQ = eq(_pa(_a, _k), sp.Derivative(_H_ak, _xa(_a, _k)))
+COSTATE5 = D5.formula("costate", _Steps([_COSTATE5_EQ], _k, 1, _Nm1))
+COSTATE5_PRINTED = D5.formula(
+    "costate_printed",
+    _Steps(
+        [eq(_pa(_a, _k), sp.Derivative(_H(_pa(_a, _k1), _x[_k], _u[_k]), _x[_k]))],
+        _k, 0, _Nm1,
+    ),
+)  # fmt: skip
+STATIONARY5 = D5.formula(
+    "stationary",
+    _Steps(
+        [
+            eq(
+                _plus(
+                    sp.Sum(sp.Derivative(_H_ak, _u[_k]), (_a, 1, _M)),
+                    sp.Derivative(_Dot(_sig[_k], _h(_u[_k])), _u[_k]),
+                ),
+                0,
+            ),
+            eq(_h(_u[_k]), 0),
+        ],
+        _k,
+        0,
+        _Nm1,
+    ),
+)
+_dphi = sp.Derivative(_phi(_xa(_a, _N)), _xa(_a, _N))
+ENDPOINT = D5.formula("endpoint", eq(_pa(_a, _N), -_dphi))
+M8 = D5.formula("m8", eq(_pa(_a, _N), _dphi))
+
+
+def _d5_variables(N: int, M: int, nx: int, nu: int, nl: int) -> dict[Any, Any]:
+    values: dict[Any, Any] = {"N": N, "M": M}
+    for a in range(1, M + 1):
+        for k in range(N + 1):
+            values[("x", a, k)] = _vec(f"x{a}{k}", nx)
+            if k:
+                values[("p", a, k)] = _vec(f"p{a}{k}", nx)
+    for k in range(N):
+        values[("u", k)] = _vec(f"u{k}", nu)
+        values[(r"\sigma", k)] = _vec(f"s{k}", nl)
+    return values
+
+
+@D5.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d5_stationarity() -> sp.Expr:
+    """The derivatives of the displayed V (free endpoint) in p^a_{k+1}, x^a_k, x^a_N, u_k and
+    sigma_k are the displayed state, costate, endpoint, stationarity and constraint equations over
+    their displayed ranges, covering every variable of V once (undefined f, g, h, phi; n = m = 2,
+    l = 1, M = 2 samples, N = 2)."""
+    N, M = 2, 2
+    values = _d5_variables(N, M, 2, 2, 1)
+    fn = _with_hamiltonians(_generic(2, 2, 1))
+    V = _value(V5.rhs, values, fn)
+    total = sp.Integer(0)
+    covered = []
+
+    def compare(lhs: sp.Basic, rhs: sp.Basic, var: sp.Basic, sign: int) -> sp.Expr:
+        """dV/dvar against +-(lhs - rhs): rhs - lhs of "p = dH/dx", lhs - rhs of "... = 0"."""
+        covered.append(_key(var))
+        side = _minus(_value(lhs, values, fn), _value(rhs, values, fn))
+        return _nonzero(_minus(_grad(V, values[_key(var)]), sign * side))
+
+    for a in range(1, M + 1):
+        for k in STATE5.steps(N):
+            total += compare(*STATE5.at(k, a=a), _pa(a, k + 1), -1)
+        for k in COSTATE5.steps(N):
+            total += compare(*COSTATE5.at(k, a=a), _xa(a, k), -1)
+        total += compare(*_instance(ENDPOINT, {_a: a, _N: N}), _xa(a, N), -1)
+    for k in STATIONARY5.steps(N):
+        total += compare(*STATIONARY5.at(k, 0), _u[k], 1)
+        total += compare(*STATIONARY5.at(k, 1), _sig[k], 1)
+    fixed = {("x", a, 0) for a in range(1, M + 1)}
+    total += _coverage_defect(V, values, fixed, covered)
+    return total
+
+
+def _two_sample_example() -> tuple[dict[str, Any], dict[Any, Any]]:
+    """M = 2 samples, N = 2, n = m = 1: f = x + u, g = (u^2 + x^2)/2, phi(x) = (x - 1)^2/2,
+    x^1_0 = 0, x^2_0 = 2, no constraint.  The exact minimiser of the displayed cost along the
+    displayed dynamics, as values."""
+    N, M = 2, 2
+    fn = _with_hamiltonians({
+        "f": lambda x, u: x + u,
+        "g": lambda x, u: (u[0] ** 2 + x[0] ** 2) / 2,
+        "h": lambda u: sp.zeros(1, 1),
+        r"\phi": lambda x: (x[0] - 1) ** 2 / 2,
+    })  # fmt: skip
+    us = sp.symbols("v0 v1")
+    values: dict[Any, Any] = {"N": N, "M": M}
+    values.update({("u", k): sp.Matrix([us[k]]) for k in range(N)})
+    values.update({(r"\sigma", k): sp.zeros(1, 1) for k in range(N)})
+    for a, x0 in ((1, 0), (2, 2)):
+        values[("x", a, 0)] = sp.Matrix([x0])
+        for k in DYNAMICS5.steps(N):
+            lhs, rhs = DYNAMICS5.at(k, a=a)
+            values[_key(lhs)] = _value(rhs, values, fn)
+    cost = _value(COST5.rhs, values, fn)
+    if not sp.hessian(cost, us).is_positive_definite:
+        raise ValueError("the example is not convex")
+    best = sp.solve([sp.diff(cost, v) for v in us], us, dict=True)[0]
+    return fn, _substituted(values, best)
+
+
+def _d5_example_defect(endpoint: sp.Eq, costate: _Steps) -> sp.Expr:
+    """In the two-sample example: costates from the given endpoint condition and costate equation
+    (for the un-indexed x_k of the printed eq8.3m, sample 1's state), then sum over k of
+    |lhs - rhs| of the displayed stationarity condition at the exact minimiser."""
+    fn, values = _two_sample_example()
+    N, M = values["N"], values["M"]
+    for k in range(N + 1):
+        values[("x", k)] = values[("x", 1, k)]
+    for a in range(1, M + 1):
+        lhs, rhs = _instance(endpoint, {_a: a, _N: N})
+        values[_key(lhs)] = _value(rhs, values, fn)
+        for k in reversed([k for k in costate.steps(N) if k >= 1]):
+            lhs, rhs = costate.at(k, a=a)
+            values[_key(lhs)] = _value(rhs, values, fn)
+    total = sp.Integer(0)
+    for k in STATIONARY5.steps(N):
+        lhs, rhs = STATIONARY5.at(k, 0)
+        total += sum(abs(e) for e in _value(lhs, values, fn) - sp.Matrix([_value(rhs, values, fn)]))
+    return sp.nsimplify(total)
+
+
+@D5.check(Level.EXACT_RATIONAL, form="corrected")
+def d5_corrected_example() -> sp.Expr:
+    """2 samples, N = 2, f = x + u, g = (u^2 + x^2)/2, phi = (x - 1)^2/2, x_0 = 0 and 2: costates
+    from the displayed endpoint condition and costate equation satisfy the displayed stationarity
+    condition at the exact minimiser (sum over k of |sum_a H_u|)."""
+    return _d5_example_defect(ENDPOINT, COSTATE5)
+
+
+@D5.check(Level.EXACT_RATIONAL, form="printed")
+def d5_printed_endpoint_sign() -> sp.Expr:
+    """Same example with m8's endpoint sign: the stationarity condition fails at the minimiser."""
+    return _d5_example_defect(M8, COSTATE5)
+
+
+@D5.check(Level.EXACT_RATIONAL, form="printed")
+def d5_printed_shared_state() -> sp.Expr:
+    """Same example with eq8.3m's un-indexed x_k (sample 1's state for both samples): the
+    stationarity condition fails at the minimiser."""
+    return _d5_example_defect(ENDPOINT, COSTATE5_PRINTED)
+
+
+def _d5_endpoint_defect(fixed: bool) -> sp.Expr:
+    """N = 1, one sample, f = x + u, g = u^2/2, phi(x) = (x - 3)^2/2, x_0 = 0; the control is the
+    minimiser of the displayed cost (free endpoint) or forced by x_1 = 1 (fixed endpoint); p_1
+    from the displayed stationarity condition.  Returns the smaller mismatch of the two endpoint
+    conditions, displayed corrected and m8."""
+    N, M = 1, 1
+    fn = _with_hamiltonians({
+        "f": lambda x, u: x + u,
+        "g": lambda x, u: u[0] ** 2 / 2,
+        "h": lambda u: sp.zeros(1, 1),
+        r"\phi": lambda x: (x[0] - 3) ** 2 / 2,
+    })  # fmt: skip
+    v, P = sp.symbols("v P")
+    values: dict[Any, Any] = {"N": N, "M": M, ("x", 1, 0): sp.Matrix([0]), ("u", 0): sp.Matrix([v])}
+    values[(r"\sigma", 0)] = sp.zeros(1, 1)
+    lhs, rhs = DYNAMICS5.at(0, a=1)
+    values[_key(lhs)] = _value(rhs, values, fn)
+    if fixed:
+        best = sp.solve(values[("x", 1, 1)][0] - 1, v)[0]
+    else:
+        best = sp.solve(sp.diff(_value(COST5.rhs, values, fn), v), v)[0]
+    values = _substituted(values, {v: best})
+    values[("p", 1, 1)] = sp.Matrix([P])
+    lhs, rhs = STATIONARY5.at(0, 0)
+    values[("p", 1, 1)] = sp.Matrix(
+        [sp.solve(_value(lhs, values, fn)[0] - _value(rhs, values, fn), P)[0]]
+    )
+    gaps = []
+    for condition in (ENDPOINT, M8):
+        lhs, rhs = _instance(condition, {_a: 1, _N: N})
+        gaps.append(abs((_value(lhs, values, fn) - _value(rhs, values, fn))[0]))
+    return sp.Min(*gaps)
+
+
+@D5.check(Level.EXACT_RATIONAL, form="printed")
+def d5_printed_fixed_endpoint() -> sp.Expr:
+    """prob8.1m fixes x_N and adds phi(x_N): with N = 1, f = x + u, g = u^2/2, x_0 = 0, x_1 = 1,
+    phi = (x - 3)^2/2, the stationarity condition gives p_1 = 1 while phi'(1) = -2, so neither
+    endpoint condition holds (smaller mismatch 1)."""
+    return _d5_endpoint_defect(fixed=True)
+
+
+@D5.check(Level.EXACT_RATIONAL, form="corrected")
+def d5_free_endpoint() -> sp.Expr:
+    """The same problem with a free endpoint: at the exact minimiser one of the endpoint
+    conditions holds (the corrected one, as the stationarity check above shows in general)."""
+    return _d5_endpoint_defect(fixed=False)

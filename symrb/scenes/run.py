@@ -1,0 +1,134 @@
+"""Running a scene: :func:`scene_inputs` (the arrays it starts from), :func:`run_scene` (plan,
+run through the system's hook ``_run``, reduce the windowed observables, store)."""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .._validate import Array
+from .parse import load_scene, parse_scene
+from .plan import Plan, plan_scene
+from .result import SceneResult
+from .schema import Scene
+from .store import SceneStore, _store, _versions, scene_key
+
+
+def scene_inputs(scene: Scene) -> dict[str, Any]:
+    """The arrays a scene starts from (what a hand-written run would pass).
+
+    Parameters
+    ----------
+    scene : Scene
+        A validated scene.
+
+    Returns
+    -------
+    dict
+        For the bodies ``lam``, ``Q0``, ``M0`` (and ``P0`` for the symmetric rigid body, ``B0``
+        for McLachlan-Scovel); for the orbits ``x0``, ``N``; for the ResNet ``x0``, ``targets``,
+        ``labels``, ``K0``, ``beta0`` (on the digits also ``x_test``, ``labels_test`` and
+        ``classes``); the Toda lattice ``a0``, ``b0``, ``L0``; the SO(n) network ``Q0``, ``targets``,
+        ``lam``, ``alpha``, ``U0``: each system says in its hook ``_inputs``.
+
+    Examples
+    --------
+    >>> from symrb.scenes import parse_scene, scene_inputs
+    >>> scene = parse_scene({"system": "rigid_body", "parameters": {"n": 4, "seed": 1},
+    ...                      "integrator": {"kind": "continuous"}, "horizon": {"T": 1.0},
+    ...                      "observables": {"M": "end"}})
+    >>> x = scene_inputs(scene)
+    >>> x["lam"].shape, x["M0"].shape
+    ((4,), (4, 4))
+    """
+    return scene._inputs()  # type: ignore[no-any-return]
+
+
+def _window_reduce(
+    t: Array, values: Array, windows: int, reductions: Sequence[str]
+) -> tuple[Array, Array]:
+    """Reduce a recorded series per window (see :class:`When`): (window times, values)."""
+    a = np.asarray(values)
+    blocks = np.array_split(np.arange(a.shape[0]), min(windows, a.shape[0]))
+    out = []
+    for r in reductions:
+        if r == "max_abs":
+            b = np.abs(a)
+        elif r == "max_abs_change":
+            b = np.abs(a - a[0])
+        elif r == "max_rel_change":
+            b = np.abs(a - a[0]) / np.abs(a[0])
+        else:
+            b = a
+        fn = np.min if r == "min" else np.max
+        out.append(np.stack([fn(b[i], axis=0) for i in blocks]))
+    ends = np.array([t[i[-1]] for i in blocks])
+    return ends, (out[0] if len(out) == 1 else np.stack(out, axis=1))
+
+
+def _execute(sc: Any, plan: Plan) -> tuple[dict[str, Array], dict[str, Array], str]:
+    """Run a planned scene: (times per observable, data per observable, failure message), the
+    windowed observables reduced."""
+    times, data, failure = sc._run(plan, scene_inputs(sc))
+    for name, (reductions, windows) in plan.windows.items():
+        if data[name].shape[0] == 0:  # pragma: no cover - a run that failed at once
+            continue
+        times[name], data[name] = _window_reduce(times[name], data[name], windows, reductions)
+    return times, data, failure
+
+
+def run_scene(
+    scene: Scene | Mapping[str, Any] | str | os.PathLike[str],
+    *,
+    cache: bool | str | os.PathLike[str] | SceneStore | None = True,
+) -> SceneResult:
+    """Plan and run a scene, or load its result from the cache.
+
+    Parameters
+    ----------
+    scene : Scene, mapping, or path
+        The scene (a path or TOML text is read with :func:`load_scene`).
+    cache : bool, path or SceneStore, optional
+        ``True`` (default): the store at ``$SYMRB_CACHE_DIR`` or ``~/.cache/symrb/scenes``;
+        a directory or a :class:`SceneStore`; ``False``: compute and store nothing.
+
+    Returns
+    -------
+    SceneResult
+        ``meta["from_cache"]`` tells whether anything was computed.  A run whose integrator
+        stopped early has ``meta["success"]`` False and is not stored.
+
+    Examples
+    --------
+    >>> from symrb.scenes import run_scene
+    >>> r = run_scene({"system": "resnet", "effects": ["terminal_cost"],
+    ...                "integrator": {"kind": "gradient_descent"}, "horizon": {"steps": 20},
+    ...                "observables": {"loss": {"every": 10}}}, cache=False)
+    >>> r.times["loss"], bool(r["loss"][-1] < r["loss"][0])
+    (array([ 0., 10., 20.]), True)
+    """
+    if isinstance(scene, str | os.PathLike):
+        sc: Any = load_scene(scene)
+    else:
+        sc = parse_scene(scene)
+    plan = plan_scene(sc)
+    store = _store(cache)
+    key = scene_key(sc, plan)
+    if store is not None:
+        hit = store.get(key, sc, plan)
+        if hit is not None:
+            hit.meta["from_cache"] = True
+            return hit
+    start = time.perf_counter()
+    times, data, failure = _execute(sc, plan)
+    seconds = time.perf_counter() - start
+    meta = {"key": key, "versions": _versions(), "seconds": seconds, "from_cache": False,
+            "success": not failure, "message": failure or "ok"}  # fmt: skip
+    result = SceneResult(sc, plan, times, data, meta)
+    if store is not None and not failure:
+        store.put(key, result)
+    return result

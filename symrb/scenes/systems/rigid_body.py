@@ -1,0 +1,422 @@
+"""The free rigid body as a scene (``system = "rigid_body"``): the momentum alone
+(:class:`RigidBodyMomentum`) or with the attitude, by ``symrb.integrate``, the Moser-Veselov
+engine, the paper's MV-Algorithms 1 and 2 or the symmetric representation; each integrator
+planned and run by a function of its own."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from ... import _validate as v
+from ..._generated import rigid_body as _rb
+from ..._validate import Array
+from ...algebra import _Jinv_weights
+from ...continuous import Flow, RigidBody
+from ...engine import MVStepper, mv_flow
+from ...errors import NotConvergedError, OutOfDomainError
+from ...paper import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2, symmetric_flow
+from ..plan import (
+    Plan,
+    SystemPlan,
+    _continuous_save,
+    _est_continuous,
+    _fixed_step_cost,
+    _fixed_step_plan,
+    _fixed_step_save,
+    diagnostic_kernels,
+)
+from ..schema import TimeHorizon, When, _problem, register_system
+from ._body import (
+    _RB_MODULES,
+    _SYMMETRIC_MAP_MODULES,
+    MV,
+    BodyParameters,
+    Continuous,
+    Discrete,
+    MVAlgorithm1,
+    MVAlgorithm2,
+    _integrate,
+    _rot,
+    _rotate_back,
+    body_inputs,
+)
+from ._compare import _Q_ONLY, Compares, _ComparedBody
+
+_MODULES = _RB_MODULES + ("scenes.systems._compare", "scenes.systems.rigid_body")
+#: the modules of the Moser-Veselov engine, and of the paper's MV-Algorithms
+_MV_MODULES = ("engine", "discrete", "solvers", "_compiled", "_generated.discrete_rigid_body")
+_MV_ALGORITHM_MODULES = ("discrete", "solvers", "_generated.discrete_rigid_body", "_progress")
+
+
+class RigidBodyMomentum(Flow):
+    r"""The rigid body's momentum alone, :math:`\dot M = [M, \Omega]`, :math:`\Omega = J^{-1}M`.
+
+    The momentum equation does not involve the attitude, so a scene that observes only
+    momenta, energies or integrals propagates this flow: n(n - 1)/2... as stored, ``n^2`` numbers
+    instead of ``2 n^2`` and two matrix products a step instead of three.  The field is the
+    generated ``rigid_body_rhs`` (claim S2) evaluated with an empty attitude of shape (0, n),
+    whose product costs nothing.  State ``("M",)``; derived ``Omega``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symrb
+    >>> from symrb.scenes import RigidBodyMomentum
+    >>> lam, M0 = np.array([0.7, 1.1, 1.6]), symrb.hat([0.5, 1.0, 1.5])
+    >>> a = symrb.integrate(RigidBodyMomentum, (0, 5), {"M": M0}, lam=lam, t_eval=[5.0])
+    >>> b = symrb.integrate(symrb.RigidBody, (0, 5), {"Q": np.eye(3), "M": M0}, lam=lam,
+    ...                     t_eval=[5.0])
+    >>> bool(np.abs(a.y.M - b.y.M).max() < 1e-9)
+    True
+    """
+
+    name = "rigid body momentum"
+    state = ("M",)
+
+    def rhs(self, y, lam):
+        M = y["M"]
+        return (_rb.rigid_body_rhs(np.empty((0, M.shape[-1])), M, lam)[1],)
+
+    def check(self, y, lam):
+        v.skew(y["M"], "y0['M']")
+
+    def derived(self, y, lam):
+        return {"Omega": _Jinv_weights(lam) * y["M"]}
+
+
+@register_system
+class RigidBodyScene(_ComparedBody):
+    """The free rigid body (momentum only, or with the attitude: effect ``attitude``).
+
+    Examples
+    --------
+    >>> from symrb.scenes import RigidBodyScene
+    >>> RigidBodyScene.EFFECTS, sorted(RigidBodyScene.OBSERVABLES)  # doctest: +NORMALIZE_WHITESPACE
+    (('attitude',), ['M', 'M_gap', 'Omega', 'Q', 'Q_gap', 'casimirs', 'energy', 'lax_spectrum',
+    'manakov', 'orthogonality'])
+    """
+
+    EFFECTS = ("attitude",)
+    STATE_OBSERVABLES = ("Q", "M")
+    OBSERVABLES = {
+        "M": None, "Omega": None, "energy": None, "casimirs": None, "manakov": None,
+        "lax_spectrum": None, "Q": "attitude", "orthogonality": "attitude", "M_gap": None,
+        "Q_gap": "attitude",
+    }  # fmt: skip
+    system: Literal["rigid_body"]
+    parameters: BodyParameters = BodyParameters()
+    integrator: Annotated[
+        Continuous | MV | MVAlgorithm2 | MVAlgorithm1 | Discrete, Field(discriminator="kind")
+    ]
+    horizon: TimeHorizon
+    compare: Compares | None = None
+    observables: dict[
+        Literal[
+            "M",
+            "Omega",
+            "energy",
+            "casimirs",
+            "manakov",
+            "lax_spectrum",
+            "Q",
+            "orthogonality",
+            "M_gap",
+            "Q_gap",
+        ],  # fmt: skip
+        When,
+    ]
+
+    def _inputs(self) -> dict[str, Any]:
+        """``lam``, ``Q0`` and ``M0``."""
+        return body_inputs(self.parameters)
+
+    def _own_plan(self, skipped: list[tuple[str, str]], notes: list[str]) -> SystemPlan:
+        if "attitude" not in self.effects:
+            skipped.append(("attitude Q", "effect 'attitude' not named: the momentum equation "
+                            "M' = [M, Omega] does not involve Q"))  # fmt: skip
+        integ = self.integrator
+        if isinstance(integ, Continuous):
+            part = _plan_continuous(self, notes)
+        else:
+            fixed = _fixed_step_save(self, integ.h)
+            part = _FIXED_STEP_PLANS[type(integ)](self, skipped, notes, fixed)
+        return dataclasses.replace(
+            part, kernels=part.kernels + diagnostic_kernels(self.observables)
+        )
+
+    def _states(
+        self, plan: Plan, x: dict[str, Any], rotation: Array | None
+    ) -> tuple[Array, dict[str, Array], str]:
+        return _RUNS[type(self.integrator)](self, plan, x, rotation)
+
+
+# ---------------------------------------------------------------------------------------------
+# the plan of each integrator
+
+_Fixed = tuple[int, int, dict[str, tuple[int, ...]]]
+
+
+def _plan_continuous(sc: RigidBodyScene, notes: list[str]) -> SystemPlan:
+    integ: Any = sc.integrator
+    p = sc.parameters
+    attitude = "attitude" in sc.effects
+    rate = p.momentum / 0.5 if p.M0 is None else 2.0
+    t_eval, index = _continuous_save(sc)
+    flow = "RigidBody" if attitude else "symrb.scenes.RigidBodyMomentum"
+    if not attitude:
+        notes.append(
+            "solve_ivp's error control sees only M here, so its steps (and M, to the "
+            "tolerance) differ from a run that also carries Q"
+        )
+    return SystemPlan(
+        route=f"symrb.integrate({flow}, method={integ.method!r}, rtol={integ.rtol:g}, "
+        f"atol={integ.atol:g})",
+        propagated=("Q", "M") if attitude else ("M",),
+        kernels=("rigid_body.rigid_body_rhs",),
+        save={"t_eval": [float(t) for t in t_eval]},
+        index=index,
+        cost=_est_continuous(sc.horizon.T, integ.rtol, rate, (6.0 if attitude else 4.0) * p.n**3),
+        modules=_MODULES,
+    )
+
+
+def _plan_mv(
+    sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
+) -> SystemPlan:
+    steps = fixed[0]
+    integ: Any = sc.integrator
+    n = sc.parameters.n
+    attitude = "attitude" in sc.effects
+    if integ.order != 2 and n != 3:
+        raise _problem("integrator.order",
+                       f"the preprocessed method (order {integ.order}) needs n = 3, "
+                       f"got n = {n}", [2])  # fmt: skip
+    kernels: tuple[str, ...]
+    if attitude or n == 3:
+        route = f"symrb.mv_flow(h={integ.h:g}, order={integ.order})"
+        propagated: tuple[str, ...] = ("Q", "M")
+        if not attitude:
+            skipped.pop()
+            notes.append("n = 3: the generated step mv3_cayley_step updates Q and "
+                         "m together (fused), so Q is stepped but not recorded")  # fmt: skip
+        kernels = ("discrete_rigid_body.mv3_cayley_step",) if n == 3 else ()
+    else:
+        route = (f"symrb.MVStepper(lam).step with an empty attitude, h={integ.h:g}: "
+                 "M_{k+1} = U^T M_k U needs only U")  # fmt: skip
+        propagated = ("M",)
+        kernels = ()
+    if integ.order != 2:
+        kernels += ("discrete_rigid_body.mv3_preprocessed_lam",)
+    per = 3e-6 if n == 3 else 8 * 2.0 * n**3 / 1.5e9 + 40e-6
+    flops = 60.0 if n == 3 else 16.0 * n**3
+    how = " a step (n = 3: one fused kernel call; else ~4 solver sweeps of two n^3 products)"
+    cost = _fixed_step_cost(steps, flops, per, how)
+    return _fixed_step_plan(fixed, route, propagated, kernels, cost, _MODULES + _MV_MODULES)
+
+
+def _plan_mv_algorithm(
+    sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
+) -> SystemPlan:
+    """MV-Algorithm 1, or MV-Algorithm 2 from (Q0, h M0) or from (Q1, M1)."""
+    steps, every, _ = fixed
+    integ: Any = sc.integrator
+    n = sc.parameters.n
+    modules: tuple[str, ...] = _MODULES + _MV_ALGORITHM_MODULES
+    first = ("symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1) for Q_1 and M_1 = "
+             "h (Q0^T P0 - P0^T Q0) (the first step, D12), then ")  # fmt: skip
+    kernels: tuple[str, ...]
+    if isinstance(integ, MVAlgorithm1):
+        route = (first + f"symrb.mv_algorithm1(Q0, Q1, lam, steps - 1) with "
+                 f"h={integ.h:g} (the paper's MV-Algorithm 1)")  # fmt: skip
+        propagated: tuple[str, ...] = ("Q",)
+        skipped.append(("M", "MV-Algorithm 1 carries configurations only"))
+        kernels = ("discrete_rigid_body.mv_momentum", "discrete_rigid_body.mv_transport")
+    elif integ.start == "Q1_M1":
+        more = "steps" if any(o not in _Q_ONLY for o in sc.observables) else "steps - 1"
+        route = (first + f"symrb.mv_algorithm2(Q1, M1, lam, {more}) with "
+                 f"h={integ.h:g} (the paper's MV-Algorithm 2 and indices; Q_k and "
+                 "M_{k+1}/h recorded at t_k)")  # fmt: skip
+        propagated = ("Q", "M")
+        kernels = ("discrete_rigid_body.mv_transport",)
+        if any(o in _Q_ONLY for o in sc.observables) and every > 1:
+            notes.append(f"start Q1_M1: the run from Q_1 saves every step (Q_k is "
+                         f"its (k - 1)-th), and every {every}-th is kept")  # fmt: skip
+    else:
+        route = (f"symrb.mv_algorithm2(Q0, h M0, lam, steps) with h={integ.h:g} "
+                 "(the paper's MV-Algorithm 2; its discrete momenta divided by "
+                 "h)")  # fmt: skip
+        propagated = ("Q", "M")
+        kernels = ("discrete_rigid_body.mv_transport",)
+    if "attitude" not in sc.effects and "Q" in propagated:
+        skipped.pop()
+        notes.append("MV-Algorithm 2 steps Q_{k+1} = Q_k Omega_{k+1}^T itself, so Q "
+                     "is propagated, though not recorded")  # fmt: skip
+    if not isinstance(integ, MVAlgorithm2) or integ.start == "Q1_M1":
+        modules += ("_generated.symmetric_rigid_body",)
+        kernels += ("symmetric_rigid_body.symmetric_momentum",)
+    per = 40e-6 + 16.0 * n**3 / 1.5e9
+    cost = _fixed_step_cost(steps, 16.0 * n**3, per, " (one solve of J_D(Omega^T) = M a step)")
+    return _fixed_step_plan(fixed, route, propagated, kernels, cost, modules)
+
+
+def _plan_discrete(
+    sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
+) -> SystemPlan:
+    steps = fixed[0]
+    integ: Any = sc.integrator
+    n = sc.parameters.n
+    if "attitude" not in sc.effects:
+        skipped.pop()
+        notes.append("the symmetric representation's state is (Q, P): Q is "
+                     "propagated by the map itself, though not recorded")  # fmt: skip
+    per = 60e-6 + 30.0 * n**3 / 1.5e9
+    return _fixed_step_plan(
+        fixed, f"symrb.discrete_rigid_body_flow(h={integ.h:g})", ("Q", "P"),
+        ("symmetric_rigid_body.symmetric_momentum",),
+        _fixed_step_cost(steps, 30.0 * n**3, per, " (a Newton solve of J_D(U) = hM a step)"),
+        _MODULES + _SYMMETRIC_MAP_MODULES,
+    )  # fmt: skip
+
+
+_PlanFixed = Callable[[RigidBodyScene, list[tuple[str, str]], list[str], _Fixed], SystemPlan]
+#: the plan of each fixed-step integrator
+_FIXED_STEP_PLANS: dict[type, _PlanFixed] = {
+    MV: _plan_mv, MVAlgorithm1: _plan_mv_algorithm, MVAlgorithm2: _plan_mv_algorithm,
+    Discrete: _plan_discrete,
+}  # fmt: skip
+
+
+# ---------------------------------------------------------------------------------------------
+# the run of each integrator
+
+_Run = tuple[Array, dict[str, Array], str]
+
+
+def _run_continuous(
+    sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None
+) -> _Run:
+    if "Q" in plan.propagated:
+        y0 = {"Q": _rot(rotation, x["Q0"]), "M": x["M0"]}
+        return _integrate(sc, plan, RigidBody, y0, x["lam"], rotation)
+    return _integrate(sc, plan, RigidBodyMomentum, {"M": x["M0"]}, x["lam"], rotation)
+
+
+def _run_mv(sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None) -> _Run:
+    integ: Any = sc.integrator
+    steps, every = plan.save["steps"], plan.save["save_every"]
+    if "Q" in plan.propagated:
+        dsol = mv_flow(_rot(rotation, x["Q0"]), x["M0"], x["lam"], integ.h, steps,
+                       save_every=every, order=integ.order)  # fmt: skip
+        keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
+        states = _rotate_back({k: dsol.y[k] for k in keep}, rotation)
+        return dsol.t, states, "" if dsol.success else dsol.message
+    return _mv_momentum(x["M0"], x["lam"], integ.h, steps, every)
+
+
+def _run_mv_algorithm2(
+    sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None
+) -> _Run:
+    integ: Any = sc.integrator
+    if integ.start == "Q1_M1":
+        return _mv_from_first_step(sc, plan, x, rotation)
+    steps, every = plan.save["steps"], plan.save["save_every"]
+    dsol = mv_algorithm2(_rot(rotation, x["Q0"]), integ.h * x["M0"], x["lam"], steps,
+                         save_every=every)  # fmt: skip
+    keep = ("Q",) if "attitude" in sc.effects else ()
+    states = {k: dsol.y[k] for k in keep}
+    states["M"] = dsol.y.M / integ.h
+    return (np.asarray(dsol.k, dtype=float) * integ.h, _rotate_back(states, rotation),
+            "" if dsol.success else dsol.message)  # fmt: skip
+
+
+def _run_discrete(
+    sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None
+) -> _Run:
+    integ: Any = sc.integrator
+    steps, every = plan.save["steps"], plan.save["save_every"]
+    lam = x["lam"]
+    if rotation is None:
+        dsol = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, steps,
+                                        save_every=every)  # fmt: skip
+    else:  # the state (Q0, P0) of the symmetric algorithm, rotated: P0 as the flow sets it
+        P0 = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, 1).y.P[0]
+        dsol = symmetric_flow(_rot(rotation, x["Q0"]), _rot(rotation, P0), lam, integ.h, steps,
+                              save_every=every)  # fmt: skip
+    keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
+    states = _rotate_back({k: dsol.y[k] for k in keep}, rotation)
+    return dsol.t, states, "" if dsol.success else dsol.message
+
+
+def _mv_from_first_step(sc: Any, plan: Plan, x: dict[str, Any], rotation: Array | None) -> _Run:
+    """MV-Algorithm 1 from (Q_0, Q_1), or MV-Algorithm 2 from (Q_1, M_1) (``start = "Q1_M1"``),
+    Q_1 and M_1 from the symmetric algorithm's first step; Q_k and M_{k+1}/h at t_k."""
+    integ, lam, h = sc.integrator, x["lam"], sc.integrator.h
+    steps, every = plan.save["steps"], plan.save["save_every"]
+    first = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, h, 1)
+    if not first.success:
+        empty = np.zeros((0,) + x["Q0"].shape)
+        return np.zeros(0), {"Q": empty, "M": empty}, first.message
+    Q1, M1 = first.y.Q[1], h * first.y.M[0]
+    if isinstance(integ, MVAlgorithm1):
+        dsol = mv_algorithm1(
+            _rot(rotation, x["Q0"]), _rot(rotation, Q1), lam, steps - 1, save_every=every
+        )
+        return (np.asarray(dsol.k, dtype=float) * h, _rotate_back({"Q": dsol.y.Q}, rotation),
+                "" if dsol.success else dsol.message)  # fmt: skip
+    need_Q = any(o.removesuffix("_gap") in ("Q", "orthogonality") for o in plan.index)
+    need_M = any(o.removesuffix("_gap") not in ("Q", "orthogonality") for o in plan.index)
+    # Q_k is the (k - 1)-th state of the run from Q_1: with Q asked for every e > 1 steps the
+    # run saves every step; M_{k+1}, its k-th momentum, is saved at the steps asked for
+    save = every if every == 1 or not need_Q else 1
+    dsol = mv_algorithm2(
+        _rot(rotation, Q1), M1, lam, steps if need_M else steps - 1, save_every=save
+    )
+    states: dict[str, Array] = {}
+    if need_Q:
+        Qs = np.concatenate([_rot(rotation, x["Q0"])[None], dsol.y.Q])[: steps + 1]
+        states["Q"] = Qs[::every] if save == 1 else Qs
+    if need_M:
+        Ms = dsol.y.M / h
+        states["M"] = Ms[::every] if save != every else Ms
+    count = min(len(a) for a in states.values())
+    states = {k: a[:count] for k, a in states.items()}
+    times = (np.arange(count) * every).astype(float) * h
+    return times, _rotate_back(states, rotation), "" if dsol.success else dsol.message
+
+
+def _mv_momentum(
+    M0: Array, lam: Array, h: float, steps: int, every: int
+) -> tuple[Array, dict[str, Array], str]:
+    """The Moser-Veselov momentum map M -> U^T M U alone (general n): ``MVStepper.step`` with an
+    empty attitude (shape (0, n, n)), so the product Q U is skipped; the M it returns is the M
+    of ``mv_flow`` bit for bit (the same stepper, the same operations on M)."""
+    L = v.inertia(lam, positive=True)
+    Mk = v.skew(M0, "M0", L.shape[-1])
+    Mk = 0.5 * (Mk - np.swapaxes(Mk, -1, -2))
+    stepper = MVStepper(L, Mk.shape[:-2])
+    empty = np.empty((0,) + Mk.shape[-2:])
+    ks, Ms = [0], [Mk.copy()]
+    failure = ""
+    for k in range(1, steps + 1):
+        try:
+            _, Mk = stepper.step(empty, Mk, h)
+        except (OutOfDomainError, NotConvergedError) as exc:
+            failure = f"step {k} of {steps} failed: {exc}"
+            break
+        if k % every == 0:
+            ks.append(k)
+            Ms.append(Mk)
+    return np.asarray(ks, dtype=float) * h, {"M": np.stack(Ms)}, failure
+
+
+_RunFn = Callable[[RigidBodyScene, Plan, dict[str, Any], Array | None], _Run]
+#: the run of each integrator
+_RUNS: dict[type, _RunFn] = {
+    Continuous: _run_continuous, MV: _run_mv, MVAlgorithm1: _mv_from_first_step,
+    MVAlgorithm2: _run_mv_algorithm2, Discrete: _run_discrete,
+}  # fmt: skip

@@ -1,0 +1,147 @@
+"""Tests of the book's own code (``book/lib/symrb_book``): the computations of the conventions,
+Section 2 and Section 3 pages that are not scenes.
+
+Each test calls the function its page calls (with smaller sizes where the page's run is long) and
+judges the numbers against a reference stated here: a closed form, a theoretical order, a bound of
+float64 arithmetic, an exact value (a conserved quantity, zero for two descriptions of one
+motion), or the integrator's tolerance, never against a spread that the experiment computes
+itself.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from symrb_book import discrete, smooth
+
+from symrb import InputError
+
+EPS = np.finfo(float).eps
+
+
+def test_time_step_scaling_is_second_order_with_the_predicted_term():
+    run = discrete.time_step_scaling()
+    assert np.all(np.abs(run.order - 2) < 0.01)
+    # J_D(exp(h Om)) - h J(Om) = h^2/2 (Om^2 Lam - Lam Om^2) + O(h^3): the leading term, written
+    # with an explicit diagonal matrix
+    L = np.diag(run.lam)
+    O2 = run.Omega @ run.Omega
+    c2 = np.linalg.norm(O2 @ L - L @ O2) / 2
+    assert run.error[-1] / run.h[-1] ** 2 == pytest.approx(c2, rel=1e-3)
+    assert run.leading == pytest.approx(c2, rel=1e-12)
+
+
+def test_layer_jacobian_residual_tends_to_identity_plain_to_zero():
+    run = discrete.layer_jacobian()
+    small = run.scale <= 1e-2
+    # residual layer: dF/dx - I = diag(tanh') eps K_1, linear in eps (slope 1 on log-log axes)
+    slope = np.polyfit(np.log(run.scale[small]), np.log(run.residual_gap[small]), 1)[0]
+    assert slope == pytest.approx(1.0, abs=0.01)
+    assert run.residual_gap[0] < 1e-3
+    # plain layer: dF/dx = diag(tanh') eps K_1 -> 0, so dF/dx - I -> -I, of max entry 1
+    assert run.plain_gap[small] == pytest.approx(1.0, abs=0.02)
+
+
+def test_trace_maximum_reaches_the_closed_form_value():
+    run = discrete.trace_maximum()
+    s = np.linalg.svd(run.A, compute_uv=False)
+    # max over SO(n) of tr(AU): the sum of the singular values, the smallest taken with the sign
+    # of det A (von Neumann's trace inequality)
+    best = s[:-1].sum() + np.sign(np.linalg.det(run.A)) * s[-1]
+    assert run.value_search == pytest.approx(best, rel=1e-10)
+    assert run.value_closed == pytest.approx(best, rel=1e-12)
+    for U in (run.U_search, run.U_closed):
+        assert np.abs(U.T @ U - np.eye(U.shape[0])).max() < 1e-12
+        assert np.linalg.det(U) == pytest.approx(1.0, abs=1e-12)
+    assert run.asymmetry < 1e-6  # AU symmetric at a critical point
+
+
+def test_solver_accuracy_meets_its_documented_tolerance():
+    run = discrete.solver_accuracy(sizes=(2, 3, 5, 8, 20))
+    # the solver's tolerance: ||J_D(U) - M||_F <= 10 eps ||M||_F
+    assert run.residual.max() <= 10
+    assert np.all(run.orthogonality <= 10 * run.n)
+    assert np.all(np.abs(run.det_error) < 100 * run.n * EPS)
+    assert np.all(run.margin > 0)
+    for nn in np.unique(run.n):
+        margins = run.margin[run.n == nn]
+        assert margins[-1] < margins[0]  # the margin closes towards the fold
+
+
+def test_fold_approach_has_the_square_root_law():
+    run = discrete.fold_approach()
+    # at a fold the branch closes like the square root of the distance
+    assert run.exponent == pytest.approx(0.5, abs=0.02)
+    near = run.distance < 1e-5
+    slope = np.polyfit(np.log(run.distance[near]), np.log(run.sigma_min[near]), 1)[0]
+    assert slope == pytest.approx(0.5, abs=0.02)
+    assert run.residual.max() <= 10 and run.iterations.max() <= 4
+    assert "past the fold" in run.past_fold
+
+
+def test_solver_cost_records_cpu_time_per_repeat():
+    run = discrete.solver_cost(sizes=(3, 50), repeats=3, inner=2)
+    assert run.cold_ms.shape == run.warm_ms.shape == (2, 3)
+    assert np.all(run.cold_ms > 0) and np.all(run.warm_ms > 0)
+    assert np.all(run.cold_ms.min(axis=1) <= run.cold_median)
+    assert np.all(run.cold_median <= run.cold_ms.max(axis=1))
+    assert run.cold_median[1] > run.cold_median[0]  # an O(n^3) solve: n = 50 costs more
+    assert run.pinned  # threadpoolctl comes with the test extra
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: discrete.time_step_scaling(halvings=1), "halvings"),
+        (lambda: discrete.layer_jacobian(scales=[0.0, 1.0]), "scales"),
+        (lambda: discrete.solver_accuracy(fractions=(1.5,)), "fractions"),
+        (lambda: discrete.fold_approach(distances=[0.5]), "distances"),
+        (lambda: discrete.solver_cost(repeats=0), "repeats"),
+    ],
+)
+def test_bad_arguments_are_named(call, match):
+    with pytest.raises(InputError, match=match):
+        call()
+
+
+def test_mclachlan_scovel_map() -> None:
+    run = smooth.mclachlan_scovel_map(T=10.0, samples=51)
+    assert run.skew_defect.max() < 1e-12  # Q^T B stays skew: exactly, up to rounding
+    assert run.gap.max() < 1e-9  # rtol 1e-12 over t <= 10
+
+
+def test_shared_control_is_the_rigid_body_velocity() -> None:
+    run = smooth.shared_control(T=5.0)
+    assert run.gap.max() < 1e-9
+
+
+def test_momentum_norms_bound_and_distribution() -> None:
+    run = smooth.momentum_norms(count=4000)
+    assert run.norms.max() <= 2 + 1e-12
+    # n = 3: Q^T P is a Haar rotation, its angle has the density (1 - cos a)/pi on [0, pi] and
+    # ||M||_op = 2 |sin a|, of mean 4/pi and variance 2 - 16/pi^2
+    n3 = run.norms[run.sizes.index(3)]
+    mean, sd = 4 / np.pi, np.sqrt(2 - 16 / np.pi**2)
+    assert abs(n3.mean() - mean) < 4 * sd / np.sqrt(n3.size)
+    assert n3.max() > 1.99  # the bound 2 is approached
+
+
+def test_rotation_angles_are_arcsin() -> None:
+    theta = np.linspace(0.0, 3.0, 61)
+    run = smooth.rotation_angles(theta)
+    np.testing.assert_array_equal(run.refused, theta >= 2)
+    inside = theta < 2
+    np.testing.assert_allclose(
+        run.angle[inside], np.arcsin(theta[inside] / 2), rtol=0, atol=4 * EPS
+    )
+    assert np.all(np.isnan(run.angle[~inside]))
+    with pytest.raises(InputError, match="theta"):
+        smooth.rotation_angles([-1.0])
+
+
+def test_boundary_accuracy_is_as_conditioned() -> None:
+    run = smooth.boundary_accuracy([1e-1, 1e-4, 1e-8, 1e-12, 1e-15], n=5)
+    assert run.residual.max() < 5e-15 and run.orthogonality.max() < 5e-15
+    # the forward error is set by the conditioning of the problem, eps / sqrt(delta)
+    assert np.all(run.forward_error <= 10 * run.eps_over_sqrt_delta), run.forward_error
+    assert run.forward_error[-1] > 100 * run.forward_error[0]  # and does grow near the boundary
