@@ -31,27 +31,29 @@ import sympy as sp
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from derivations.parts import rigid_body as rb  # noqa: E402
-from derivations.symbolic import explicit, residual, skew_matrix  # noqa: E402
+from derivations.claims.section3 import s02_rigid_body_equations as rb  # noqa: E402
+from derivations.claims.section3 import s04_manakov_integrals as s4  # noqa: E402
+from derivations.claims.section3._inertia import lam_symbols  # noqa: E402
+from derivations.symbolic import explicit, lhs_minus_rhs, residual, skew_matrix  # noqa: E402
 
 
 def j_symmetric(n: int) -> sp.Expr:
-    lam, a, b = rb._lam(n), skew_matrix("a", n), skew_matrix("b", n)
+    lam, a, b = lam_symbols(n), skew_matrix("a", n), skew_matrix("b", n)
     eq = rb.S2.formulas["J_symmetric"]
-    return residual(explicit(rb.lhs_minus_rhs(eq), {"a": a, "b": b}, lam))
+    return residual(explicit(lhs_minus_rhs(eq), {"a": a, "b": b}, lam))
 
 
 def emitted_field(n: int) -> sp.Expr:
-    lam, Ms = rb._lam(n), skew_matrix("m", n)
+    lam, Ms = lam_symbols(n), skew_matrix("m", n)
     env = {"Q": sp.eye(n), "M": Ms}
     Omega = explicit(rb.RIGID_BODY_RHS["Qdot"], env, lam)
     Mdot = explicit(rb.RIGID_BODY_RHS["Mdot"], env, lam)
-    r = residual(sp.simplify(rb._J_explicit(Omega, lam) - Ms))
+    r = residual(sp.simplify(rb.J_explicit(Omega, lam) - Ms))
     return r + residual(sp.simplify(Mdot - explicit(rb.MDOT.rhs, {"M": Ms, "Omega": Omega})))
 
 
 def integrals_conserved(n: int) -> sp.Expr:
-    return rb._conservation(rb._lam(n), skew_matrix("m", n), 4)
+    return s4.conservation(lam_symbols(n), skew_matrix("m", n), 4)
 
 
 CHECKS: dict[str, tuple[Callable[[int], sp.Expr], int]] = {

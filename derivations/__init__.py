@@ -10,15 +10,15 @@
 * :mod:`derivations.text` and :mod:`derivations.report`: claims as terminal text and as book
   tables; :mod:`derivations.cli`: the commands ``claims``, ``show``, ``verify``, ``derive``;
 * :mod:`derivations.reference`: independent float64 / high-precision references (never symrb);
-* :mod:`derivations.parts`: the part modules not yet split (``rigid_body`` is S1-S4, ...).
 * :mod:`derivations.claims`: one module per claim, by section (``section2.d10_moser_veselov``
-  is D10); code shared by a section's claims sits in its underscore modules;
+  is D10, ``section3.s02_rigid_body_equations`` is S2); code shared by a section's claims sits
+  in its underscore modules;
 * :mod:`derivations.methods`: checks of symrb's own methods (ids M1, ...), apart from the
   paper's claims (``cayley_step`` is M1).
 
 Imports run one way: vocabulary <- symbolic <- registry <- printer <- text, report <- cli.
 
-How a part is written (``derivations/parts/rigid_body.py`` is the model):
+How a claim is written (``derivations/claims/section3/s02_rigid_body_equations.py`` is a model):
 
 1. **Declare a claim above its evidence** with :func:`~derivations.registry.claim`; register its
    evidence with the decorator ``@S2.check(level, tol=..., form=...)``.  The first paragraph of the
@@ -29,7 +29,7 @@ How a part is written (``derivations/parts/rigid_body.py`` is the model):
    math may name objects but not state a relation (``=``, ``<``, ``\\le``, ...), except a parameter
    value such as ``$n=3$``.
 3. **Emit what was verified.**  A :class:`~derivations.vocabulary.Kernel` holds the expressions of a
-   generated function (``target`` = the part module's name); evidence reads them with
+   generated function (``target`` = the generated module's name); evidence reads them with
    ``KERNEL["output"]`` (this records that the claim checked the kernel) and evaluates them with
    :func:`~derivations.symbolic.explicit` (fixed n) or :class:`~derivations.symbolic.Words`
    (every n).  Never type a kernel's formula a second time in an evidence function.

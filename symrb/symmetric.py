@@ -13,7 +13,7 @@ reconstruction :math:`P = Q\exp(\sinh^{-1}(M/2))`.
     \qquad\text{(learning version, Section 3.2)}
 
 The vector fields are generated in :mod:`symrb._generated.symmetric_rigid_body` by
-:mod:`derivations.parts.symmetric_rigid_body` (claims S5-S12); the functions here validate input and
+the claims S5-S12 of :mod:`derivations.claims.section3`; the functions here validate input and
 document the mathematics.  The flows :class:`SymmetricRigidBody`, :class:`McLachlanScovel` and
 :class:`MultiSampleSymmetricRigidBody` are :class:`symrb.continuous.Flow` objects naming their
 state variables; :func:`symrb.integrate` runs them through :func:`scipy.integrate.solve_ivp`.

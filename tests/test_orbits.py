@@ -10,9 +10,17 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import derivations.parts.adjoint_orbits as ao
+import derivations.claims.section3._orbit_learning as ol
+import derivations.claims.section3._orbits as orb
+import derivations.claims.section3.s13_adjoint_orbits as s13
+import derivations.claims.section3.s14_brockett_toda as s14
+import derivations.claims.section3.s15_learning_on_orbits as s15
+import derivations.claims.section3.s15_learning_on_orbits.so3 as s15_so3
 import symrb
+from derivations.claims.section3._display import _Norm
+from derivations.claims.section3.s15_learning_on_orbits import _beta
 from derivations.symbolic import Pair, Words, eq, trace_residual
+from derivations.vocabulary import matrix
 from symrb import orbits
 from symrb.errors import InputError
 
@@ -215,7 +223,7 @@ def test_two_samples_share_control_and_leave_double_bracket():
 def test_two_samples_long_horizon():
     """The continuation (first half kept, second half shifted) reaches T = 8 for two samples; the
     shared control conserves <x^1, x^2> and ||x^a||."""
-    X0, N = ao.two_sample_data()
+    X0, N = ol.two_sample_data()
     res = orbits.solve_orbit_bvp(X0, N, 8.0, tol=1e-5)
     assert res.success, res.message
     np.testing.assert_allclose(pair(res.x[:, 0], res.x[:, 1]), pair(X0[0], X0[1]), atol=1e-7)
@@ -247,89 +255,89 @@ def test_extend_guess():
 
 def test_opposite_control_sign_is_not_stationary():
     """dH/du vanishes at the emitted u* = [p, x] but not at [x, p]."""
-    ustar = ao.OPTIMAL_CONTROL.outputs["u"]
-    assert trace_residual(ao.stationarity(ustar)) == 0
-    assert trace_residual(ao.stationarity(-ustar)) > 0
+    ustar = s13.OPTIMAL_CONTROL.outputs["u"]
+    assert trace_residual(s13.stationarity(ustar)) == 0
+    assert trace_residual(s13.stationarity(-ustar)) > 0
 
 
 def test_opposite_potential_gradient_fails():
     """The derivative of Brockett's potential is <[N,[N,x]], d>, not <-[N,[N,x]], d>."""
     w = Words()
-    dV = ao._directional(ao.BROCKETT_POTENTIAL.outputs["V"], {ao.x: ao.d}, w)
-    right = ao._pair_poly(ao.BROCKETT_GRADIENT.rhs, ao.d, w)
+    dV = orb.directional(s14.BROCKETT_POTENTIAL.outputs["V"], {orb.x: orb.d}, w)
+    right = orb.pair_poly(s14.BROCKETT_GRADIENT.rhs, orb.d, w)
     assert trace_residual(dV - right) == 0
     assert trace_residual(dV + right) > 0
 
 
 def test_wrong_displayed_gradient_fails_the_check(monkeypatch):
-    shown = ao.BROCKETT_GRADIENT
-    monkeypatch.setattr(ao, "BROCKETT_GRADIENT", eq(shown.lhs, -shown.rhs))
-    assert ao.s14_gradient() > 0
+    shown = s14.BROCKETT_GRADIENT
+    monkeypatch.setattr(s14, "BROCKETT_GRADIENT", eq(shown.lhs, -shown.rhs))
+    assert s14.s14_gradient() > 0
 
 
 def test_separate_controls_change_the_pairing():
     """With two different controls d/dt <x^1, x^2> does not vanish (the shared control is what
     conserves it)."""
     w = Words()
-    u2 = ao.matrix("u_2")
-    field = ao.ORBIT_RHS_WITH_CONTROL.outputs["xdot"]
+    u2 = matrix("u_2")
+    field = s15.ORBIT_RHS_WITH_CONTROL.outputs["xdot"]
     moves = {
-        ao._x1: ao._kernel_of_sample(field, 1),
-        ao._x2: ao._kernel_of_sample(field, 2, control=u2),
+        s15._x1: s15.kernel_of_sample(field, 1),
+        s15._x2: s15.kernel_of_sample(field, 2, control=u2),
     }
-    assert trace_residual(ao._directional(Pair(ao._x1, ao._x2), moves, w)) > 0
+    assert trace_residual(orb.directional(Pair(s15._x1, s15._x2), moves, w)) > 0
 
 
 def test_printed_endpoint_sign_gives_the_reversed_flow():
     """p = +N also solves the costate equation, but then xdot = [x,[N,x]] = -[x,[x,N]]."""
     w = Words()
-    at = {ao.p: ao.N}
-    pdot = ao.ORBIT_EXTREMAL_RHS.outputs["pdot"].xreplace(at)
-    xdot = ao.ORBIT_EXTREMAL_RHS.outputs["xdot"].xreplace(at)
-    db = ao.DOUBLE_BRACKET_RHS.outputs["xdot"]
-    assert trace_residual(ao._pair_poly(pdot, ao.d, w)) == 0
-    assert trace_residual(ao._pair_poly(xdot + db, ao.d, w)) == 0
-    assert trace_residual(ao._pair_poly(xdot - db, ao.d, w)) > 0
+    at = {orb.p: orb.N}
+    pdot = s14.ORBIT_EXTREMAL_RHS.outputs["pdot"].xreplace(at)
+    xdot = s14.ORBIT_EXTREMAL_RHS.outputs["xdot"].xreplace(at)
+    db = s14.DOUBLE_BRACKET_RHS.outputs["xdot"]
+    assert trace_residual(orb.pair_poly(pdot, orb.d, w)) == 0
+    assert trace_residual(orb.pair_poly(xdot + db, orb.d, w)) == 0
+    assert trace_residual(orb.pair_poly(xdot - db, orb.d, w)) > 0
 
 
 def test_printed_equations_fail_and_corrected_pass():
     """The same function judges both forms: the printed per-sample equations are not Hamilton's
     equations of the shared problem, the corrected ones are."""
-    assert ao._two_sample_hamilton("printed") > 0
-    assert ao._two_sample_hamilton("corrected") == 0
+    assert s15._two_sample_hamilton("printed") > 0
+    assert s15._two_sample_hamilton("corrected") == 0
 
 
 def test_mixed_forms_rescale_the_control():
     """su(2), costate paired by -1/2 tr, ||u||^2 = -kappa(u, u) = -4 tr(u u): u* = [p, x] / 8."""
-    assert ao.killing_factor(ao.su_basis(2)) == 4
-    assert ao.mixed_form_control_scale() == sp.Rational(1, 8)
+    assert s13.killing_factor(s13.su_basis(2)) == 4
+    assert s13.mixed_form_control_scale() == sp.Rational(1, 8)
 
 
 @pytest.mark.parametrize(
     "change",
     [
-        lambda b: b.subs(ao._beta / 2, ao._beta),  # sin(beta): too strong
-        lambda b: b.subs(ao._beta / 2, ao._beta / 3),  # sin(beta/3): true, but not the sharp bound
+        lambda b: b.subs(_beta / 2, _beta),  # sin(beta): too strong
+        lambda b: b.subs(_beta / 2, _beta / 3),  # sin(beta/3): true, but not the sharp bound
     ],
 )
 def test_wrong_bound_fails_the_check(monkeypatch, change):
-    bound = ao.BOUND
-    monkeypatch.setattr(ao, "BOUND", sp.Ge(bound.lhs, change(bound.rhs)))
-    assert ao.s15_bound_so3() > 0
+    bound = s15.BOUND
+    monkeypatch.setattr(s15_so3, "BOUND", sp.Ge(bound.lhs, change(bound.rhs)))
+    assert s15_so3.s15_bound_so3() > 0
 
 
 def test_wrong_decay_rate_fails_the_check(monkeypatch):
-    phase = ao.PHASE
-    faster = phase.rhs.subs(ao._Norm(ao.N), 2 * ao._Norm(ao.N))
-    monkeypatch.setattr(ao, "PHASE", eq(phase.lhs, faster))
-    assert ao.s15_decay_exact_so3() > 0
+    phase = s15.PHASE
+    faster = phase.rhs.subs(_Norm(orb.N), 2 * _Norm(orb.N))
+    monkeypatch.setattr(s15_so3, "PHASE", eq(phase.lhs, faster))
+    assert s15_so3.s15_decay_exact_so3() > 0
 
 
 def test_one_sample_second_term_decreases_with_T():
     """The closed form ||[N,[N,x_T]]|| at T = 1, 2, 4, 8, 16 decreases to 0, the last ratio close
     to exp(-||x_0|| ||N|| 8)."""
-    x0, N = ao.one_sample_data()
-    decay = symrb.one_sample_second_term(x0, N, ao.ONE_SAMPLE_HORIZONS)
+    x0, N = ol.one_sample_data()
+    decay = symrb.one_sample_second_term(x0, N, ol.ONE_SAMPLE_HORIZONS)
     assert np.all(np.diff(decay) < 0) and decay[-1] < 1e-3
     assert decay[-1] / decay[-2] == pytest.approx(np.exp(-0.5 * 8), rel=0.02)
 

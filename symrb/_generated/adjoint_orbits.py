@@ -1,4 +1,4 @@
-"""Generated from ``derivations.parts.adjoint_orbits``; do not edit by hand.
+"""Generated from ``derivations.claims.section3.s13_adjoint_orbits``, ``derivations.claims.section3.s14_brockett_toda``, ``derivations.claims.section3.s15_learning_on_orbits``, ``derivations.claims.section3.s15_learning_on_orbits.so3``; do not edit by hand.
 
 Every function here is the expression that the evidence of the claims named in its
 docstring evaluated.  Regenerate with ``python -m derivations derive`` (or ``symrb
@@ -11,8 +11,8 @@ import numpy
 
 __all__ = [
     "optimal_control",
-    "brockett_potential",
     "orbit_hamiltonian",
+    "brockett_potential",
     "orbit_extremal_rhs",
     "double_bracket_rhs",
     "orbit_rhs_with_control",
@@ -40,42 +40,13 @@ def optimal_control(x, p):
     Notes
     -----
     Checked by claims S13, S15 (``symrb verify S13 S15``);
-    expressions from ``derivations.parts.adjoint_orbits``.
+    expressions from ``derivations.claims.section3.s13_adjoint_orbits``.
 
     Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2).
     """
     x = numpy.asarray(x, dtype=float)
     p = numpy.asarray(p, dtype=float)
     return (p @ x) - (x @ p)
-
-
-def brockett_potential(x, N):
-    r"""Brockett's potential V(x) = -1/2 ||[x, N]||^2.
-
-    ||a||^2 = <a, a> = -1/2 trace(a a).
-
-    Parameters
-    ----------
-    x : array, shape (..., n, n)
-        state on an adjoint orbit (skew for so(n))
-    N : array, shape (..., n, n)
-        the fixed element n of Brockett's potential
-
-    Returns
-    -------
-    V : array
-
-    Notes
-    -----
-    Checked by claim S14 (``symrb verify S14``);
-    expressions from ``derivations.parts.adjoint_orbits``.
-
-    Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2), 1 trace (n^2), 1 scalar.
-    """
-    x = numpy.asarray(x, dtype=float)
-    N = numpy.asarray(N, dtype=float)
-    t0 = (x @ N) - (N @ x)
-    return (1 / 4) * numpy.einsum("...ij,...ji->...", t0, t0)
 
 
 def orbit_hamiltonian(x, p, N):
@@ -99,7 +70,7 @@ def orbit_hamiltonian(x, p, N):
     Notes
     -----
     Checked by claims S13, S14 (``symrb verify S13 S14``);
-    expressions from ``derivations.parts.adjoint_orbits``.
+    expressions from ``derivations.claims.section3.s13_adjoint_orbits``.
 
     Total ops per batch item: 6 matrix products (n^3), 3 elementwise (n^2), 2 traces (n^2), 3 scalar.
     """
@@ -111,6 +82,35 @@ def orbit_hamiltonian(x, p, N):
     return (1 / 4) * numpy.einsum("...ij,...ji->...", t0, t0) + (1 / 4) * numpy.einsum(
         "...ij,...ji->...", x, ((p @ t1) - (t1 @ p))
     )
+
+
+def brockett_potential(x, N):
+    r"""Brockett's potential V(x) = -1/2 ||[x, N]||^2.
+
+    ||a||^2 = <a, a> = -1/2 trace(a a).
+
+    Parameters
+    ----------
+    x : array, shape (..., n, n)
+        state on an adjoint orbit (skew for so(n))
+    N : array, shape (..., n, n)
+        the fixed element n of Brockett's potential
+
+    Returns
+    -------
+    V : array
+
+    Notes
+    -----
+    Checked by claim S14 (``symrb verify S14``);
+    expressions from ``derivations.claims.section3.s14_brockett_toda``.
+
+    Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2), 1 trace (n^2), 1 scalar.
+    """
+    x = numpy.asarray(x, dtype=float)
+    N = numpy.asarray(N, dtype=float)
+    t0 = (x @ N) - (N @ x)
+    return (1 / 4) * numpy.einsum("...ij,...ji->...", t0, t0)
 
 
 def orbit_extremal_rhs(x, p, N):
@@ -135,7 +135,7 @@ def orbit_extremal_rhs(x, p, N):
     Notes
     -----
     Checked by claims S14, S15 (``symrb verify S14 S15``);
-    expressions from ``derivations.parts.adjoint_orbits``.
+    expressions from ``derivations.claims.section3.s14_brockett_toda``.
 
     Total ops per batch item: 10 matrix products (n^3), 6 elementwise (n^2).
     """
@@ -164,7 +164,7 @@ def double_bracket_rhs(x, N):
     Notes
     -----
     Checked by claims S14, S15 (``symrb verify S14 S15``);
-    expressions from ``derivations.parts.adjoint_orbits``.
+    expressions from ``derivations.claims.section3.s14_brockett_toda``.
 
     Total ops per batch item: 4 matrix products (n^3), 2 elementwise (n^2).
     """
@@ -199,7 +199,7 @@ def orbit_rhs_with_control(x, p, u, N):
     Notes
     -----
     Checked by claim S15 (``symrb verify S15``);
-    expressions from ``derivations.parts.adjoint_orbits``.
+    expressions from ``derivations.claims.section3.s15_learning_on_orbits``.
 
     Total ops per batch item: 8 matrix products (n^3), 5 elementwise (n^2).
     """
@@ -235,7 +235,7 @@ def one_sample_second_term(r, s, tau_0, T):
     Notes
     -----
     Checked by claim S15 (``symrb verify S15``);
-    expressions from ``derivations.parts.adjoint_orbits``.
+    expressions from ``derivations.claims.section3.s15_learning_on_orbits.so3``.
 
     Total ops per batch item: 14 scalar.
     """
@@ -271,7 +271,7 @@ def two_sample_bound(r_1, r_2, s, p_12):
     Notes
     -----
     Checked by claim S15 (``symrb verify S15``);
-    expressions from ``derivations.parts.adjoint_orbits``.
+    expressions from ``derivations.claims.section3.s15_learning_on_orbits.so3``.
 
     Total ops per batch item: 8 scalar.
     """

@@ -1,4 +1,4 @@
-"""Generated from ``derivations.parts.rigid_body``; do not edit by hand.
+"""Generated from ``derivations.claims.section3.s02_rigid_body_equations``, ``derivations.claims.section3.s03_euler_poincare``, ``derivations.claims.section3.s04_manakov_integrals``; do not edit by hand.
 
 Every function here is the expression that the evidence of the claims named in its
 docstring evaluated.  Regenerate with ``python -m derivations derive`` (or ``symrb
@@ -40,7 +40,7 @@ def rigid_body_rhs(Q, M, lam):
     Notes
     -----
     Checked by claim S2 (``symrb verify S2``);
-    expressions from ``derivations.parts.rigid_body``.
+    expressions from ``derivations.claims.section3.s02_rigid_body_equations``.
 
     Total ops per batch item: 3 matrix products (n^3), 2 elementwise (n^2).
     """
@@ -73,7 +73,7 @@ def euler_rhs_so3(m, lam):
     Notes
     -----
     Checked by claim S2 (``symrb verify S2``);
-    expressions from ``derivations.parts.rigid_body``.
+    expressions from ``derivations.claims.section3.s02_rigid_body_equations``.
 
     Total ops per batch item: 18 scalar.
     """
@@ -115,7 +115,7 @@ def kinetic_energy(M, lam):
     Notes
     -----
     Checked by claim S3 (``symrb verify S3``);
-    expressions from ``derivations.parts.rigid_body``.
+    expressions from ``derivations.claims.section3.s03_euler_poincare``.
 
     Total ops per batch item: 1 elementwise (n^2), 1 trace (n^2), 1 scalar.
     """
@@ -153,7 +153,7 @@ def manakov_integrals(M, lam):
     Notes
     -----
     Checked by claim S4 (``symrb verify S4``);
-    expressions from ``derivations.parts.rigid_body``.
+    expressions from ``derivations.claims.section3.s04_manakov_integrals``.
 
     Total ops per batch item: 1 matrix product (n^3), 3 elementwise (n^2), 8 traces (n^2), 8 scalar.
     """
@@ -194,7 +194,7 @@ def casimir_traces(M):
     Notes
     -----
     Checked by claim S4 (``symrb verify S4``);
-    expressions from ``derivations.parts.rigid_body``.
+    expressions from ``derivations.claims.section3.s04_manakov_integrals``.
 
     Total ops per batch item: 2 matrix products (n^3), 3 traces (n^2).
     """

@@ -1,4 +1,4 @@
-"""Generated from ``derivations.parts.symmetric_rigid_body``; do not edit by hand.
+"""Generated from ``derivations.claims.section3.s05_maximum_principle``, ``derivations.claims.section3.s06_symmetric_to_rigid_body``, ``derivations.claims.section3.s07_mclachlan_scovel``, ``derivations.claims.section3.s08_learning_version``, ``derivations.claims.section3.s12_hamiltonian_on_gl``; do not edit by hand.
 
 Every function here is the expression that the evidence of the claims named in its
 docstring evaluated.  Regenerate with ``python -m derivations derive`` (or ``symrb
@@ -10,41 +10,12 @@ from __future__ import annotations
 import numpy
 
 __all__ = [
-    "symmetric_momentum",
     "symmetric_rigid_body_rhs",
+    "symmetric_momentum",
     "mclachlan_scovel_rhs",
     "control_rhs",
     "gl_hamiltonian",
 ]
-
-
-def symmetric_momentum(Q, P):
-    r"""The body momentum of the symmetric representation, M = Q^T P - P^T Q.
-
-    Skew for any square Q, P; on the symmetric rigid body flow it follows the rigid body
-    equations (paper, Proposition SRBtoRB).
-
-    Parameters
-    ----------
-    Q : array, shape (..., n, n)
-        configuration (SO(n) is invariant; any square matrix accepted)
-    P : array, shape (..., n, n)
-        costate
-
-    Returns
-    -------
-    M : array
-
-    Notes
-    -----
-    Checked by claims S6, S9, S11 (``symrb verify S6 S9 S11``);
-    expressions from ``derivations.parts.symmetric_rigid_body``.
-
-    Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2).
-    """
-    Q = numpy.asarray(Q, dtype=float)
-    P = numpy.asarray(P, dtype=float)
-    return (numpy.swapaxes(Q, -1, -2) @ P) - (numpy.swapaxes(P, -1, -2) @ Q)
 
 
 def symmetric_rigid_body_rhs(Q, P, lam):
@@ -69,7 +40,7 @@ def symmetric_rigid_body_rhs(Q, P, lam):
     Notes
     -----
     Checked by claims S5, S6, S7, S11, S12 (``symrb verify S5 S6 S7 S11 S12``);
-    expressions from ``derivations.parts.symmetric_rigid_body``.
+    expressions from ``derivations.claims.section3.s05_maximum_principle``.
 
     Total ops per batch item: 4 matrix products (n^3), 2 elementwise (n^2).
     """
@@ -79,6 +50,35 @@ def symmetric_rigid_body_rhs(Q, P, lam):
     W = 1.0 / (lam[..., :, None] + lam[..., None, :])
     t0 = ((numpy.swapaxes(Q, -1, -2) @ P) - (numpy.swapaxes(P, -1, -2) @ Q)) * W
     return ((Q @ t0), (P @ t0))
+
+
+def symmetric_momentum(Q, P):
+    r"""The body momentum of the symmetric representation, M = Q^T P - P^T Q.
+
+    Skew for any square Q, P; on the symmetric rigid body flow it follows the rigid body
+    equations (paper, Proposition SRBtoRB).
+
+    Parameters
+    ----------
+    Q : array, shape (..., n, n)
+        configuration (SO(n) is invariant; any square matrix accepted)
+    P : array, shape (..., n, n)
+        costate
+
+    Returns
+    -------
+    M : array
+
+    Notes
+    -----
+    Checked by claims S6, S9, S11 (``symrb verify S6 S9 S11``);
+    expressions from ``derivations.claims.section3.s06_symmetric_to_rigid_body``.
+
+    Total ops per batch item: 2 matrix products (n^3), 1 elementwise (n^2).
+    """
+    Q = numpy.asarray(Q, dtype=float)
+    P = numpy.asarray(P, dtype=float)
+    return (numpy.swapaxes(Q, -1, -2) @ P) - (numpy.swapaxes(P, -1, -2) @ Q)
 
 
 def mclachlan_scovel_rhs(Q, B, lam):
@@ -103,7 +103,7 @@ def mclachlan_scovel_rhs(Q, B, lam):
     Notes
     -----
     Checked by claim S7 (``symrb verify S7``);
-    expressions from ``derivations.parts.symmetric_rigid_body``.
+    expressions from ``derivations.claims.section3.s07_mclachlan_scovel``.
 
     Total ops per batch item: 3 matrix products (n^3), 1 elementwise (n^2).
     """
@@ -137,7 +137,7 @@ def control_rhs(Q, P, U):
     Notes
     -----
     Checked by claim S8 (``symrb verify S8``);
-    expressions from ``derivations.parts.symmetric_rigid_body``.
+    expressions from ``derivations.claims.section3.s08_learning_version``.
 
     Total ops per batch item: 2 matrix products (n^3).
     """
@@ -169,7 +169,7 @@ def gl_hamiltonian(Q, P, lam):
     Notes
     -----
     Checked by claim S12 (``symrb verify S12``);
-    expressions from ``derivations.parts.symmetric_rigid_body``.
+    expressions from ``derivations.claims.section3.s12_hamiltonian_on_gl``.
 
     Total ops per batch item: 2 matrix products (n^3), 2 elementwise (n^2), 1 trace (n^2), 1 scalar.
     """

@@ -22,7 +22,8 @@ The paper prints :math:`p^a_T = +\partial\phi/\partial x^a_T` and per-sample con
 exactly :math:`p \equiv -n` and the double bracket flow :math:`\dot x = [x, [x, n]]`.
 
 Each vector field calls one kernel generated in :mod:`symrb._generated.adjoint_orbits` by
-:mod:`derivations.parts.adjoint_orbits`.  Here ``N`` is the paper's fixed element ``n``.
+the claims S13-S15 of :mod:`derivations.claims.section3`.  Here ``N`` is the paper's fixed
+element ``n``.
 
 The modules: :mod:`~symrb.orbits.extremal` (the extremal vector field, its Hamiltonian and
 Brockett's potential), :mod:`~symrb.orbits.double_bracket` (the double bracket flow and the Toda

@@ -5,7 +5,7 @@ r"""The classical n-dimensional rigid body (paper, Section 3.1).
     \dot Q = Q\Omega,\qquad \dot M = [M,\Omega],\qquad M = J(\Omega) = \Lambda\Omega + \Omega\Lambda.
 
 Each function validates its input and calls one kernel generated in
-:mod:`symrb._generated.rigid_body` by :mod:`derivations.parts.rigid_body`.
+:mod:`symrb._generated.rigid_body` by the claims S2-S4 of :mod:`derivations.claims.section3`.
 """
 
 from __future__ import annotations

@@ -1,0 +1,280 @@
+"""S4 (Section 3.1, eq. ``lambda_eqn``): Manakov's Lax equation with parameter and its integrals.
+
+With M = J(Omega) and Mdot = [M, Omega] (S2), d/dt(M + lambda Lambda^2) = [M + lambda Lambda^2,
+Omega + lambda Lambda] for every n, and the coefficients of the powers of lambda in
+tr((M + lambda Lambda^2)^k) are conserved and in involution for the Lie-Poisson bracket.
+
+Emitted to ``symrb/_generated/rigid_body.py``: ``manakov_integrals`` (derived by expanding the
+displayed trace in noncommutative letters) and ``casimir_traces`` (its lambda^0 coefficients).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import sympy as sp
+
+from derivations import reference as ref
+from derivations.claims.section3._inertia import ARG_LAM, lam_symbols
+from derivations.claims.section3.s02_rigid_body_equations import (
+    ARG_M,
+    J_DEF,
+    MDOT,
+    RIGID_BODY_RHS,
+    M,
+    Om,
+)
+from derivations.registry import Level, claim
+from derivations.symbolic import (
+    Bracket,
+    Pair,
+    Words,
+    eq,
+    explicit,
+    residual,
+    skew_gradient,
+    skew_matrix,
+    trace_words,
+)
+from derivations.vocabulary import Kernel, Lam, matrix
+
+_xi, _eta = matrix("xi"), matrix("eta")
+
+S4 = claim(
+    "S4",
+    label="lambda_eqn",
+    title="Manakov's Lax equation with parameter and its integrals",
+    statement="[[lax]]; the coefficients of the powers of $\\lambda$ in [[generating]] are "
+    "conserved along the rigid body flow and are in involution for the Lie-Poisson bracket.",
+    expected="holds",
+    section="3.1",
+    where="Section 3.1, the last displayed equation: Manakov's Lax equation with parameter, "
+    "$\\frac{d}{dt}(M + \\lambda\\Lambda^2) = [M + \\lambda\\Lambda^2, \\Omega + "
+    "\\lambda\\Lambda]$, and the integrals after it",
+    note="Words with an odd number of $M$'s vanish ($M$ skew, $\\Lambda^2$ symmetric) and the top "
+    "power of $\\lambda$ is the constant $\\operatorname{tr}(\\Lambda^{2k})$, so the non-trivial "
+    "integrals for $2 \\le k \\le 5$ are six; the $\\lambda^0$ coefficients "
+    "$\\operatorname{tr}(M^k)$ are the Casimirs.",
+)
+_lp = sp.Symbol("lambda")
+_k = sp.Symbol("k", integer=True, positive=True)
+LAX_MATRIX = M + _lp * Lam**2
+LAX = S4.formula(
+    "lax",
+    eq(sp.Derivative(LAX_MATRIX, sp.Symbol("t")), Bracket(LAX_MATRIX, Om + _lp * Lam)),
+)
+GENERATING = S4.formula("generating", sp.Trace(sp.MatPow(LAX_MATRIX, _k)))
+
+
+def _letters_of_lax() -> dict[str, tuple[sp.Expr, sp.MatrixExpr]]:
+    """The summands of the Lax matrix as {letter: (coefficient, matrix)}: M and Lambda^2."""
+    out = {}
+    for term in GENERATING.arg.base.args:
+        coeff, mat = term.as_coeff_mmul() if isinstance(term, sp.MatMul) else (sp.Integer(1), term)
+        out["M" if mat == M else "A"] = (coeff, mat)
+    return out
+
+
+def manakov_words(kmax: int) -> list[tuple[int, int, dict[tuple[str, ...], sp.Expr]]]:
+    """The non-trivial coefficients of lambda^j in the displayed tr((M + lambda Lambda^2)^k),
+    2 <= k <= kmax, as {trace word: integer coefficient} (words up to rotation and reversal)."""
+    letters = _letters_of_lax()
+    out = []
+    for k in range(2, kmax + 1):
+        coeffs = trace_words(
+            {name: c for name, (c, _m) in letters.items()}, k, _lp, {"M": -1, "A": 1}
+        )
+        out += [(k, j, words) for j, words in coeffs.items() if j != k]
+    return out
+
+
+def _word_trace(word: tuple[str, ...]) -> sp.Expr:
+    mats = {name: m for name, (_c, m) in _letters_of_lax().items()}
+    return sp.Trace(sp.MatMul(*[mats[x] for x in word]))
+
+
+_MANAKOV = manakov_words(5)
+MANAKOV_INTEGRALS = Kernel(
+    name="manakov_integrals",
+    target="rigid_body",
+    args=[ARG_M, ARG_LAM],
+    outputs={
+        f"k{k}_j{j}": sp.Add(*[c * _word_trace(w) for w, c in words.items()])
+        for k, j, words in _MANAKOV
+    },
+    doc="Manakov's integrals of the rigid body.\n\n"
+    "The non-trivial coefficients of lambda^j in trace((M + lambda Lambda^2)^k), 2 <= k <= 5\n"
+    "(A = Lambda^2), in this order:\n\n"
+    + "\n".join(
+        f"- k={k}, lambda^{j}: " + " + ".join(f"{c} tr({''.join(w)})" for w, c in words.items())
+        for k, j, words in _MANAKOV
+    ),
+    claims=("S4",),
+    stack=True,
+)
+CASIMIR_TRACES = Kernel(
+    name="casimir_traces",
+    target="rigid_body",
+    args=[ARG_M],
+    outputs={
+        f"tr_M{k}": sp.Add(*[c * _word_trace(w) for w, c in words.items()])
+        for k, j, words in manakov_words(6)
+        if j == 0 and k % 2 == 0
+    },
+    doc="Casimirs of so(n): trace(M^2), trace(M^4), trace(M^6).\n\n"
+    "The lambda^0 coefficients of trace((M + lambda Lambda^2)^k); odd powers vanish.",
+    claims=("S4",),
+    stack=True,
+)
+
+
+@S4.check(Level.SYMBOLIC_GENERAL_N)
+def s4_lax_pair_general_n() -> sp.Expr:
+    """With Lambda and Om noncommutative, M the displayed J(Om) and Mdot the displayed [M, Om]:
+    Mdot minus the right side of the displayed Lax equation expands to 0 (any n)."""
+    w = Words(symmetric=["Lambda"])
+    Mdot = w.of(MDOT.rhs.xreplace({M: J_DEF.rhs}))  # Lambda is constant: d/dt lhs = Mdot
+    rhs = w.of(LAX.rhs.xreplace({M: J_DEF.rhs}))
+    return w.is_zero(Mdot - rhs)
+
+
+def _degree(name: str) -> int:
+    return int(name[1]) if name.startswith("k") else int(name[4:])
+
+
+def _integrals(max_degree: int, lam: list[sp.Expr], Ms: sp.Matrix) -> list[sp.Expr]:
+    """The emitted Manakov integrals of degree <= max_degree, on an explicit M (the Casimirs of
+    these degrees are among them: (k, j) = (2, 0), (4, 0))."""
+    return [
+        sp.expand(explicit(MANAKOV_INTEGRALS[name], {"M": Ms}, lam))
+        for name in MANAKOV_INTEGRALS.outputs
+        if _degree(name) <= max_degree
+    ]
+
+
+def conservation(lam: list[sp.Expr], Ms: sp.Matrix, max_degree: int) -> sp.Expr:
+    k = Ms.rows
+    Mdot = explicit(RIGID_BODY_RHS["Mdot"], {"Q": sp.eye(k), "M": Ms}, lam)
+    total = sp.Integer(0)
+    for F in _integrals(max_degree, lam, Ms):
+        G = skew_gradient(F, Ms)
+        total += residual(sp.together(explicit(Pair(M, Om), {"M": G, "Omega": Mdot})))
+    return total
+
+
+@S4.check(Level.SYMBOLIC_FIXED_N)
+def s4_integrals_conserved() -> sp.Expr:
+    """d/dt F = <grad F, Mdot> vanishes identically for the emitted integrals of degree <= 4,
+    with Mdot from the emitted rigid body field (symbolic M and Lambda, n = 4)."""
+    lam, Ms = lam_symbols(4), skew_matrix("m", 4)
+    return conservation(lam, Ms, 4)
+
+
+def _derivative_at_zero(values: list[sp.Rational]) -> sp.Rational:
+    """p'(0) of the polynomial p of degree < len(values) with p(i) = values[i], i = 0, 1, ...
+    (exact Lagrange interpolation)."""
+    e = sp.Symbol("e")
+    return sp.diff(sp.interpolate(list(enumerate(values)), e), e).subs(e, 0)
+
+
+@S4.check(Level.EXACT_RATIONAL)
+def s4_integrals_conserved_exact() -> sp.Expr:
+    """The same for every emitted integral and Casimir (degrees up to 6): d/de F(M + e Mdot) at
+    e = 0, by exact interpolation of F at e = 0..6, vanishes at 3 random rational (M, Lambda),
+    n = 4 and 5."""
+    rng = np.random.default_rng(44)
+    total = sp.Integer(0)
+    for k in (4, 5):
+        for _ in range(3):
+            lam = [sp.Rational(int(x), 7) for x in rng.integers(3, 20, k)]
+            A = sp.Matrix(k, k, lambda i, j: sp.Rational(int(rng.integers(-9, 10)), 5))
+            Ms = A - A.T
+            Mdot = explicit(RIGID_BODY_RHS["Mdot"], {"Q": sp.eye(k), "M": Ms}, lam)
+            for kernel in (MANAKOV_INTEGRALS, CASIMIR_TRACES):
+                for name in kernel.outputs:
+                    vals = [explicit(kernel[name], {"M": Ms + e * Mdot}, lam) for e in range(7)]
+                    total += residual(_derivative_at_zero(vals))
+    return total
+
+
+@S4.check(Level.SYMBOLIC_FIXED_N)
+def s4_integrals_in_involution() -> sp.Expr:
+    """Lie-Poisson brackets {F, G}(M) = -<M, [grad F, grad G]> of the emitted Manakov integrals
+    of degree <= 4 vanish pairwise (symbolic, n = 4)."""
+    lam, Ms = lam_symbols(4), skew_matrix("m", 4)
+    grads = [skew_gradient(F, Ms) for F in _integrals(4, lam, Ms)]
+    total = sp.Integer(0)
+    for a, b in itertools.combinations(range(len(grads)), 2):
+        bracket = explicit(Pair(M, Bracket(_xi, _eta)), {"M": Ms, "xi": grads[a], "eta": grads[b]})
+        total += residual(bracket)
+    return total
+
+
+@S4.check(Level.SYMBOLIC_FIXED_N)
+def s4_coefficients_by_expansion() -> sp.Expr:
+    """Another route to the same integrals: expand the displayed trace with explicit symbolic
+    3 x 3 matrices as a polynomial in lambda; its coefficients equal the emitted Manakov integrals
+    and Casimirs (n = 3)."""
+    lam, Ms = lam_symbols(3), skew_matrix("m", 3)
+    base = explicit(GENERATING.arg.base, {"M": Ms, "lambda": _lp}, lam)
+    total = sp.Integer(0)
+    coeff_cache: dict[int, sp.Poly] = {}
+    for kernel in (MANAKOV_INTEGRALS, CASIMIR_TRACES):
+        for name in kernel.outputs:
+            k, j = (int(name[1]), int(name[4])) if name.startswith("k") else (int(name[4:]), 0)
+            if k not in coeff_cache:
+                coeff_cache[k] = sp.Poly(sp.expand((base**k).trace()), _lp)
+            want = coeff_cache[k].coeff_monomial(_lp**j)
+            total += residual(sp.expand(explicit(kernel[name], {"M": Ms}, lam)) - want)
+    return total
+
+
+@S4.check(Level.FLOAT64, tol=1e-10)
+def s4_symrb_integrals_pointwise() -> float:
+    """symrb.manakov_integrals and symrb.casimir_traces against coefficients of a polynomial fit
+    of tr((M + t Lambda^2)^k) over t (plain NumPy), n = 4, 5, 10 random M each: max relative
+    difference."""
+    import symrb
+
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    order = [(int(nm[1]), int(nm[4])) for nm in MANAKOV_INTEGRALS.outputs]
+    for k in (4, 5):
+        lam = rng.uniform(0.5, 1.5, k)
+        A = np.diag(lam**2)
+        for _ in range(10):
+            m = ref.random_skew(k, rng, 0.5)
+            ts = np.linspace(-1.0, 1.0, 9)
+            fits = {}
+            for p in range(2, 7):
+                vals = [np.trace(np.linalg.matrix_power(m + t * A, p)) for t in ts]
+                fits[p] = np.polynomial.polynomial.polyfit(ts, vals, p)
+            got = symrb.manakov_integrals(m, lam)
+            want = np.array([fits[p][j] for p, j in order])
+            cas = symrb.casimir_traces(m)
+            want_c = np.array([fits[p][0] for p in (2, 4, 6)])
+            scale = max(np.abs(want).max(), np.abs(want_c).max())
+            worst = max(worst, float(np.abs(got - want).max() / scale))
+            worst = max(worst, float(np.abs(cas - want_c).max() / scale))
+    return worst
+
+
+@S4.check(Level.FLOAT64, tol=1e-9)
+def s4_conserved_on_reference_flow() -> float:
+    """symrb.manakov_integrals along a trajectory of the reference rigid body field (J^-1 by a
+    linear solve; DOP853, rtol 1e-12, n = 4, t in [0, 20]): max drift relative to the values."""
+    from scipy.integrate import solve_ivp
+
+    import symrb
+
+    rng = np.random.default_rng(6)
+    k = 4
+    lam = np.array([0.6, 0.9, 1.3, 1.9])
+    M0 = ref.random_skew(k, rng, 0.5)
+    sol = solve_ivp(
+        lambda _t, y: ref.rigid_body_field(np.eye(k), y.reshape(k, k), lam)[1].ravel(),
+        (0, 20), M0.ravel(), method="DOP853", rtol=1e-12, atol=1e-12,
+    )  # fmt: skip
+    vals = symrb.manakov_integrals(sol.y.T.reshape(-1, k, k), lam)
+    return float(np.max(np.abs(vals - vals[0]) / np.abs(vals[0])))

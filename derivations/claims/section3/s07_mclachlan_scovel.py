@@ -1,0 +1,157 @@
+"""S7 (Section 3.2, eq. ``rbnlms``): a costate B with Q^T B skew gives the McLachlan-Scovel
+equations.
+
+For a costate B with Q^T B skew the extremal equations of S5 become Qdot = Q J^-1(Q^T B),
+Bdot = B J^-1(Q^T B); the set where Q^T B is skew is invariant and on it Q^T B follows the rigid
+body equations.  Erratum: for a costate B with Q^T B skew the extremal control is J^-1(2 Q^T B),
+so (rbnlms) holds for 2B (equivalently for P - Q P^T Q, the paper's commented-out remark), not for
+the costate itself.
+
+Emitted to ``symrb/_generated/symmetric_rigid_body.py``: ``mclachlan_scovel_rhs``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from derivations import reference as ref
+from derivations.claims.section3._inertia import ARG_LAM
+from derivations.claims.section3._symmetric import ARG_B, ARG_Q, MOMENTUM, B, Bdot, P, Q, Qdot
+from derivations.claims.section3._words import ddt, jinv_letters, reduce_words, rule
+from derivations.claims.section3.s05_maximum_principle import SYMMETRIC_RIGID_BODY_RHS
+from derivations.registry import Level, claim
+from derivations.symbolic import Words, eq
+from derivations.vocabulary import Jinv, Kernel, matrix
+
+S7 = claim(
+    "S7",
+    label="rbnlms",
+    title="A costate $B$ with $Q^T B$ skew: the McLachlan-Scovel equations",
+    statement="For a costate $B$ with [[skew]], the extremal equations of S5 become [[rbnlms]]; "
+    "these equations leave the set where $Q^TB$ is skew invariant, and on it $Q^TB$ follows the "
+    "rigid body equations (the McLachlan-Scovel equations).",
+    expected="holds after correction",
+    printed="The extremal equations for a costate $B$ with [[skew]] are [[rbnlms]].",
+    corrected="The extremal equations for a costate $B$ with [[skew]] are [[extremal_B]]: "
+    "the McLachlan-Scovel equations hold for the rescaled costate [[rescaled]], which on this set is "
+    "[[remark]], the map the paper's commented-out remark names.",
+    note="Read for the costate itself, the printed McLachlan-Scovel equations run the extremal "
+    "flow at half speed. Corrected: the extremals are $\\dot Q = QJ^{-1}(2Q^T B)$, $\\dot B = "
+    "BJ^{-1}(2Q^T B)$, so the printed equations hold for the rescaled costate $B' = 2B$. With "
+    "$Q^T B$ skew, $Q^T B - B^T Q = 2Q^T B$, so the control of S5 is $U = J^{-1}(2Q^T B)$; on "
+    "this set $B' = 2B$ equals $B - QB^T Q$. That map, $B' = P - QP^T Q$, takes every solution of "
+    "the symmetric rigid body equations with $Q$ orthogonal to a solution of the McLachlan-Scovel "
+    "equations with $Q^T B' = M$ (the paper's commented-out remark). The invariance of the set "
+    "where $Q^T B$ is skew holds for any $U$: $S = Q^T B + B^T Q$ obeys $\\dot S = U^T S + SU$.",
+    section="3.2",
+    where="Section 3.2, the paragraph after the proof of the second proposition: the "
+    "McLachlan-Scovel equations $\\dot Q = QJ^{-1}(Q^T B)$, $\\dot B = BJ^{-1}(Q^T B)$ for a "
+    "costate $B$ with $Q^T B$ skew",
+)
+SKEW_B = S7.formula("skew", eq(sp.Transpose(Q.T * B), -Q.T * B))
+MCLACHLAN_SCOVEL_RHS = Kernel(
+    name="mclachlan_scovel_rhs",
+    target="symmetric_rigid_body",
+    args=[ARG_Q, ARG_B, ARG_LAM],
+    outputs={"Qdot": Q * Jinv(Q.T * B), "Bdot": B * Jinv(Q.T * B)},
+    doc="McLachlan-Scovel field (paper, Section 3.2).\n\n"
+    "Qdot = Q U, Bdot = B U, U = J^{-1}(Q^T B), for Q^T B skew.",
+    claims=("S7",),
+)
+RBNLMS = S7.formula(
+    "rbnlms",
+    tuple(eq(d, MCLACHLAN_SCOVEL_RHS.outputs[o]) for d, o in ((Qdot, "Qdot"), (Bdot, "Bdot"))),
+)
+EXTREMAL_B = S7.formula(
+    "extremal_B", (eq(Qdot, Q * Jinv(2 * Q.T * B)), eq(Bdot, B * Jinv(2 * Q.T * B)))
+)
+_Bs = matrix("B'")
+RESCALED = S7.formula("rescaled", eq(_Bs, 2 * B))
+REMARK = S7.formula("remark", eq(_Bs, B - Q * B.T * Q))
+
+
+def _s7_extremals(form: str) -> sp.Integer:
+    w = Words()
+    rules = rule(w, SKEW_B)
+    target = {"V": Jinv(Q.T * B)}
+    shown = S7.formulas["rbnlms" if form == "printed" else "extremal_B"]
+    total = sp.Integer(0)
+    for out, rel in zip(("Qdot", "Pdot"), shown, strict=True):
+        field = SYMMETRIC_RIGID_BODY_RHS[out].xreplace({P: B})  # S5's extremals, costate B
+        lhs = reduce_words(w, w.of(jinv_letters(field, w, target, rules)), rules)
+        rhs = reduce_words(w, w.of(jinv_letters(rel.rhs, w, target, rules)), rules)
+        total += w.is_zero(lhs - rhs)
+    return total
+
+
+@S7.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def s7_printed_extremals() -> sp.Integer:
+    """The emitted S5 extremal field (QU, BU), U = J^-1(Q^T B - B^T Q), for a costate B with the
+    displayed skewness (a rewriting rule B^T Q -> -Q^T B) against the printed (rbnlms), any n
+    (noncommutative Q, B; J^-1 linear): number of equations that differ."""
+    return _s7_extremals("printed")
+
+
+@S7.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def s7_corrected_extremals() -> sp.Integer:
+    """The same field against the corrected equations with U = J^-1(2 Q^T B), any n."""
+    return _s7_extremals("corrected")
+
+
+@S7.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def s7_remark_maps_symmetric_flow() -> sp.Integer:
+    """Noncommutative Q (orthogonal), P, any n: for B from the displayed remark, Q^T B is the
+    momentum, so the emitted McLachlan-Scovel field at (Q, B) has the U of the emitted symmetric
+    field; d/dt B along the symmetric field (product rule) equals its Bdot, and its Qdot equals
+    the symmetric Qdot.  And on the displayed skew set (B^T Q -> -Q^T B) the remark equals the
+    displayed rescaling 2B."""
+    w = Words(orthogonal=["Q"], skew=["U"])
+    target = {"U": Jinv(MOMENTUM)}
+    sym = {o: w.of(jinv_letters(SYMMETRIC_RIGID_BODY_RHS[o], w, target)) for o in ("Qdot", "Pdot")}
+    Bp = REMARK.rhs.xreplace({B: P})  # the remark applied to the symmetric costate P
+    ms = {
+        o: reduce_words(
+            w, w.of(jinv_letters(MCLACHLAN_SCOVEL_RHS[o].xreplace({B: Bp}), w, target)), {}
+        )
+        for o in ("Qdot", "Bdot")
+    }
+    dB = ddt(w, w.of(Bp), {"Q": sym["Qdot"], "P": sym["Pdot"]})
+    total = w.is_zero(ms["Qdot"] - sym["Qdot"]) + w.is_zero(ms["Bdot"] - dB)
+    rules = rule(w, SKEW_B)
+    return total + w.is_zero(reduce_words(w, w.of(REMARK.rhs) - w.of(RESCALED.rhs), rules))
+
+
+@S7.check(Level.SYMBOLIC_GENERAL_N)
+def s7_skew_set_invariant() -> sp.Integer:
+    """Noncommutative Q, B, any n: along the emitted McLachlan-Scovel field (Qdot = QU,
+    Bdot = BU with one U, not assumed skew), S = Q^T B + B^T Q obeys the linear equation
+    Sdot = U^T S + S U, so S(0) = 0 gives S = 0."""
+    w = Words()
+    rates = {
+        o[0]: w.of(jinv_letters(MCLACHLAN_SCOVEL_RHS[o], w, {"U": Jinv(Q.T * B)}))
+        for o in ("Qdot", "Bdot")
+    }
+    S = w.of(Q.T * B + B.T * Q)
+    Uw = w("U")
+    return w.is_zero(ddt(w, S, rates) - (w.T(Uw) * S + S * Uw))
+
+
+@S7.check(Level.FLOAT64, tol=1e-9)
+def s7_flow_against_elliptic() -> float:
+    """symrb.integrate(McLachlanScovel) (n = 3, DOP853, rtol 1e-12) from Q0 in SO(3),
+    B0 = Q0 hat(m0): its M = Q^T B against the Jacobi elliptic solution of Euler's equations at
+    41 times in [0, 20]: max |M error| / |m0| (a factor in U changes the speed)."""
+    import symrb
+
+    rng = np.random.default_rng(71)
+    inertia = np.array([1.0, 1.7, 2.6])
+    lam = 0.5 * inertia.sum() - inertia
+    t = np.linspace(0.0, 20.0, 41)
+    m = ref.euler_elliptic(inertia, 0.8, 1.1, t)
+    Q0 = ref.random_rotation(3, rng)
+    sol = symrb.integrate(
+        symrb.McLachlanScovel, (0.0, 20.0), {"Q": Q0, "B": Q0 @ ref.hat(m[0])}, lam=lam,
+        rtol=1e-12, atol=1e-12, t_eval=t,
+    )  # fmt: skip
+    return float(np.abs(ref.vee(sol.y.M) - m).max() / np.linalg.norm(m[0]))

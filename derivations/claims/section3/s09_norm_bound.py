@@ -1,0 +1,99 @@
+"""S9 (Section 3.3, eq. ``M_Q_P.eqn`` and the definition ``CandS.definition``): ||M||_op <= 2 is
+necessary for M = Q^T P - P^T Q with P in SO(n).
+
+If Q, P are rotations then ||Q^T P - P^T Q||_op <= 2, and the bound is attained; with A = Q^T P
+orthogonal, M^T M + (A + A^T)^T (A + A^T) = 4 I.  For a costate P in gl(n) (as in S5) there is no
+bound: P = Q M / 2 solves the equation for every skew M.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from derivations import reference as ref
+from derivations.claims.section3._display import OpNorm
+from derivations.claims.section3._symmetric import M, P, Q
+from derivations.claims.section3.s06_symmetric_to_rigid_body import SYMMETRIC_MOMENTUM
+from derivations.registry import Level, claim
+from derivations.symbolic import Words, eq
+from derivations.vocabulary import matrix, n
+
+S9 = claim(
+    "S9",
+    label="M_Q_P.eqn, CandS.definition",
+    title="$\\|M\\|_{\\mathrm{op}} \\le 2$ is necessary for $M = Q^T P - P^T Q$ with $P$ in "
+    "$\\mathrm{SO}(n)$",
+    statement="If $Q, P\\in SO(n)$ and [[M]], then [[bound]], and the bound is attained. With "
+    "$A$ the orthogonal matrix $Q^TP$, [[identity]]. For $P\\in\\mathfrak{gl}(n)$ there is no "
+    "bound: [[gl]] solves the equation for every skew $M$.",
+    expected="holds",
+    section="3.3",
+    where="Section 3.3 (Local equivalence of classical rigid body and symmetric rigid body "
+    "equations), the paragraph before the definition of $C$ and $S$ (the necessary condition "
+    "$\\|M\\|_{\\mathrm{op}} \\le 2$), and that definition",
+    note="The paper's argument uses $\\|P\\|_{\\mathrm{op}} \\le 1$, so $P$ is in "
+    "$\\mathrm{SO}(n)$ (or $\\mathrm{O}(n)$). For a costate $P$ in $\\mathfrak{gl}(n)$, as in S5, "
+    "there is no bound. With $A = Q^T P$ orthogonal the identity gives $\\|Mx\\|^2 = 4\\|x\\|^2 - "
+    "\\|(A + A^T)x\\|^2$, so $\\|M\\|_{\\mathrm{op}} = 2$ exactly when $A + A^T$ is singular ($A$ "
+    "has eigenvalues $\\pm i$).",
+)
+S9_M = S9.formula("M", eq(M, SYMMETRIC_MOMENTUM.outputs["M"]))
+BOUND = S9.formula("bound", sp.Le(OpNorm(M), 2))
+_Ao = matrix("A")
+IDENTITY = S9.formula("identity", eq(M.T * M + (_Ao + _Ao.T).T * (_Ao + _Ao.T), 4 * sp.Identity(n)))
+GL_SOLUTION = S9.formula("gl", eq(P, Q * M / 2))
+
+
+@S9.check(Level.SYMBOLIC_GENERAL_N)
+def s9_identity_general_n() -> sp.Integer:
+    """Noncommutative orthogonal Q, P (any n): the displayed identity with M the emitted
+    momentum and A = Q^T P reduces to 0, and its constant is the square of the displayed bound
+    (so |Mx|^2 <= bound^2 |x|^2)."""
+    w = Words(orthogonal=["Q", "P"])
+    env = {M: SYMMETRIC_MOMENTUM["M"], _Ao: Q.T * P}
+    lhs, rhs = (w.of(side.xreplace(env)) for side in (IDENTITY.lhs, IDENTITY.rhs))
+    return w.is_zero(lhs - rhs) + sp.Integer(sp.expand(rhs - BOUND.rhs**2) != 0)
+
+
+@S9.check(Level.SYMBOLIC_GENERAL_N)
+def s9_no_bound_on_gl() -> sp.Integer:
+    """Noncommutative orthogonal Q and skew M (any n): the emitted momentum at the displayed
+    P = Q M / 2 reduces to M, whatever the size of M."""
+    w = Words(orthogonal=["Q"], skew=["M"])
+    return w.is_zero(w.of(SYMMETRIC_MOMENTUM["M"].xreplace({P: GL_SOLUTION.rhs})) - w("M"))
+
+
+@S9.check(Level.FLOAT64, tol=1e-12)
+def s9_sampled_bound() -> float:
+    """symrb.symmetric_momentum of 3000 random pairs of reference rotations (n = 2..7): by how
+    much its largest operator norm exceeds the displayed bound (0 when it does not)."""
+    import symrb
+
+    rng = np.random.default_rng(9)
+    norms = []
+    for k in range(2, 8):
+        Qs = np.stack([ref.random_rotation(k, rng) for _ in range(500)])
+        Ps = np.stack([ref.random_rotation(k, rng) for _ in range(500)])
+        norms.append(np.linalg.norm(symrb.symmetric_momentum(Qs, Ps), 2, axis=(-2, -1)).max())
+    return float(np.max([0.0, np.max(norms) - float(BOUND.rhs)]))
+
+
+@S9.check(Level.FLOAT64, tol=1e-13)
+def s9_bound_attained() -> float:
+    """The bound is attained: for Q^T P an orthogonal matrix with a rotation by pi/2 in some
+    plane (random Q, random rotation on the complement, n = 3..6), the operator norm of
+    symrb.symmetric_momentum(Q, P) minus the displayed bound, in absolute value."""
+    from scipy.linalg import block_diag
+
+    import symrb
+
+    rng = np.random.default_rng(90)
+    errs = []
+    for k in range(3, 7):
+        rest = ref.random_rotation(k - 2, rng) if k > 3 else np.eye(1)
+        V = ref.random_rotation(k, rng)
+        A = V @ block_diag(np.array([[0.0, -1.0], [1.0, 0.0]]), rest) @ V.T
+        Qk = ref.random_rotation(k, rng)
+        errs.append(np.linalg.norm(symrb.symmetric_momentum(Qk, Qk @ A), 2) - float(BOUND.rhs))
+    return float(np.max(np.abs(errs)))

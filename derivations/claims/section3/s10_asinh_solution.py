@@ -1,0 +1,226 @@
+"""S10 (Section 3.3, eq. ``Pequ``): P = Q exp(asinh(M/2)) solves M = Q^T P - P^T Q for
+||M||_op < 2.
+
+Erratum: the printed exponent "sinh^-1 M/2" is ambiguous; read as (sinh^-1 M)/2 it fails, read as
+sinh^-1(M/2) (the reading that matches the domain ||M/2||_op < 1 of the series) it holds, and on
+skew matrices exp(sinh^-1 X) = X + (I + X^2)^(1/2).  The evidence evaluates the displayed formulas
+on an eigenvalue (symbolic), with matrices (float64) and near the boundary of the domain in 60
+digits.  symrb's own solver of this equation, ``symrb.P_from_M``, is checked by M6
+(``derivations/methods/p_from_m.py``) against the formulas displayed here.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import mpmath as mp
+import numpy as np
+import sympy as sp
+
+from derivations import reference as ref
+from derivations.claims.section3._display import MatFn, OpNorm
+from derivations.claims.section3._symmetric import M, P, Q
+from derivations.claims.section3.s06_symmetric_to_rigid_body import SYMMETRIC_MOMENTUM
+from derivations.registry import Level, claim
+from derivations.symbolic import eq
+from derivations.vocabulary import n
+
+S10 = claim(
+    "S10",
+    label="Pequ",
+    title="$P = Q\\exp(\\sinh^{-1}(M/2))$ solves $M = Q^T P - P^T Q$ for $\\|M\\|_{\\mathrm{op}} "
+    "< 2$",
+    statement="For [[domain]], the rotation given by the paper's formula for $P$ solves [[M]].",
+    expected="holds after correction",
+    printed="[[printed]], the exponent read as half of $\\sinh^{-1}M$.",
+    corrected="[[corrected]], which on skew matrices is [[closed]].",
+    note="The printed exponent $\\sinh^{-1} M/2$ is ambiguous, and read as $\\tfrac12\\sinh^{-1} "
+    "M$ it fails. Corrected: $P = Q\\exp(\\sinh^{-1}(M/2))$, the reading that matches the domain "
+    "$\\|M/2\\|_{\\mathrm{op}} < 1$ of the series. The slip is notational: read as "
+    "$\\sinh^{-1}(M/2)$ the proposition holds; read as $(\\sinh^{-1} M)/2$ it fails even where "
+    "the series converges. On skew matrices $\\exp(\\sinh^{-1} X) = X + (I + X^2)^{1/2}$, which "
+    "is how `symrb.P_from_M` computes it (on the real Schur form). The solution is not unique: "
+    "eigen-angles $\\varphi$ and $\\pi - \\varphi$ of $Q^T P$ give the same $M$; this one has "
+    "$\\lvert\\varphi\\rvert < \\pi/2$.",
+    section="3.3",
+    where="Section 3.3, the first proposition: for $\\|M\\|_{\\mathrm{op}} < 2$ the equation $M = "
+    "Q^T P - P^T Q$ has the solution $P = Q\\,e^{\\sinh^{-1} M/2}$",
+)
+DOMAIN = S10.formula("domain", sp.Lt(OpNorm(M), 2))
+S10_M = S10.formula("M", eq(M, SYMMETRIC_MOMENTUM.outputs["M"]))
+S10.formula("printed", eq(P, Q * MatFn("exp", MatFn("asinh", M) / 2)))
+S10.formula("corrected", eq(P, Q * MatFn("exp", MatFn("asinh", M / 2))))
+CLOSED = S10.formula("closed", eq(P, Q * (M / 2 + MatFn("sqrt", sp.Identity(n) + M * M / 4))))
+
+
+def _after_Q(rhs: sp.MatrixExpr) -> sp.MatrixExpr:
+    """X for a displayed right side Q X."""
+    coeff, mats = rhs.as_coeff_matrices()
+    if not mats or mats[0] != Q:
+        raise ValueError(f"{rhs} is not Q times a matrix")
+    return coeff * sp.MatMul(*mats[1:]).doit() if len(mats) > 2 else coeff * mats[1]
+
+
+def evaluate(expr: sp.Basic, env: Mapping[str, Any], ops: Mapping[str, Callable[..., Any]]) -> Any:
+    """A displayed matrix formula evaluated with concrete matrices: ``ops`` supplies ``mul``,
+    ``T``, ``num`` (a SymPy number), ``eye`` and the matrix functions by name."""
+
+    def ev(e: sp.Basic) -> Any:
+        if isinstance(e, sp.MatrixSymbol):
+            return env[str(e.name)]
+        if isinstance(e, sp.Identity):
+            return ops["eye"]()
+        if isinstance(e, sp.MatMul):
+            coeff, mats = e.as_coeff_matrices()
+            acc = ev(mats[0])
+            for m in mats[1:]:
+                acc = ops["mul"](acc, ev(m))
+            return ops["num"](coeff) * acc
+        if isinstance(e, sp.MatAdd):
+            return functools.reduce(lambda x, y: x + y, [ev(a) for a in e.args])
+        if isinstance(e, sp.Transpose):
+            return ops["T"](ev(e.arg))
+        if isinstance(e, sp.MatPow) and e.exp.is_Integer and e.exp > 0:
+            base = ev(e.base)
+            return functools.reduce(ops["mul"], [base] * int(e.exp))
+        if isinstance(e, MatFn):
+            return ops[str(e.args[0])](ev(e.args[1]))
+        raise TypeError(f"cannot evaluate {type(e).__name__}: {e}")
+
+    return ev(expr)
+
+
+def _asinh_skew(X: np.ndarray) -> np.ndarray:
+    """asinh of a real skew X with ||X||_op <= 1, through the Hermitian matrix iX:
+    asinh(iy) = i arcsin(y)."""
+    w, V = np.linalg.eigh(1j * X)
+    return np.real(V @ np.diag(-1j * np.arcsin(np.clip(w, -1.0, 1.0))) @ V.conj().T)
+
+
+def _sqrt_sym(S: np.ndarray) -> np.ndarray:
+    """The square root of a symmetric positive semidefinite S (symmetric eigen-decomposition)."""
+    w, V = np.linalg.eigh((S + S.T) / 2)
+    return (V * np.sqrt(np.clip(w, 0.0, None))) @ V.T
+
+
+def numpy_ops(k: int) -> dict[str, Callable[..., Any]]:
+    from scipy.linalg import expm
+
+    return {
+        "mul": np.matmul, "T": lambda a: np.swapaxes(a, -1, -2), "num": float,
+        "eye": lambda: np.eye(k), "exp": expm, "asinh": _asinh_skew, "sqrt": _sqrt_sym,
+    }  # fmt: skip
+
+
+def _scalar(expr: sp.Basic, x: sp.Symbol) -> sp.Expr:
+    """A displayed function of M as a scalar function of x (M -> x, I -> 1): on skew M these
+    formulas act on each eigenvalue."""
+    ops = {
+        "mul": lambda a, b: a * b, "T": lambda a: a, "num": lambda c: c,
+        "eye": lambda: sp.Integer(1), "exp": sp.exp, "asinh": sp.asinh, "sqrt": sp.sqrt,
+    }  # fmt: skip
+    return evaluate(expr, {"M": x}, ops)
+
+
+def _s10_scalar(form: str) -> sp.Expr:
+    x = sp.Symbol("x", real=True)
+    inner = _after_Q(S10.formulas[form].rhs)
+    if not isinstance(inner, MatFn) or str(inner.args[0]) != "exp":
+        raise ValueError(f"the {form} formula is not Q exp(X)")
+    X = _scalar(inner.args[1], x)
+    gap = sp.exp(X) - sp.exp(-X) - x  # Q^T P - P^T Q - M on the eigenvalue x, P = Q exp(X)
+    closed = sp.exp(X) - _scalar(_after_Q(CLOSED.rhs), x)
+    total = sp.Integer(0)
+    for e in (gap, closed) if form == "corrected" else (gap,):
+        if sp.simplify(e.rewrite(sp.log)) != 0:
+            total += sp.Integer(1)
+    return total
+
+
+@S10.check(Level.SYMBOLIC_FIXED_N, form="printed")
+def s10_printed_scalar() -> sp.Integer:
+    """On an eigenvalue x of M, the displayed printed reading P = Q exp(X(x)) gives
+    exp(X) - exp(-X) - x, the eigenvalue of Q^T P - P^T Q - M: does it simplify to 0?"""
+    return _s10_scalar("printed")
+
+
+@S10.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def s10_corrected_scalar() -> sp.Integer:
+    """The same for the corrected reading, and exp(X(x)) equals the displayed closed form
+    x/2 + (1 + x^2/4)^(1/2) (identities of analytic functions, simplified for real x after
+    rewriting asinh as a log, so they hold on the imaginary eigenvalues of M too)."""
+    return _s10_scalar("corrected")
+
+
+def _s10_equation(form: str) -> float:
+    """max |Q^T P - P^T Q - M| (the displayed M formula) for P from the displayed formula."""
+    rng = np.random.default_rng(10)
+    errs = []
+    for k in range(3, 7):
+        ops = numpy_ops(k)
+        for _ in range(20):
+            Mk = ref.random_skew(k, rng)
+            Mk *= rng.uniform(0.05, 0.9) / np.linalg.norm(Mk, 2)  # both readings' series converge
+            Qk = ref.random_rotation(k, rng)
+            Pk = evaluate(S10.formulas[form].rhs, {"Q": Qk, "M": Mk}, ops)
+            errs.append(np.abs(evaluate(S10_M.rhs, {"Q": Qk, "P": Pk}, ops) - Mk).max())
+    return float(np.max(errs))
+
+
+@S10.check(Level.FLOAT64, tol=1e-12, form="printed")
+def s10_printed_matrix() -> float:
+    """The displayed printed formula evaluated with matrices (asinh by the Hermitian
+    eigen-decomposition of iM, scipy expm) for random skew M with ||M||_op < 0.9 and rotations
+    Q, n = 3..6: max |Q^T P - P^T Q - M|."""
+    return _s10_equation("printed")
+
+
+@S10.check(Level.FLOAT64, tol=1e-12, form="corrected")
+def s10_corrected_matrix() -> float:
+    """The same for the displayed corrected formula."""
+    return _s10_equation("corrected")
+
+
+#: The precision (decimal digits) of the reference near the boundary of the domain.
+DPS = 60
+
+
+@functools.cache
+def near_boundary() -> tuple[np.ndarray, list[tuple[float, np.ndarray, Any]], float]:
+    """60 digits, n = 4, ||M||_op = 2(1 - delta) for delta = 1e-4, 1e-8, 1e-12: the rotation Q
+    (float64), for each delta the triple (delta, M in float64, P from the displayed closed form in
+    60-digit arithmetic, square root through mpmath's symmetric eigen-decomposition), and the
+    worst residual of that P (Q^T P - P^T Q - M and P^T P - I)."""
+    rng = np.random.default_rng(1010)
+    Qf, D = ref.random_rotation(4, rng), ref.random_skew(4, rng)
+    D = D / np.linalg.norm(D, 2)
+    identity, points = [], []
+    with mp.workdps(DPS):
+
+        def sqrt_mp(S: Any) -> Any:
+            E, V = mp.eigsy(S)
+            return V * mp.diag([mp.sqrt(max(e, 0)) for e in E]) * V.T
+
+        ops: dict[str, Callable[..., Any]] = {
+            "mul": lambda a, b: a * b, "T": lambda a: a.T, "num": lambda c: mp.mpf(c.p) / c.q,
+            "eye": lambda: mp.eye(4), "sqrt": sqrt_mp,
+        }  # fmt: skip
+        Qm, Rm = mp.qr(mp.matrix(Qf.tolist()))  # orthogonal to 60 digits, not just to rounding
+        Qm = Qm * mp.diag([mp.sign(Rm[i, i]) for i in range(4)])
+        for delta in (1e-4, 1e-8, 1e-12):
+            Mf = 2.0 * (1.0 - delta) * D
+            Mm = mp.matrix(Mf.tolist())
+            Pm = evaluate(CLOSED.rhs, {"Q": Qm, "M": Mm}, ops)
+            gap = evaluate(S10_M.rhs, {"Q": Qm, "P": Pm}, ops) - Mm
+            identity += [float(mp.mnorm(gap, 1)), float(mp.mnorm(Pm.T * Pm - mp.eye(4), 1))]
+            points.append((delta, Mf, Pm))
+    return Qf, points, float(np.max(identity))
+
+
+@S10.check(Level.MPMATH, tol=1e-50, form="corrected")
+def s10_high_precision_identity() -> float:
+    """60 digits: P from the displayed closed form solves Q^T P - P^T Q = M with P^T P = I at
+    ||M||_op = 2(1 - delta), delta = 1e-4, 1e-8, 1e-12 (n = 4): largest residual."""
+    return near_boundary()[2]

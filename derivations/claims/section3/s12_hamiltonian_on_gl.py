@@ -1,0 +1,180 @@
+"""S12 (Section 3.3, eqs. ``gln_symp``, ``ourHam``): the Hamiltonian form of the symmetric rigid
+body on gl(n) x gl(n).
+
+With the symplectic form 1/2 tr(eta_2^T xi_1 - eta_1^T xi_2) and the Hamiltonian
+H = -1/8 tr(J^-1(M) M), Hamilton's equations are the symmetric rigid body equations, SO(n) x SO(n)
+is invariant, and H = 1/4 <J^-1(M), M> is half the kinetic energy.
+
+Emitted to ``symrb/_generated/symmetric_rigid_body.py``: ``gl_hamiltonian``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import sympy as sp
+
+from derivations import reference as ref
+from derivations.claims.section3._display import SymplecticForm
+from derivations.claims.section3._exact import count_nonzero
+from derivations.claims.section3._inertia import ARG_LAM, lam_symbols
+from derivations.claims.section3._symmetric import ARG_P, ARG_Q, MOMENTUM, M, P, Q
+from derivations.claims.section3._words import ddt, jinv_letters
+from derivations.claims.section3.s05_maximum_principle import H_SYM, SYMMETRIC_RIGID_BODY_RHS
+from derivations.registry import Level, claim
+from derivations.symbolic import Pair, Words, eq, explicit, general_matrix, trace_residual
+from derivations.vocabulary import Jinv, Kernel, matrix
+
+S12 = claim(
+    "S12",
+    label="gln_symp, ourHam",
+    title="Hamiltonian form of the symmetric rigid body on $\\mathfrak{gl}(n) \\times "
+    "\\mathfrak{gl}(n)$",
+    statement="On $\\mathfrak{gl}(n)\\times\\mathfrak{gl}(n)$ with the symplectic form [[form]] "
+    "and the Hamiltonian [[H]], Hamilton's equations [[hamilton]] for every $v$ are "
+    "[[equations]], the symmetric rigid body equations; $SO(n)\\times SO(n)$ is invariant, and "
+    "[[quarter]] with [[M]].",
+    expected="holds",
+    section="3.3",
+    where="Section 3.3, the paragraph 'The Hamiltonian form of the symmetric rigid body "
+    "equations': the third proposition (the symplectic form on $\\mathfrak{gl}(n) \\times "
+    "\\mathfrak{gl}(n)$ and the Hamiltonian $H(\\xi, \\eta)$) and the remark $H = "
+    "\\tfrac14\\langle J^{-1}M, M\\rangle$ after it",
+    note="With the convention $\\Omega(X_H, \\cdot) = dH$ the equations are exactly the symmetric "
+    "rigid body equations (the factor $\\tfrac12$ of the form and the $\\tfrac18$ of $H$ match); "
+    "the opposite convention reverses time. $H$ is half the kinetic energy $\\tfrac12\\langle "
+    "J^{-1}M, M\\rangle$, consistent with the cost $\\tfrac14\\langle U, J(U)\\rangle$ of S5. The "
+    "symplectic form and $H$ are the paper's definitions: what is checked is what follows from "
+    "them.",
+)
+_xi, _eta = matrix("xi"), matrix("eta")
+_x1, _y1, _x2, _y2 = (matrix(s) for s in ("xi_1", "eta_1", "xi_2", "eta_2"))
+FORM = S12.formula(
+    "form", eq(SymplecticForm(_x1, _y1, _x2, _y2), sp.Trace(_y2.T * _x1 - _y1.T * _x2) / 2)
+)
+_XH, _v = sp.symbols("X_H v")
+HAMILTON = S12.formula("hamilton", eq(sp.Function("Omega")(_XH, _v), sp.Function("dH")(_v)))
+
+GL_HAMILTONIAN = Kernel(
+    name="gl_hamiltonian",
+    target="symmetric_rigid_body",
+    args=[ARG_Q, ARG_P, ARG_LAM],
+    outputs={"H": -sp.Trace(Jinv(MOMENTUM) * MOMENTUM) / 8},
+    doc="The Hamiltonian on gl(n) x gl(n) (paper, Section 3.3).\n\n"
+    "H = -1/8 trace(J^{-1}(M) M) = 1/4 <J^{-1}(M), M>, M = Q^T P - P^T Q: half the kinetic\n"
+    "energy of the rigid body with momentum M.",
+    claims=("S12",),
+)
+_rename = {Q: _xi, P: _eta}
+S12.formula("H", eq(H_SYM, GL_HAMILTONIAN.outputs["H"].xreplace(_rename)))
+S12.formula(
+    "equations",
+    tuple(
+        eq(matrix(d), SYMMETRIC_RIGID_BODY_RHS.outputs[o].xreplace(_rename))
+        for d, o in (("xidot", "Qdot"), ("etadot", "Pdot"))
+    ),
+)
+QUARTER = S12.formula("quarter", eq(H_SYM, Pair(Jinv(M), M) / 4))
+S12.formula("M", eq(M, MOMENTUM.xreplace(_rename)))
+
+
+def form_matrix(k: int) -> sp.Matrix:
+    """The matrix of the displayed symplectic form on gl(k) x gl(k), coordinates (xi_11, xi_12,
+    ..., eta_kk): entry (a, b) is the form on the a-th and b-th elementary pairs."""
+    N = 2 * k * k
+    basis = [_unflatten(k, [int(i == a) for i in range(N)]) for a in range(N)]
+    return sp.Matrix(
+        N, N,
+        lambda a, b: explicit(FORM.rhs, {"xi_1": basis[a][0], "eta_1": basis[a][1],
+                                         "xi_2": basis[b][0], "eta_2": basis[b][1]}),
+    )  # fmt: skip
+
+
+def _unflatten(k: int, vec: Sequence[sp.Expr]) -> tuple[sp.Matrix, sp.Matrix]:
+    return sp.Matrix(k, k, list(vec[: k * k])), sp.Matrix(k, k, list(vec[k * k :]))
+
+
+def hamilton_equations(k: int, convention: sp.Expr) -> tuple[sp.Matrix, ...]:
+    """Solve Omega(X_H, v) = convention dH(v) for every v, with the displayed form and the emitted
+    Hamiltonian (symbolic entries x_ij, y_ij and Lambda, n = k).  Returns (xidot, etadot) and the
+    emitted symmetric rigid body field (Qdot, Pdot) at (Q, P) = (xi, eta)."""
+    X, Y, lam = general_matrix("x", k), general_matrix("y", k), lam_symbols(k)
+    coords = list(X) + list(Y)
+    env = {"Q": X, "P": Y}
+    H = explicit(GL_HAMILTONIAN["H"], env, lam)
+    grad = sp.Matrix([sp.diff(H, c) for c in coords])
+    # Omega(Z, v) = Z^T F v = convention dH(v) for every v:  F^T Z = convention grad H
+    # (F is a matrix of numbers: invert it rather than eliminate with a symbolic right side)
+    Xdot, Ydot = _unflatten(k, list(form_matrix(k).T.inv() * (convention * grad)))
+    field = [explicit(SYMMETRIC_RIGID_BODY_RHS[o], env, lam) for o in ("Qdot", "Pdot")]
+    return Xdot, Ydot, field[0], field[1]
+
+
+@S12.check(Level.SYMBOLIC_FIXED_N)
+def s12_hamilton_equations() -> sp.Integer:
+    """Hamilton's equations from the displayed form (its Gram matrix on the elementary matrices,
+    no coefficient assumed), the displayed convention and the emitted Hamiltonian, solved for
+    X_H, against the emitted symmetric rigid body field (symbolic entries and Lambda, n = 3):
+    entries that differ."""
+    convention, dH = HAMILTON.rhs.as_coeff_Mul()
+    if dH.func.__name__ != "dH":
+        raise ValueError("the convention is not a multiple of dH")
+    Xdot, Ydot, Qdot_k, Pdot_k = hamilton_equations(3, convention)
+    return count_nonzero(list(Xdot - Qdot_k) + list(Ydot - Pdot_k))
+
+
+@S12.check(Level.SYMBOLIC_GENERAL_N)
+def s12_SO_invariant_general_n() -> sp.Integer:
+    """Noncommutative Q, P (any n), emitted field with J^-1(M) a skew letter U: d/dt(Q^T Q - I)
+    equals [Q^T Q - I, U], a linear homogeneous equation, so Q^T Q = I is invariant; likewise
+    for P."""
+    w = Words(skew=["U"])
+    rates = {
+        o[0]: w.of(jinv_letters(SYMMETRIC_RIGID_BODY_RHS[o], w, {"U": Jinv(MOMENTUM)}))
+        for o in ("Qdot", "Pdot")
+    }
+    Uw = w("U")
+    total = sp.Integer(0)
+    for name in ("Q", "P"):
+        X = w(name)
+        G = w.T(X) * X - 1
+        total += w.is_zero(ddt(w, G, rates) - (G * Uw - Uw * G))
+    return total
+
+
+@S12.check(Level.SYMBOLIC_GENERAL_N)
+def s12_quarter_energy_general_n() -> sp.Integer:
+    """The emitted Hamiltonian minus the displayed 1/4 <J^-1(M), M> (pairing -1/2 tr), with
+    J^-1(M) a letter, as trace words in noncommutative Q, P (any n): no word remains."""
+    w = Words()
+    letters = {"V": Jinv(MOMENTUM)}
+    emitted = jinv_letters(GL_HAMILTONIAN["H"], w, letters)
+    quarter = jinv_letters(QUARTER.rhs.xreplace({M: MOMENTUM}).doit(), w, letters)
+    return trace_residual(w.trace_argument(emitted) - w.trace_argument(quarter))
+
+
+@S12.check(Level.FLOAT64, tol=1e-13)
+def s12_symrb_pointwise() -> float:
+    """symrb.gl_hamiltonian against 1/4 <J^-1(M), M> and symrb.symmetric_rigid_body_rhs against
+    the reference field, J^-1 by the reference linear solve, M = Q^T P - P^T Q in NumPy, n = 2..6,
+    batches of 20 random (Q in SO(n), P in gl(n)): max difference relative to the reference
+    values' size."""
+    import symrb
+
+    rng = np.random.default_rng(12)
+    errs = []
+    for k in range(2, 7):
+        lam = rng.uniform(0.3, 2.0, k)
+        Qs = np.stack([ref.random_rotation(k, rng) for _ in range(20)])
+        Ps = rng.standard_normal((20, k, k))
+        Ms = np.swapaxes(Qs, -1, -2) @ Ps - np.swapaxes(Ps, -1, -2) @ Qs
+        want_H = 0.25 * ref.pairing(ref.J_inv(Ms, lam), Ms)
+        errs.append(np.abs(symrb.gl_hamiltonian(Qs, Ps, lam) - want_H).max() / want_H.max())
+        for got, want in zip(
+            symrb.symmetric_rigid_body_rhs(Qs, Ps, lam),
+            ref.symmetric_field(Qs, Ps, lam),
+            strict=True,
+        ):
+            errs.append(np.abs(got - want).max() / np.abs(want).max())
+    return float(np.max(errs))
