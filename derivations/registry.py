@@ -1,6 +1,6 @@
 """The claim registry: every statement of the paper that symrb reproduces, stated once.
 
-A claim is declared in the module of its part of the paper, right above its evidence::
+A claim is declared in a module of its own (derivations/claims/section*/), above its evidence::
 
     S6 = claim("S6", label="SRBtoRB.prop", title="...", expected="holds", section="3.2",
                statement="If [[srb]] then [[rb]] ...")
@@ -59,7 +59,7 @@ __all__ = [
     "all_claims",
     "all_kernels",
     "get_claim",
-    "import_parts",
+    "import_claim_modules",
     "verify",
     "verify_claim",
     "kernel_report",
@@ -317,7 +317,7 @@ class ClaimResult:
 
 
 #: The packages searched for claims and method checks, in this order.
-PACKAGES = ("derivations.claims", "derivations.methods", "derivations.parts")
+PACKAGES = ("derivations.claims", "derivations.methods")
 
 #: Claim groups: the paper's statements (D1.., S1..) and checks of symrb's own methods (M1..).
 GROUPS = {"D": "paper", "S": "paper", "M": "method"}
@@ -337,7 +337,7 @@ def _claim_key(cid: str) -> tuple[int, int]:
     return ("DSM".index(cid[0]), int(cid[1:]))
 
 
-def import_parts() -> list[Any]:
+def import_claim_modules() -> list[Any]:
     """Import every module of the claim packages (:data:`PACKAGES`, recursively, sorted by name;
     a package that does not exist is skipped)."""
     modules = []
@@ -363,7 +363,7 @@ def all_claims(group: str | None = None) -> list[Claim]:
     if group is not None and group not in set(GROUPS.values()):
         raise ValueError(f"group must be one of {sorted(set(GROUPS.values()))}, got {group!r}")
     claims: dict[str, Claim] = {}
-    for module in import_parts():
+    for module in import_claim_modules():
         for value in vars(module).values():
             if isinstance(value, Claim) and value.module == module.__name__:
                 if value.id in claims and claims[value.id] is not value:
@@ -378,7 +378,7 @@ def all_claims(group: str | None = None) -> list[Claim]:
 def all_kernels(only: Sequence[str] | None = None) -> list[Kernel]:
     """Every kernel declared by a claim module, by target and definition order (``only``: just
     the kernels of those generated modules)."""
-    import_parts()
+    import_claim_modules()
     kernels = [k for k in KERNELS if not only or k.target in only]
     return sorted(kernels, key=lambda k: (k.target, k.order))
 
