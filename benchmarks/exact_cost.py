@@ -55,7 +55,7 @@ def mp_reference(Q0: np.ndarray, M0: np.ndarray, lam: np.ndarray, T: float, dps:
     import mpmath as mp
 
     mp.mp.dps = dps
-    inertia = [mp.mpf(float(x)) for x in symrb.inertia_from_lam(lam)]
+    inertia = [mp.mpf(float(x)) for x in symrb.algebra.inertia_from_lam(lam)]
 
     def f(_t, y):
         m = y[9:]

@@ -63,7 +63,7 @@ def main() -> None:
     from threadpoolctl import threadpool_limits
 
     rng = np.random.default_rng(args.seed)
-    lam = symrb.random_lam(args.n, seed=rng)
+    lam = symrb.algebra.random_lam(args.n, seed=rng)
     Q = symrb.random_SO(args.n, seed=rng)
     M = args.h * symrb.random_so(args.n, seed=rng)  # discrete momentum = h * continuous momentum
     per_chunk = max(1, args.steps // args.chunks)

@@ -1,10 +1,17 @@
 """symrb: numerics for Bloch, Crouch and Ratiu, "Symmetric Discrete Optimal Control and Deep Learning".
 
 The package imports only NumPy and SciPy.  Its kernels in :mod:`symrb._generated` are emitted by
-the ``derivations`` of the source tree (SymPy, development time only) and wrapped here by
-functions that validate input.  Each submodule lists its public names in ``__all__``; they are
-available here too, loaded on first use (so ``import symrb`` is cheap and the ``symrb`` command
-works even while the generated kernels are being rewritten).
+the ``derivations`` of the source tree (SymPy, development time only) and wrapped by functions that
+validate input.  The top level holds the entry points (:data:`_EXPORTS`, 40 names, loaded on
+first use so that ``import symrb`` is cheap); everything else is imported from the submodule that
+defines it, e.g. ``symrb.engine.mv_flow`` or ``symrb.scenes.plan_scene``.  ``ARCHITECTURE.md``
+in the source tree maps the submodules.
+
+>>> import numpy as np, symrb
+>>> sol = symrb.simulate(np.eye(3), symrb.hat([0.3, -0.2, 0.5]), [0.7, 1.1, 1.6], (0.0, 1.0),
+...                      method="mv", h=0.01)
+>>> sol.success, sol.Q.shape
+(True, (101, 3, 3))
 """
 
 from __future__ import annotations
@@ -14,64 +21,38 @@ from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
-#: Public names of each submodule (a test checks this table against the modules' ``__all__``).
+#: The top-level names and the submodule defining each (a test checks that each is in that
+#: module's ``__all__``).
 _EXPORTS: dict[str, tuple[str, ...]] = {
-    "algebra": (
-        "hat", "vee", "pairing", "commutator", "skew_part", "J", "J_inv", "J_D",
-        "inertia_from_lam", "lam_from_inertia", "random_so", "random_SO", "random_lam",
-        "as_generator",
-    ),
-    "base_steps": ("MVStep", "MidpointStep", "RKMK4Step"),
-    "composition": ("composition_coefficients", "compose_steps"),
-    "compose": (
-        "composed_rigid_body_flow", "rkmk4_rigid_body_flow", "midpoint_rigid_body_flow",
-        "benchmark_cost",
-    ),
-    "continuous": ("Flow", "RigidBody", "Trajectory", "FlowSolution", "integrate"),
-    "symmetric": (
-        "symmetric_momentum", "symmetric_rigid_body_rhs", "mclachlan_scovel_rhs",
-        "multi_sample_control", "multi_sample_rhs", "gl_hamiltonian", "P_from_M", "PFromMInfo",
-        "SymmetricRigidBody", "McLachlanScovel", "MultiSampleSymmetricRigidBody",
-    ),
-    "paper": (
-        "jd_residual", "symmetric_step", "symmetric_flow", "mv_algorithm1", "mv_algorithm2",
-        "discrete_rigid_body_flow", "DiscreteFlowSolution",
-    ),
-    "engine": ("MVStepper", "mv_flow"),
-    "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
-    "exact": ("ExactSolution", "rigid_body_exact"),
-    "learning": (
-        "resnet_forward", "squared_error", "costate_sweep", "loss_gradients", "SweepInfo", "train",
-        "TrainResult", "toy_classification", "so_network_forward", "so_network_gradients",
-        "so_network_costates", "so_extremal_residual", "so_procrustes", "so_rotation_task",
-        "SOTrainResult", "train_so_gradient", "train_so_msa", "train_so_shooting", "DigitsTask",
-        "digits_task", "resnet_predict", "train_msa",
-    ),
-    "orbits": (
-        "orbit_extremal_rhs", "orbit_hamiltonian", "brockett_potential", "double_bracket_rhs",
-        "double_bracket_flow", "DoubleBracketInfo", "toda_flow", "one_sample_second_term",
-        "two_sample_bound", "OrbitBVPResult", "solve_orbit_bvp",
-    ),
-    "scenes": (
-        "SceneError", "When", "RigidBodyScene", "SymmetricRigidBodyScene",
-        "McLachlanScovelScene", "DoubleBracketScene", "OrbitExtremalScene", "ResNetScene",
-        "TodaScene", "parse_scene", "load_scene", "scene_inputs", "RigidBodyMomentum", "Plan",
-        "plan_scene", "SceneResult", "SceneStore", "run_scene", "expand_grid", "SweepResult",
-        "sweep", "SONetworkScene",
-    ),
     "rigid_body": (
-        "rigid_body_rhs", "kinetic_energy", "casimir_traces", "manakov_integrals",
-        "euler_rhs_so3", "simulate", "RigidBodySolution",
+        "simulate", "RigidBodySolution", "kinetic_energy", "casimir_traces", "manakov_integrals",
     ),
-    "solvers": ("MVSolveInfo", "solve_moser_veselov", "fold_scale"),
+    "paper": ("symmetric_flow", "mv_algorithm1", "mv_algorithm2", "discrete_rigid_body_flow"),
+    "algebra": ("hat", "vee", "pairing", "commutator", "J", "J_inv", "random_so", "random_SO"),
+    "continuous": ("integrate", "RigidBody"),
+    "symmetric": ("SymmetricRigidBody", "McLachlanScovel", "MultiSampleSymmetricRigidBody"),
+    "solvers": ("solve_moser_veselov", "fold_scale"),
+    "orbits": ("double_bracket_flow", "toda_flow", "solve_orbit_bvp"),
+    "learning": (
+        "train", "train_msa", "so_network_gradients", "train_so_gradient", "train_so_msa",
+        "train_so_shooting",
+    ),
+    "scenes": ("load_scene", "run_scene", "sweep"),
+    "errors": ("SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"),
 }  # fmt: skip
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 
 __all__ = [name for names in _EXPORTS.values() for name in names]
 
+#: The public submodules, reachable as attributes (``symrb.engine``) without an explicit import.
+_SUBMODULES = frozenset(
+    {"algebra", "base_steps", "compose", "composition", "continuous", "engine", "errors", "exact",
+     "learning", "orbits", "paper", "rigid_body", "scenes", "solvers", "symmetric", "testing"}
+)  # fmt: skip
+
 
 def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
+    if name in _SUBMODULES:
         return importlib.import_module(f"{__name__}.{name}")
     module = _WHERE.get(name)
     if module is None:
@@ -82,7 +63,7 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__) | set(_EXPORTS))
+    return sorted(set(globals()) | set(__all__) | _SUBMODULES)
 
 
 if TYPE_CHECKING:  # static type checkers see the eager imports
@@ -102,19 +83,28 @@ if TYPE_CHECKING:  # static type checkers see the eager imports
         scenes,
         solvers,
         symmetric,
+        testing,
     )
-    from .algebra import *  # noqa: F403
-    from .base_steps import *  # noqa: F403
-    from .compose import *  # noqa: F403
-    from .composition import *  # noqa: F403
-    from .continuous import *  # noqa: F403
-    from .engine import *  # noqa: F403
-    from .errors import *  # noqa: F403
-    from .exact import *  # noqa: F403
-    from .learning import *  # noqa: F403
-    from .orbits import *  # noqa: F403
-    from .paper import *  # noqa: F403
-    from .rigid_body import *  # noqa: F403
-    from .scenes import *  # noqa: F403
-    from .solvers import *  # noqa: F403
-    from .symmetric import *  # noqa: F403
+    from .algebra import J, J_inv, commutator, hat, pairing, random_SO, random_so, vee
+    from .continuous import RigidBody, integrate
+    from .errors import InputError, NotConvergedError, OutOfDomainError, SymrbError
+    from .learning import (
+        so_network_gradients,
+        train,
+        train_msa,
+        train_so_gradient,
+        train_so_msa,
+        train_so_shooting,
+    )
+    from .orbits import double_bracket_flow, solve_orbit_bvp, toda_flow
+    from .paper import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2, symmetric_flow
+    from .rigid_body import (
+        RigidBodySolution,
+        casimir_traces,
+        kinetic_energy,
+        manakov_integrals,
+        simulate,
+    )
+    from .scenes import load_scene, run_scene, sweep
+    from .solvers import fold_scale, solve_moser_veselov
+    from .symmetric import McLachlanScovel, MultiSampleSymmetricRigidBody, SymmetricRigidBody

@@ -17,7 +17,7 @@ class Trajectory(dict):
     Examples
     --------
     >>> import numpy as np
-    >>> from symrb import Trajectory
+    >>> from symrb.continuous import Trajectory
     >>> y = Trajectory(Q=np.zeros((5, 3, 3)))
     >>> y.Q.shape
     (5, 3, 3)
@@ -71,7 +71,7 @@ class DiscreteFlowSolution:
         most its ``tol``.
     condition : ndarray, shape (number of solves,)
         The solver's condition estimate :math:`\kappa` of each solve (see
-        :class:`symrb.MVSolveInfo`; the largest over a batch), with ``diagnostics=True``;
+        :class:`symrb.solvers.MVSolveInfo`; the largest over a batch), with ``diagnostics=True``;
         NaN otherwise.
     failed_step : int or None
         The step that failed, or None.

@@ -99,7 +99,7 @@ def skew(x: ArrayLike, name: str, n: int | None = None, rtol: float = 1e-10) -> 
     if dev > rtol * scale:
         raise InputError(
             f"{name} must be skew-symmetric; max |{name} + {name}^T| = {dev:.3e} > {rtol:g} * "
-            f"{scale:.3g}; pass the skew part ({name} - {name}^T) / 2 (symrb.skew_part) if the "
+            f"{scale:.3g}; pass the skew part ({name} - {name}^T) / 2 (symrb.algebra.skew_part) if the "
             "symmetric part is rounding"
         )
     return a

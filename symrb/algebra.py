@@ -57,9 +57,9 @@ def as_generator(seed: int | np.random.Generator | None) -> np.random.Generator:
     >>> import numpy as np
     >>> import symrb
     >>> rng = np.random.default_rng(1)
-    >>> symrb.as_generator(rng) is rng
+    >>> symrb.algebra.as_generator(rng) is rng
     True
-    >>> print(symrb.as_generator(1).integers(10) == np.random.default_rng(1).integers(10))
+    >>> print(symrb.algebra.as_generator(1).integers(10) == np.random.default_rng(1).integers(10))
     True
     """
     if isinstance(seed, np.random.Generator):
@@ -194,7 +194,7 @@ def skew_part(a: ArrayLike) -> Array:
     Examples
     --------
     >>> import symrb
-    >>> print(symrb.skew_part([[1, 2], [0, 1]]))
+    >>> print(symrb.algebra.skew_part([[1, 2], [0, 1]]))
     [[ 0.  1.]
      [-1.  0.]]
     """
@@ -288,7 +288,7 @@ def J_D(U: ArrayLike, lam: ArrayLike) -> Array:
     >>> lam = np.array([1.0, 2.0, 3.0])
     >>> Om = symrb.hat([1, 1, 1])
     >>> e = 1e-6  # the derivative at U = I along Omega is J(Omega)
-    >>> dJD = (symrb.J_D(np.eye(3) + e * Om, lam) - symrb.J_D(np.eye(3) - e * Om, lam)) / (2 * e)
+    >>> dJD = (symrb.algebra.J_D(np.eye(3) + e * Om, lam) - symrb.algebra.J_D(np.eye(3) - e * Om, lam)) / (2 * e)
     >>> bool(np.allclose(dJD, symrb.J(Om, lam)))
     True
     """
@@ -314,7 +314,7 @@ def inertia_from_lam(lam: ArrayLike) -> Array:
     Examples
     --------
     >>> import symrb
-    >>> print(symrb.inertia_from_lam([1, 2, 3]))
+    >>> print(symrb.algebra.inertia_from_lam([1, 2, 3]))
     [5. 4. 3.]
     """
     L = _v.as_float_array(lam, "lam")
@@ -340,7 +340,7 @@ def lam_from_inertia(inertia: ArrayLike) -> Array:
     Examples
     --------
     >>> import symrb
-    >>> print(symrb.lam_from_inertia([5, 4, 3]))
+    >>> print(symrb.algebra.lam_from_inertia([5, 4, 3]))
     [1. 2. 3.]
     """
     Ii = _v.as_float_array(inertia, "inertia")
@@ -447,7 +447,7 @@ def random_lam(
     Examples
     --------
     >>> import symrb
-    >>> print(symrb.random_lam(4, seed=0).round(3))
+    >>> print(symrb.algebra.random_lam(4, seed=0).round(3))
     [0.525 0.561 0.905 1.455]
     """
     if not 0 < low < high:

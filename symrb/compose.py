@@ -17,7 +17,7 @@ Casimir, conserved to rounding) and the energy (to rounding, each MV step conser
 symplecticity of the map.
 
 The textbook alternatives, with the same result object
-(:class:`symrb.DiscreteFlowSolution`):
+(:class:`symrb.paper.DiscreteFlowSolution`):
 
 * RKMK4 (Munthe-Kaas 1998; Hairer, Lubich and Wanner, Section IV.8.2): the classical
   Runge-Kutta method of order 4 applied to :math:`\dot\Theta = \mathrm{dexp}^{-1}_{-\Theta}(\Omega)`

@@ -54,7 +54,7 @@ class Flow:
 
     >>> import numpy as np
     >>> import symrb
-    >>> class ConstantRate(symrb.Flow):
+    >>> class ConstantRate(symrb.continuous.Flow):
     ...     name = "constant rate"
     ...     state = ("Q",)
     ...     def rhs(self, y, lam):
@@ -177,7 +177,7 @@ def _as_flow(flow: Any) -> Flow:
         return flow
     raise InputError(
         f"flow must be a Flow (e.g. symrb.SymmetricRigidBody), got {type(flow).__name__} "
-        f"{flow!r}; pass a subclass of symrb.Flow or an instance"
+        f"{flow!r}; pass a subclass of symrb.continuous.Flow or an instance"
     )
 
 

@@ -597,9 +597,9 @@ def mv_flow(
     >>> mv_flow(np.eye(3), Ms, lam, 0.01, 10).y.M.shape
     (11, 4, 3, 3)
 
-    Order 10 at a step of 0.1 against the exact solution (:func:`symrb.rigid_body_exact`):
+    Order 10 at a step of 0.1 against the exact solution (:func:`symrb.exact.rigid_body_exact`):
 
-    >>> ex = symrb.rigid_body_exact(np.eye(3), M0, lam, [10.0])
+    >>> ex = symrb.exact.rigid_body_exact(np.eye(3), M0, lam, [10.0])
     >>> sol = mv_flow(np.eye(3), M0, lam, 0.1, 100, save_every=100, order=10)
     >>> bool(np.abs(sol.y.M[-1] - ex.y.M[-1]).max() < 1e-11)
     True
@@ -617,7 +617,7 @@ def mv_flow(
     if order != 2 and n != 3:
         raise InputError(
             f"order {order} (the preprocessed Moser-Veselov method) needs n = 3, got n = {n}; "
-            "for higher order at any n use symrb.composed_rigid_body_flow"
+            "for higher order at any n use symrb.compose.composed_rigid_body_flow"
         )
     if method == "numba" and (n != 3 or not _compiled.AVAILABLE):
         raise InputError(

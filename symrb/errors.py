@@ -51,7 +51,7 @@ class OutOfDomainError(SymrbError, ValueError):
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> symrb.P_from_M(np.eye(3), symrb.hat([0.0, 0.0, 2.5]))  # doctest: +ELLIPSIS
+    >>> symrb.symmetric.P_from_M(np.eye(3), symrb.hat([0.0, 0.0, 2.5]))  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     symrb.errors.OutOfDomainError: P_from_M needs ||M||_op < 2 ...; got ||M||_op = 2.5 ...
@@ -74,7 +74,7 @@ class NotConvergedError(SymrbError, RuntimeError):
     of the residual do not all round to zero (for n = 3 they can, and then it converges).
 
     >>> import symrb
-    >>> lam = symrb.random_lam(8, seed=6)
+    >>> lam = symrb.algebra.random_lam(8, seed=6)
     >>> M = symrb.random_so(8, seed=7)
     >>> M = 0.5 * symrb.fold_scale(M, lam) * M
     >>> try:

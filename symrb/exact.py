@@ -10,7 +10,7 @@ The equations are those of :class:`symrb.RigidBody` for n = 3,
 
 which for :math:`m = \operatorname{vee}(M)`, :math:`\omega = \operatorname{vee}(\Omega)` are
 Euler's equations :math:`\dot m = m\times\omega`, :math:`\omega_i = m_i/I_i`, with the principal
-moments :math:`I_1 = \lambda_2+\lambda_3` (cyclic; :func:`symrb.inertia_from_lam`).  The spatial
+moments :math:`I_1 = \lambda_2+\lambda_3` (cyclic; :func:`symrb.algebra.inertia_from_lam`).  The spatial
 momentum :math:`\pi = Qm` is constant.
 
 **Body momentum.**  With :math:`2E = \sum_i m_i^2/I_i` and :math:`\mu = |m|`, relabel the axes by
@@ -86,7 +86,7 @@ __all__ = ["ExactSolution", "rigid_body_exact"]
 
 @dataclass
 class ExactSolution:
-    r"""Result of :func:`rigid_body_exact` (modelled on :class:`symrb.FlowSolution`).
+    r"""Result of :func:`rigid_body_exact` (modelled on :class:`symrb.continuous.FlowSolution`).
 
     Attributes
     ----------

@@ -88,7 +88,7 @@ def jd_residual(U: ArrayLike, M: ArrayLike, lam: ArrayLike) -> Array:
     >>> lam = np.array([0.7, 1.1, 1.6])
     >>> M = symrb.hat([0.1, -0.2, 0.3])
     >>> U = symrb.solve_moser_veselov(M, lam)
-    >>> bool(np.abs(symrb.jd_residual(U, M, lam)).max() < 1e-14)
+    >>> bool(np.abs(symrb.paper.jd_residual(U, M, lam)).max() < 1e-14)
     True
     """
     L = v.inertia(lam, positive=True)
@@ -131,7 +131,7 @@ def symmetric_step(
     >>> import numpy as np
     >>> import symrb
     >>> Q0, P0 = np.eye(3), symrb.hat([0.05, 0.1, 0.15])
-    >>> Q1, P1, U = symrb.symmetric_step(Q0, P0, [0.7, 1.1, 1.6], h=0.1)
+    >>> Q1, P1, U = symrb.paper.symmetric_step(Q0, P0, [0.7, 1.1, 1.6], h=0.1)
     >>> bool(np.allclose(Q1, Q0 @ U) and np.allclose(U.T @ U, np.eye(3)))
     True
     """

@@ -75,7 +75,7 @@ def symmetric_momentum(Q: ArrayLike, P: ArrayLike) -> Array:
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> print(symrb.symmetric_momentum(np.eye(3), symrb.hat([0.1, 0.2, 0.3])))
+    >>> print(symrb.symmetric.symmetric_momentum(np.eye(3), symrb.hat([0.1, 0.2, 0.3])))
     [[ 0.  -0.6  0.4]
      [ 0.6  0.  -0.2]
      [-0.4  0.2  0. ]]
@@ -109,8 +109,8 @@ def symmetric_rigid_body_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tupl
     >>> import symrb
     >>> lam = np.array([0.7, 1.1, 1.6])
     >>> Q, P = np.eye(3), symrb.hat([0.1, 0.2, 0.3])
-    >>> Qdot, Pdot = symrb.symmetric_rigid_body_rhs(Q, P, lam)
-    >>> U = symrb.J_inv(symrb.symmetric_momentum(Q, P), lam)
+    >>> Qdot, Pdot = symrb.symmetric.symmetric_rigid_body_rhs(Q, P, lam)
+    >>> U = symrb.J_inv(symrb.symmetric.symmetric_momentum(Q, P), lam)
     >>> bool(np.allclose(Qdot, Q @ U) and np.allclose(Pdot, P @ U))
     True
     """
@@ -147,8 +147,8 @@ def mclachlan_scovel_rhs(Q: ArrayLike, B: ArrayLike, lam: ArrayLike) -> tuple[Ar
     >>> import symrb
     >>> lam = np.array([0.7, 1.1, 1.6])
     >>> Q, P = np.eye(3), symrb.hat([0.1, 0.2, 0.3])  # Q^T P is skew
-    >>> a = symrb.symmetric_rigid_body_rhs(Q, P, lam)
-    >>> b = symrb.mclachlan_scovel_rhs(Q, 2 * P, lam)  # the same flow for B = 2P (claim S7)
+    >>> a = symrb.symmetric.symmetric_rigid_body_rhs(Q, P, lam)
+    >>> b = symrb.symmetric.mclachlan_scovel_rhs(Q, 2 * P, lam)  # the same flow for B = 2P (claim S7)
     >>> bool(np.allclose(a[0], b[0]) and np.allclose(2 * a[1], b[1]))
     True
     """
@@ -191,7 +191,7 @@ def multi_sample_control(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     >>> lam = np.array([0.7, 1.1, 1.6])
     >>> Q = np.stack([np.eye(3), np.eye(3)])
     >>> P = np.stack([symrb.hat([0.1, 0, 0]), symrb.hat([0, 0.1, 0])])
-    >>> print(symrb.vee(symrb.multi_sample_control(Q, P, lam)).round(4))
+    >>> print(symrb.vee(symrb.symmetric.multi_sample_control(Q, P, lam)).round(4))
     [0.0741 0.087  0.    ]
     """
     a, b, L = _samples(Q, P, lam)
@@ -225,7 +225,7 @@ def multi_sample_rhs(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> tuple[Array,
     >>> import symrb
     >>> Q = np.stack([np.eye(3), np.eye(3)])
     >>> P = np.stack([symrb.hat([0.1, 0, 0]), symrb.hat([0, 0.1, 0])])
-    >>> Qdot, Pdot = symrb.multi_sample_rhs(Q, P, [0.7, 1.1, 1.6])
+    >>> Qdot, Pdot = symrb.symmetric.multi_sample_rhs(Q, P, [0.7, 1.1, 1.6])
     >>> Qdot.shape
     (2, 3, 3)
     """
@@ -261,8 +261,8 @@ def gl_hamiltonian(Q: ArrayLike, P: ArrayLike, lam: ArrayLike) -> Array:
     >>> import symrb
     >>> lam = np.array([0.7, 1.1, 1.6])
     >>> Q, P = np.eye(3), symrb.hat([0.1, 0.2, 0.3])
-    >>> H = symrb.gl_hamiltonian(Q, P, lam)
-    >>> T = symrb.kinetic_energy(symrb.symmetric_momentum(Q, P), lam)
+    >>> H = symrb.symmetric.gl_hamiltonian(Q, P, lam)
+    >>> T = symrb.kinetic_energy(symrb.symmetric.symmetric_momentum(Q, P), lam)
     >>> print(round(float(H), 6), round(float(T / 2), 6))
     0.071095 0.071095
     """
@@ -293,7 +293,7 @@ class PFromMInfo:
     Examples
     --------
     >>> import symrb
-    >>> P, info = symrb.P_from_M(np.eye(3), symrb.hat([0.0, 0.0, 1.0]), return_info=True)
+    >>> P, info = symrb.symmetric.P_from_M(np.eye(3), symrb.hat([0.0, 0.0, 1.0]), return_info=True)
     >>> print(round(float(info.condition), 4), float(info.delta))  # 1 / cos(pi / 6)
     1.1547 0.5
     """
@@ -369,8 +369,8 @@ def P_from_M(
     >>> import numpy as np
     >>> import symrb
     >>> Q, M = np.eye(3), symrb.hat([0.2, 0.4, 0.6])
-    >>> P = symrb.P_from_M(Q, M)
-    >>> bool(np.allclose(symrb.symmetric_momentum(Q, P), M) and np.allclose(P.T @ P, np.eye(3)))
+    >>> P = symrb.symmetric.P_from_M(Q, M)
+    >>> bool(np.allclose(symrb.symmetric.symmetric_momentum(Q, P), M) and np.allclose(P.T @ P, np.eye(3)))
     True
     """
     Qa = v.orthogonal(Q, "Q")
@@ -436,7 +436,7 @@ class SymmetricRigidBody(Flow):
     >>> import symrb
     >>> lam = np.array([0.7, 1.1, 1.6])
     >>> Q0 = np.eye(3)
-    >>> P0 = symrb.P_from_M(Q0, symrb.hat([0.5, 1.0, 1.5]))
+    >>> P0 = symrb.symmetric.P_from_M(Q0, symrb.hat([0.5, 1.0, 1.5]))
     >>> sol = symrb.integrate(symrb.SymmetricRigidBody, (0, 10), {"Q": Q0, "P": P0}, lam=lam)
     >>> sorted(sol.y), bool(np.ptp(sol.y.H) < 1e-9)
     (['H', 'M', 'P', 'Q'], True)

@@ -13,7 +13,7 @@ The regimes covered (the ones where the numerics are hard):
 * momenta for :math:`J_D(U) = U\Lambda - \Lambda U^T = M` (:func:`jd_momenta`): :math:`\|M\|_F`
   from :math:`10^{-14}` up to :math:`t^*(1 - \delta)` with :math:`t^*` the fold along the ray
   (:func:`symrb.fold_scale`) and :math:`\delta` down to :math:`10^{-9}`;
-* momenta for :func:`symrb.P_from_M` (:func:`pfm_momenta`): :math:`\|M\|_{op} = 2(1 - \delta)`,
+* momenta for :func:`symrb.symmetric.P_from_M` (:func:`pfm_momenta`): :math:`\|M\|_{op} = 2(1 - \delta)`,
   :math:`\delta` down to :math:`10^{-12}`, including two equal planes;
 * attitudes (:func:`attitudes`): Haar-random rotations and rotations near a half-turn
   (:math:`\pi - \epsilon` in one or more planes, :math:`\epsilon` down to 0);
@@ -499,7 +499,7 @@ def jd_cases(
 
 @st.composite
 def pfm_momenta(draw: st.DrawFn, n: int, tiny: bool | None = None) -> tuple[np.ndarray, float]:
-    r"""Skew :math:`M` for :func:`symrb.P_from_M` with :math:`\|M\|_{op} = 2(1 - \delta)`.
+    r"""Skew :math:`M` for :func:`symrb.symmetric.P_from_M` with :math:`\|M\|_{op} = 2(1 - \delta)`.
 
     :math:`\delta = 10^{-k}`, :math:`k \in [0, 12]` (down to 1e-12 from the branch point at 2);
     for even n a case with all planes at the same rate (equal eigenvalue pairs) is drawn too;

@@ -153,7 +153,7 @@ def algorithm_agreement(
 
     The symmetric algorithm starts at :math:`(Q_0, P_0)` with :math:`P_0 = Q_0M/2` (so the body
     momentum is a random skew :math:`M` of size ``scale``); MV-Algorithm 2 at :math:`(Q_1, M_1)`
-    with :math:`M_1 = Q_0^TP_0 - P_0^TQ_0` (:func:`symrb.symmetric_momentum`, claim D12); and
+    with :math:`M_1 = Q_0^TP_0 - P_0^TQ_0` (:func:`symrb.symmetric.symmetric_momentum`, claim D12); and
     MV-Algorithm 1 at :math:`(Q_0, Q_1)`.  For scale, each of the first and the last is also run
     in a rotated frame, and MV-Algorithm 2 is run from the wrong index :math:`(Q_0, M_1)`.  BLAS
     is held to one thread during the runs (with threadpoolctl, when installed): small matrix
@@ -201,7 +201,7 @@ def algorithm_agreement(
     with _one_blas_thread():
         sym = symrb.symmetric_flow(Q0, P0, L, 1.0, steps)
         Qs, Ms = sym.y.Q, sym.y.M
-        M1 = symrb.symmetric_momentum(Q0, P0)
+        M1 = symrb.symmetric.symmetric_momentum(Q0, P0)
         mv2 = symrb.mv_algorithm2(Qs[1], M1, L, steps - 1)
         mv1 = symrb.mv_algorithm1(Q0, Qs[1], L, steps - 1)
         sym_r = symrb.symmetric_flow(R @ Q0, R @ P0, L, 1.0, steps)
@@ -330,7 +330,7 @@ def norm_conservation(
     r""":math:`\|M\|_{op}` along the symmetric rigid body flow, inside S and on C (S11).
 
     Runs of :class:`symrb.SymmetricRigidBody` (n = 4 by default) from :math:`Q_0` Haar-random and
-    :math:`P_0` = :func:`symrb.P_from_M` of a random :math:`M_0` scaled to each radius, and one
+    :math:`P_0` = :func:`symrb.symmetric.P_from_M` of a random :math:`M_0` scaled to each radius, and one
     from :math:`P_0 = Q_0A` with :math:`A` orthogonal with a rotation by :math:`\pi/2` (so
     :math:`\|M_0\|_{op} = 2`, the set C; only for n >= 4).
 
@@ -375,7 +375,7 @@ def norm_conservation(
     A = np.eye(n)
     A[:2, :2] = [[0.0, -1.0], [1.0, 0.0]]
     A[2:4, 2:4] = [[0.6, -0.8], [0.8, 0.6]]
-    starts = [symrb.P_from_M(Q0, _with_norm(n, r, seed + 5)) for r in rs] + [Q0 @ A]
+    starts = [symrb.symmetric.P_from_M(Q0, _with_norm(n, r, seed + 5)) for r in rs] + [Q0 @ A]
     kw: dict[str, Any] = dict(lam=lam, rtol=tol, atol=tol, t_eval=ts)
     initial, deviation = [], []
     for P0 in starts:

@@ -204,7 +204,7 @@ def _euler_reference(T: float) -> np.ndarray:
     """m(T) of Euler's equations in vector form, m' = m x (m / I): another route than the
     matrix field the benchmark integrates."""
     lam, _Q0, M0 = problems._problem(3, 0)
-    inertia = symrb.inertia_from_lam(lam)
+    inertia = symrb.algebra.inertia_from_lam(lam)
     sol = solve_ivp(
         lambda _t, m: np.cross(m, m / inertia),
         (0.0, T),

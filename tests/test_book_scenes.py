@@ -47,7 +47,7 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
     ),
     "hard_cases.md": (
         "long_run_spread1e6_n3",
-        ("symrb.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),
+        ("symrb.engine.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),
     ),
     "learning.md": (
         (

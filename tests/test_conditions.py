@@ -88,7 +88,7 @@ def test_integrate_rigid_body_error_within_rtol_times_condition(data, rtol, T):
 def _initial(flow: str, Q0: np.ndarray, M0: np.ndarray) -> dict:
     if flow == "McLachlanScovel":
         return {"Q": Q0, "B": Q0 @ M0}
-    return {"Q": Q0, "P": symrb.P_from_M(Q0, M0 / np.linalg.norm(M0, 2))}
+    return {"Q": Q0, "P": symrb.symmetric.P_from_M(Q0, M0 / np.linalg.norm(M0, 2))}
 
 
 @examples(0.3)
@@ -299,9 +299,11 @@ def test_resnet_sweep_error_within_eps_times_condition(N, n, m, rng, residual, a
     y = rng.standard_normal((m, n))
     K = size * rng.standard_normal((N, n, n))
     beta = rng.standard_normal((N, n))
-    _Phi, dK, db, info = symrb.loss_gradients(x0, K, beta, y, act, residual, return_info=True)
-    states = symrb.resnet_forward(x0, K, beta, act, residual)
-    p, info2 = symrb.costate_sweep(states, K, beta, y, act, residual, return_info=True)
+    _Phi, dK, db, info = symrb.learning.loss_gradients(
+        x0, K, beta, y, act, residual, return_info=True
+    )
+    states = symrb.learning.resnet_forward(x0, K, beta, act, residual)
+    p, info2 = symrb.learning.costate_sweep(states, K, beta, y, act, residual, return_info=True)
     assert info2 == info and info.layers == N and info.condition >= 1
     xr, pr, gKr, gbr = _mp_resnet(x0, K, beta, y, act, residual)
     unit = 10 * (N + 1) * n * EPS * info.condition
@@ -315,9 +317,9 @@ def test_resnet_sweep_error_within_eps_times_condition(N, n, m, rng, residual, a
 
 def test_resnet_condition_grows_with_expanding_layers():
     x0, y = np.zeros((2, 3)), np.ones((2, 3))  # z = 0: sigma' = 1, the layer is K
-    small = symrb.loss_gradients(x0, 0.1 * np.eye(3)[None].repeat(5, 0), np.zeros((5, 3)), y,
+    small = symrb.learning.loss_gradients(x0, 0.1 * np.eye(3)[None].repeat(5, 0), np.zeros((5, 3)), y,
                                  residual=False, return_info=True)[-1]  # fmt: skip
-    big = symrb.loss_gradients(x0, 3.0 * np.eye(3)[None].repeat(5, 0), np.zeros((5, 3)), y,
+    big = symrb.learning.loss_gradients(x0, 3.0 * np.eye(3)[None].repeat(5, 0), np.zeros((5, 3)), y,
                                residual=False, return_info=True)[-1]  # fmt: skip
     assert small.condition == 1.0  # contracting layers: no window amplifies
     assert big.condition > 2.0**5

@@ -28,9 +28,9 @@ def _skew_with_norm(n: int, r: float, seed: int) -> np.ndarray:
 @pytest.mark.parametrize(
     "func, second",
     [
-        (symrb.symmetric_rigid_body_rhs, "P"),
-        (symrb.gl_hamiltonian, "P"),
-        (symrb.mclachlan_scovel_rhs, "B"),
+        (symrb.symmetric.symmetric_rigid_body_rhs, "P"),
+        (symrb.symmetric.gl_hamiltonian, "P"),
+        (symrb.symmetric.mclachlan_scovel_rhs, "B"),
     ],
 )
 def test_batch_matches_loop(func, second) -> None:
@@ -40,7 +40,7 @@ def test_batch_matches_loop(func, second) -> None:
         Y = Q @ symrb.random_so(4, (2, 3), seed=rng)
     else:
         Y = rng.standard_normal((2, 3, 4, 4))
-    lam = np.stack([symrb.random_lam(4, seed=s) for s in range(3)])  # batch (3, 4)
+    lam = np.stack([symrb.algebra.random_lam(4, seed=s) for s in range(3)])  # batch (3, 4)
     Qc, Yc, lc = Q.copy(), Y.copy(), lam.copy()
     out = func(Q, Y, lam)
     for i in range(2):
@@ -59,10 +59,10 @@ def test_fields_against_direct_numpy() -> None:
     Q, P = rng.standard_normal((2, 4, 4))
     M = Q.T @ P - P.T @ Q
     U = M / (LAM[:, None] + LAM[None, :])
-    dQ, dP = symrb.symmetric_rigid_body_rhs(Q, P, LAM)
+    dQ, dP = symrb.symmetric.symmetric_rigid_body_rhs(Q, P, LAM)
     np.testing.assert_allclose(dQ, Q @ U, atol=1e-14)
     np.testing.assert_allclose(dP, P @ U, atol=1e-14)
-    H = symrb.gl_hamiltonian(Q, P, LAM)
+    H = symrb.symmetric.gl_hamiltonian(Q, P, LAM)
     np.testing.assert_allclose(H, 0.5 * symrb.kinetic_energy(M, LAM), rtol=1e-13)
 
 
@@ -70,15 +70,15 @@ def test_multi_sample_control_is_sum_of_single_controls() -> None:
     rng = np.random.default_rng(2)
     Q = symrb.random_SO(4, (5,), seed=rng)
     P = rng.standard_normal((5, 4, 4))
-    U = symrb.multi_sample_control(Q, P, LAM)
-    single = [symrb.J_inv(symrb.symmetric_momentum(Q[a], P[a]), LAM) for a in range(5)]
+    U = symrb.symmetric.multi_sample_control(Q, P, LAM)
+    single = [symrb.J_inv(symrb.symmetric.symmetric_momentum(Q[a], P[a]), LAM) for a in range(5)]
     np.testing.assert_allclose(U, np.sum(single, axis=0), atol=1e-13)
-    dQ, dP = symrb.multi_sample_rhs(Q, P, LAM)
+    dQ, dP = symrb.symmetric.multi_sample_rhs(Q, P, LAM)
     np.testing.assert_allclose(dQ, Q @ U, atol=1e-13)
     np.testing.assert_allclose(dP, P @ U, atol=1e-13)
     # one sample: the learning field is the symmetric rigid body field
-    d1 = symrb.multi_sample_rhs(Q[:1], P[:1], LAM)
-    d2 = symrb.symmetric_rigid_body_rhs(Q[0], P[0], LAM)
+    d1 = symrb.symmetric.multi_sample_rhs(Q[:1], P[:1], LAM)
+    d2 = symrb.symmetric.symmetric_rigid_body_rhs(Q[0], P[0], LAM)
     np.testing.assert_allclose(d1[0][0], d2[0], atol=1e-14)
 
 
@@ -89,19 +89,19 @@ def test_multi_sample_control_is_sum_of_single_controls() -> None:
 def test_validation_messages() -> None:
     Q = symrb.random_SO(3, seed=0)
     with pytest.raises(InputError, match="lam"):
-        symrb.symmetric_rigid_body_rhs(Q, Q, [1.0, -1.0, 2.0])
+        symrb.symmetric.symmetric_rigid_body_rhs(Q, Q, [1.0, -1.0, 2.0])
     with pytest.raises(InputError, match="P must be 3 x 3"):
-        symrb.symmetric_rigid_body_rhs(Q, np.eye(4), [1.0, 1.5, 2.0])
+        symrb.symmetric.symmetric_rigid_body_rhs(Q, np.eye(4), [1.0, 1.5, 2.0])
     with pytest.raises(InputError, match="Q\\^T B must be skew"):
-        symrb.mclachlan_scovel_rhs(Q, Q, [1.0, 1.5, 2.0])
+        symrb.symmetric.mclachlan_scovel_rhs(Q, Q, [1.0, 1.5, 2.0])
     with pytest.raises(InputError, match="finite"):
-        symrb.gl_hamiltonian(Q, np.full((3, 3), np.nan), [1.0, 1.5, 2.0])
+        symrb.symmetric.gl_hamiltonian(Q, np.full((3, 3), np.nan), [1.0, 1.5, 2.0])
     with pytest.raises(InputError, match="sample axis"):
-        symrb.multi_sample_control(Q, Q, [1.0, 1.5, 2.0])
+        symrb.symmetric.multi_sample_control(Q, Q, [1.0, 1.5, 2.0])
     with pytest.raises(InputError, match="orthogonal"):
-        symrb.P_from_M(2 * Q, np.zeros((3, 3)))
+        symrb.symmetric.P_from_M(2 * Q, np.zeros((3, 3)))
     with pytest.raises(InputError, match="skew"):
-        symrb.P_from_M(Q, np.eye(3))
+        symrb.symmetric.P_from_M(Q, np.eye(3))
 
 
 @pytest.mark.parametrize("r", [2.0, 2.0 + 1e-12, 3.0])
@@ -109,14 +109,14 @@ def test_P_from_M_out_of_domain(r: float) -> None:
     M = _skew_with_norm(4, r, 5)
     Q = symrb.random_SO(4, seed=5)
     with pytest.raises(OutOfDomainError, match=re.escape("||M||_op < 2")):
-        symrb.P_from_M(Q, M)
+        symrb.symmetric.P_from_M(Q, M)
 
 
 def test_P_from_M_batch_reports_offending_index() -> None:
     M = np.stack([_skew_with_norm(3, 1.0, 1), _skew_with_norm(3, 2.5, 2)])
     Q = symrb.random_SO(3, (2,), seed=3)
     with pytest.raises(OutOfDomainError, match=r"batch index \(1,\)"):
-        symrb.P_from_M(Q, M)
+        symrb.symmetric.P_from_M(Q, M)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -129,20 +129,20 @@ def test_P_from_M_near_boundary(n: int, delta: float) -> None:
     M = _skew_with_norm(n, 2.0 * (1.0 - delta), 10 + n)
     assert np.linalg.norm(M, 2) < 2.0
     Q = symrb.random_SO(n, seed=n)
-    P = symrb.P_from_M(Q, M)
+    P = symrb.symmetric.P_from_M(Q, M)
     eye = np.eye(n)
     assert np.abs(P.T @ P - eye).max() < 1e-14 * n
     assert abs(np.linalg.det(P) - 1.0) < 1e-13
-    np.testing.assert_allclose(symrb.symmetric_momentum(Q, P), M, atol=1e-14 * n)
+    np.testing.assert_allclose(symrb.symmetric.symmetric_momentum(Q, P), M, atol=1e-14 * n)
 
 
 def test_P_from_M_is_the_small_angle_solution() -> None:
     """Eigen-angles phi of Q^T P satisfy 2 sin(phi) = theta with |phi| < pi/2: trace(Q^T P) > 0
     pairwise, and P -> Q as M -> 0."""
     Q = symrb.random_SO(4, seed=1)
-    np.testing.assert_allclose(symrb.P_from_M(Q, np.zeros((4, 4))), Q, atol=1e-15)
+    np.testing.assert_allclose(symrb.symmetric.P_from_M(Q, np.zeros((4, 4))), Q, atol=1e-15)
     M = _skew_with_norm(4, 1.9, 2)
-    A = Q.T @ symrb.P_from_M(Q, M)
+    A = Q.T @ symrb.symmetric.P_from_M(Q, M)
     sym = 0.5 * (A + A.T)
     assert np.all(np.linalg.eigvalsh(sym) > 0)  # cos(phi) > 0 on every rotation plane
 
@@ -151,9 +151,9 @@ def test_P_from_M_batch_and_no_mutation() -> None:
     Q = symrb.random_SO(5, (4,), seed=0)
     M = np.stack([_skew_with_norm(5, r, i) for i, r in enumerate([0.1, 0.9, 1.5, 1.999])])
     Qc, Mc = Q.copy(), M.copy()
-    P = symrb.P_from_M(Q, M)
+    P = symrb.symmetric.P_from_M(Q, M)
     for i in range(4):
-        np.testing.assert_allclose(P[i], symrb.P_from_M(Q[i], M[i]), atol=1e-15)
+        np.testing.assert_allclose(P[i], symrb.symmetric.P_from_M(Q[i], M[i]), atol=1e-15)
     assert np.array_equal(Q, Qc) and np.array_equal(M, Mc)
 
 
@@ -164,7 +164,7 @@ def test_P_from_M_batch_and_no_mutation() -> None:
 def test_symmetric_flow_reproduces_rigid_body() -> None:
     Q0 = symrb.random_SO(4, seed=11)
     M0 = _skew_with_norm(4, 1.3, 11)
-    P0 = symrb.P_from_M(Q0, M0)
+    P0 = symrb.symmetric.P_from_M(Q0, M0)
     ts = np.linspace(0.0, 8.0, 17)
     kw = dict(lam=LAM, rtol=1e-12, atol=1e-12, t_eval=ts)
     a = symrb.integrate(symrb.SymmetricRigidBody, (0.0, 8.0), {"Q": Q0, "P": P0}, **kw)
@@ -194,7 +194,7 @@ def test_integrate_batch_matches_single_runs() -> None:
 def test_mclachlan_scovel_matches_symmetric_flow() -> None:
     """B = P - Q P^T Q maps the symmetric flow to McLachlan-Scovel (claim S7)."""
     Q0 = symrb.random_SO(4, seed=21)
-    P0 = symrb.P_from_M(Q0, _skew_with_norm(4, 1.0, 21))
+    P0 = symrb.symmetric.P_from_M(Q0, _skew_with_norm(4, 1.0, 21))
     B0 = P0 - Q0 @ P0.T @ Q0
     kw = dict(lam=LAM, rtol=1e-12, atol=1e-12, t_eval=np.linspace(0, 5, 6))
     a = symrb.integrate(symrb.SymmetricRigidBody, (0, 5), {"Q": Q0, "P": P0}, **kw)
@@ -225,7 +225,9 @@ def test_multi_sample_flow_shapes_and_control() -> None:
         symrb.MultiSampleSymmetricRigidBody, (0, 1), {"Q": Q0, "P": P0}, lam=lam, t_eval=[0, 1]
     )
     assert sol.y.Q.shape == (2, 4, 3, 3) and sol.y.U.shape == (2, 3, 3)
-    np.testing.assert_allclose(sol.y.U[0], symrb.multi_sample_control(Q0, P0, lam), atol=1e-14)
+    np.testing.assert_allclose(
+        sol.y.U[0], symrb.symmetric.multi_sample_control(Q0, P0, lam), atol=1e-14
+    )
     # every Q^a stays orthogonal
     eye = np.eye(3)
     assert np.abs(np.swapaxes(sol.y.Q, -1, -2) @ sol.y.Q - eye).max() < 1e-8
@@ -240,7 +242,7 @@ def test_multi_sample_total_momentum_is_a_rigid_body() -> None:
     ts = np.linspace(0, 4, 9)
     kw = dict(lam=lam, rtol=1e-12, atol=1e-12, t_eval=ts)
     ms = symrb.integrate(symrb.MultiSampleSymmetricRigidBody, (0, 4), (Q0, P0), **kw)
-    Mtot = symrb.symmetric_momentum(ms.y.Q, ms.y.P).sum(axis=-3)
+    Mtot = symrb.symmetric.symmetric_momentum(ms.y.Q, ms.y.P).sum(axis=-3)
     rb = symrb.integrate(symrb.RigidBody, (0, 4), (np.eye(3), Mtot[0]), **kw)
     np.testing.assert_allclose(Mtot, rb.y.M, atol=1e-9)
     np.testing.assert_allclose(ms.y.U, rb.y.Omega, atol=1e-9)
@@ -338,7 +340,7 @@ def test_integrate_reports_failure_without_raising() -> None:
 def test_P_from_M_property(n: int, r: float, seed: int) -> None:
     M = _skew_with_norm(n, r, seed) if r > 0 else np.zeros((n, n))
     Q = symrb.random_SO(n, seed=seed)
-    P = symrb.P_from_M(Q, M)
+    P = symrb.symmetric.P_from_M(Q, M)
     np.testing.assert_allclose(Q.T @ P - P.T @ Q, M, atol=1e-13)
     np.testing.assert_allclose(P.T @ P, np.eye(n), atol=1e-13)
 
@@ -349,7 +351,7 @@ def test_momentum_of_rotations_bounded(n: int, seed: int) -> None:
     """Claim S9 on random pairs: ||Q^T P - P^T Q||_op <= 2 for Q, P in SO(n)."""
     rng = np.random.default_rng(seed)
     Q, P = symrb.random_SO(n, (2,), seed=rng)
-    assert np.linalg.norm(symrb.symmetric_momentum(Q, P), 2) <= 2.0 + 1e-12
+    assert np.linalg.norm(symrb.symmetric.symmetric_momentum(Q, P), 2) <= 2.0 + 1e-12
 
 
 @settings(max_examples=30, deadline=None)
@@ -360,8 +362,8 @@ def test_hamiltonian_is_invariant_under_rotation(seed: int, scale: float) -> Non
     Q, R = symrb.random_SO(4, (2,), seed=rng)
     P = scale * rng.standard_normal((4, 4))
     np.testing.assert_allclose(
-        symrb.gl_hamiltonian(R @ Q, R @ P, LAM),
-        symrb.gl_hamiltonian(Q, P, LAM),
+        symrb.symmetric.gl_hamiltonian(R @ Q, R @ P, LAM),
+        symrb.symmetric.gl_hamiltonian(Q, P, LAM),
         rtol=1e-12,
         atol=1e-14,
     )

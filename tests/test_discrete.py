@@ -13,19 +13,17 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from symrb import (
-    DiscreteFlowSolution,
     InputError,
     discrete_rigid_body_flow,
-    jd_residual,
     mv_algorithm1,
     mv_algorithm2,
     random_SO,
     random_so,
-    rigid_body_rhs,
     solve_moser_veselov,
     symmetric_flow,
-    symmetric_step,
 )
+from symrb.paper import DiscreteFlowSolution, jd_residual, symmetric_step
+from symrb.rigid_body import rigid_body_rhs
 
 EPS = np.finfo(float).eps
 LAM3 = np.array([0.7, 1.1, 1.6])

@@ -204,7 +204,7 @@ def test_numba_method_needs_n3() -> None:
 
 
 def _exact_end(M0: np.ndarray, lam: np.ndarray, T: float) -> tuple[np.ndarray, np.ndarray]:
-    ex = symrb.rigid_body_exact(np.eye(3), M0, lam, [T])
+    ex = symrb.exact.rigid_body_exact(np.eye(3), M0, lam, [T])
     return ex.y.Q[-1], ex.y.M[-1]
 
 

@@ -337,7 +337,7 @@ def test_one_sample_second_term_decreases_with_T():
     """The closed form ||[N,[N,x_T]]|| at T = 1, 2, 4, 8, 16 decreases to 0, the last ratio close
     to exp(-||x_0|| ||N|| 8)."""
     x0, N = ol.one_sample_data()
-    decay = symrb.one_sample_second_term(x0, N, ol.ONE_SAMPLE_HORIZONS)
+    decay = symrb.orbits.one_sample_second_term(x0, N, ol.ONE_SAMPLE_HORIZONS)
     assert np.all(np.diff(decay) < 0) and decay[-1] < 1e-3
     assert decay[-1] / decay[-2] == pytest.approx(np.exp(-0.5 * 8), rel=0.02)
 

@@ -205,13 +205,13 @@ def test_P_from_M_residuals_at_rounding_up_to_the_branch_point(n, data):
     M, delta = data.draw(pfm_momenta(n))
     Q = data.draw(attitudes(n))
     Qf, Mf = _frozen(Q, M)
-    P, info = symrb.P_from_M(Qf, Mf, return_info=True)
+    P, info = symrb.symmetric.P_from_M(Qf, Mf, return_info=True)
     bound = 10 * n**1.5 * EPS
     assert info.residual <= bound and info.orthogonality <= bound
     assert np.linalg.det(P) > 0
     assert info.delta == pytest.approx(delta, rel=1e-6, abs=1e-15)
     assert info.condition == pytest.approx(1 / np.sqrt(delta * (2 - delta)), rel=1e-3)
-    assert _same((P, info), symrb.P_from_M(Qf, Mf, return_info=True))
+    assert _same((P, info), symrb.symmetric.P_from_M(Qf, Mf, return_info=True))
 
 
 def _P_reference(M: np.ndarray) -> np.ndarray:
@@ -232,7 +232,7 @@ def _P_reference(M: np.ndarray) -> np.ndarray:
 def test_P_from_M_forward_error_within_eps_times_condition(n, data):
     """||P - P_exact||_F <= 10 n eps kappa, kappa = 1/sqrt(1 - (||M||_op/2)^2) (the arcsin)."""
     M, _delta = data.draw(pfm_momenta(n, tiny=False))
-    P, info = symrb.P_from_M(np.eye(n), M, return_info=True)
+    P, info = symrb.symmetric.P_from_M(np.eye(n), M, return_info=True)
     err = _fro(P - _P_reference(M))
     assert err <= 10 * n * EPS * info.condition, (err, info.condition)
 
@@ -241,7 +241,7 @@ def test_P_from_M_forward_error_within_eps_times_condition(n, data):
 @given(dimensions(2, 6), batch_shapes())
 def test_P_from_M_batches_including_empty(n, shape):
     M = np.broadcast_to(symrb.hat([0.3, -0.2, 0.1]) if n == 3 else np.zeros((n, n)), shape + (n, n))
-    P = symrb.P_from_M(np.eye(n), M)
+    P = symrb.symmetric.P_from_M(np.eye(n), M)
     assert P.shape == shape + (n, n)
 
 
@@ -344,7 +344,7 @@ def _long_run_error(method, lam, N, rng, save_every=100):
     M0 = symrb.random_so(n, seed=rng)
     M0 = M0 * (0.5 * lam.min() / np.linalg.norm(M0, 2))
     if method == "mv_flow":
-        sol = symrb.mv_flow(np.eye(n), M0, lam, 1.0, N, save_every=save_every)
+        sol = symrb.engine.mv_flow(np.eye(n), M0, lam, 1.0, N, save_every=save_every)
     else:
         sol = symrb.mv_algorithm2(np.eye(n), M0, lam, N, save_every=save_every)
     assert sol.success, sol.message
@@ -409,7 +409,7 @@ def test_continuous_flows_keep_their_invariants_to_the_tolerance(flow, data):
         y0 = {"Q": Q0, "B": Q0 @ M0}
     else:
         M0 = M0 * (1.0 / np.linalg.norm(M0, 2))
-        y0 = {"Q": Q0, "P": symrb.P_from_M(Q0, M0)}
+        y0 = {"Q": Q0, "P": symrb.symmetric.P_from_M(Q0, M0)}
     frozen = {k: _frozen(a)[0] for k, a in y0.items()}
     rtol = 1e-10
     sol = symrb.integrate(getattr(symrb, flow), (0, 5), frozen, lam=lam, rtol=rtol, atol=1e-12)
@@ -454,18 +454,18 @@ def test_learning_gradients_match_central_differences(N, n, m, rng, residual):
     K = 0.5 * rng.standard_normal((N, n, n))
     beta = 0.5 * rng.standard_normal((N, n))
     x0f, yf, Kf, bf = _frozen(x0, y, K, beta)
-    Phi, dK, db = symrb.loss_gradients(x0f, Kf, bf, yf, residual=residual)
+    Phi, dK, db = symrb.learning.loss_gradients(x0f, Kf, bf, yf, residual=residual)
     assert np.isfinite(Phi) and np.all(np.isfinite(dK)) and np.all(np.isfinite(db))
     step = 1e-6
     i, j, k = rng.integers(N), rng.integers(n), rng.integers(n)
     E = np.zeros_like(K)
     E[i, j, k] = step
     fd = (
-        symrb.loss_gradients(x0, K + E, beta, y, residual=residual)[0]
-        - symrb.loss_gradients(x0, K - E, beta, y, residual=residual)[0]
+        symrb.learning.loss_gradients(x0, K + E, beta, y, residual=residual)[0]
+        - symrb.learning.loss_gradients(x0, K - E, beta, y, residual=residual)[0]
     ) / (2 * step)
     assert abs(fd - dK[i, j, k]) <= 1e-6 * (1 + abs(Phi))
-    assert _same((Phi, dK, db), symrb.loss_gradients(x0f, Kf, bf, yf, residual=residual))
+    assert _same((Phi, dK, db), symrb.learning.loss_gradients(x0f, Kf, bf, yf, residual=residual))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -481,12 +481,12 @@ def test_no_nonfinite_output_from_finite_input(case, Q3):
     outs = [
         symrb.solve_moser_veselov(M, lam),
         symrb.J_inv(M, lam),
-        symrb.symmetric_rigid_body_rhs(np.eye(n), M, lam),
+        symrb.symmetric.symmetric_rigid_body_rhs(np.eye(n), M, lam),
         symrb.kinetic_energy(M, lam),
         symrb.manakov_integrals(M, lam),
-        symrb.rigid_body_rhs(np.eye(n), M, lam),
-        symrb.double_bracket_rhs(M, M.T @ M - M @ M.T),
-        symrb.P_from_M(Q3, 1.999 * symrb.hat([0, 0, 1.0])),
+        symrb.rigid_body.rigid_body_rhs(np.eye(n), M, lam),
+        symrb.orbits.double_bracket_rhs(M, M.T @ M - M @ M.T),
+        symrb.symmetric.P_from_M(Q3, 1.999 * symrb.hat([0, 0, 1.0])),
     ]
     for out in outs:
         for a in out if isinstance(out, tuple) else (out,):
@@ -517,13 +517,13 @@ def _bad(kind: str) -> tuple[np.ndarray, str]:
 
 CALLS = {
     "solve_moser_veselov(M)": (lambda a: symrb.solve_moser_veselov(a, LAM), "M"),
-    "P_from_M(M)": (lambda a: symrb.P_from_M(Q3, a), "M"),
+    "P_from_M(M)": (lambda a: symrb.symmetric.P_from_M(Q3, a), "M"),
     "mv_algorithm2(M)": (lambda a: symrb.mv_algorithm2(Q3, a, LAM, 2), "M"),
     "discrete_rigid_body_flow(M0)": (
         lambda a: symrb.discrete_rigid_body_flow(Q3, a, LAM, 0.1, 2),
         "M0",
     ),
-    "symmetric_step(P)": (lambda a: symrb.symmetric_step(Q3, a, LAM), "P"),
+    "symmetric_step(P)": (lambda a: symrb.paper.symmetric_step(Q3, a, LAM), "P"),
     "integrate(y0['M'])": (
         lambda a: symrb.integrate(symrb.RigidBody, (0, 1), {"Q": Q3, "M": a}, lam=LAM),
         "y0['M']",
@@ -550,8 +550,8 @@ def test_wrong_matrix_input_names_argument_condition_value_and_way_out(call, kin
 
 WRONG = {
     "not skew": (lambda: symrb.solve_moser_veselov(np.ones((3, 3)), LAM), "M", "skew"),
-    "not orthogonal": (lambda: symrb.P_from_M(2 * np.eye(3), M3), "Q", "orthogonal"),
-    "det -1": (lambda: symrb.P_from_M(-np.eye(3), M3), "Q", "det +1"),
+    "not orthogonal": (lambda: symrb.symmetric.P_from_M(2 * np.eye(3), M3), "Q", "orthogonal"),
+    "det -1": (lambda: symrb.symmetric.P_from_M(-np.eye(3), M3), "Q", "det +1"),
     "lam not positive": (lambda: symrb.solve_moser_veselov(M3, [0.7, -1.1, 1.6]), "lam", "positive"),
     "lam sums": (lambda: symrb.J_inv(M3, [-1.0, 1.0, 2.0]), "lam", "lam_i + lam_j"),
     "lam matrix": (lambda: symrb.J(M3, np.diag(LAM)), "lam", "diagonal"),
@@ -559,18 +559,18 @@ WRONG = {
     "h negative": (lambda: symrb.symmetric_flow(Q3, Q3, LAM, -0.1, 2), "h", "> 0"),
     "h complex": (lambda: symrb.symmetric_flow(Q3, Q3, LAM, 0.1j, 2), "h", "real number"),
     "steps float": (lambda: symrb.mv_algorithm2(Q3, M3, LAM, 2.5), "steps", "integer"),
-    "P_from_M beyond 2": (lambda: symrb.P_from_M(Q3, 2.5 * symrb.hat([0, 0, 1.0])), "M", "< 2"),
+    "P_from_M beyond 2": (lambda: symrb.symmetric.P_from_M(Q3, 2.5 * symrb.hat([0, 0, 1.0])), "M", "< 2"),
     "past the fold": (lambda: symrb.solve_moser_veselov(30 * M3, LAM), "M", "past the fold"),
     "tol negative": (lambda: symrb.solve_moser_veselov(M3, LAM, tol=-1.0), "tol", ">= 0"),
     "K shape": (
-        lambda: symrb.resnet_forward(np.ones(2), np.zeros((2, 3)), np.zeros((1, 2))),
+        lambda: symrb.learning.resnet_forward(np.ones(2), np.zeros((2, 3)), np.zeros((1, 2))),
         "K",
         "shape",
     ),
     "lr": (lambda: symrb.train(np.ones((1, 2)), np.ones((1, 2)), np.zeros((1, 2, 2)),
                                np.zeros((1, 2)), 1, lr=-1.0), "lr", "positive"),
     "activation": (
-        lambda: symrb.resnet_forward(np.ones(2), np.zeros((1, 2, 2)), np.zeros((1, 2)), "relu"),
+        lambda: symrb.learning.resnet_forward(np.ones(2), np.zeros((1, 2, 2)), np.zeros((1, 2)), "relu"),
         "activation",
         "one of",
     ),

@@ -299,7 +299,7 @@ def test_mv_scene_equals_mv_flow(n: int) -> None:
              observables={"M": {"every": 8}, "energy": "end"})  # fmt: skip
     r = run_scene(sc, cache=False)
     x = scene_inputs(sc)
-    sol = symrb.mv_flow(x["Q0"], x["M0"], x["lam"], 0.05, 40, save_every=8)
+    sol = symrb.engine.mv_flow(x["Q0"], x["M0"], x["lam"], 0.05, 40, save_every=8)
     _same(r["M"], sol.y.M)
     _same(r["energy"], symrb.kinetic_energy(sol.y.M[-1:], x["lam"]))
 
@@ -327,8 +327,8 @@ def test_resnet_scene_equals_train() -> None:
     tr = symrb.train(x["x0"], x["targets"], x["K0"], x["beta0"], steps=12, lr=0.01)
     _same(r["loss"], tr.losses[[0, 4, 8, 12]])
     _same(r["K"], tr.K[None])
-    states = symrb.resnet_forward(x["x0"], tr.K, tr.beta)
-    _same(r["costates"], symrb.costate_sweep(states, tr.K, tr.beta, x["targets"])[None])
+    states = symrb.learning.resnet_forward(x["x0"], tr.K, tr.beta)
+    _same(r["costates"], symrb.learning.costate_sweep(states, tr.K, tr.beta, x["targets"])[None])
 
 
 def test_double_bracket_and_symmetric_scenes_equal_their_functions() -> None:
@@ -351,7 +351,7 @@ def test_double_bracket_and_symmetric_scenes_equal_their_functions() -> None:
         lam=x["lam"], rtol=1e-10, atol=1e-12, t_eval=[0, 1.0, 2.0],
     )  # fmt: skip
     _same(r["U"], sol.y.U[-1:])
-    _same(r["H"], symrb.gl_hamiltonian(sol.y.Q, sol.y.P, x["lam"]))
+    _same(r["H"], symrb.symmetric.gl_hamiltonian(sol.y.Q, sol.y.P, x["lam"]))
 
 
 @pytest.mark.parametrize("start", ["rotations", "general"])
@@ -378,7 +378,7 @@ def test_symmetric_body_start_and_gram_observables_equal_hand_written(start: str
     Q, P = sol.y.Q, sol.y.P
     _same(r["gram_spectrum"], np.linalg.eigvalsh(np.swapaxes(Q, -1, -2) @ Q))
     _same(r["P_orthogonality"], np.abs(np.swapaxes(P, -1, -2) @ P - np.eye(4)).max(axis=(1, 2)))
-    H = symrb.gl_hamiltonian(Q, P, x["lam"])
+    H = symrb.symmetric.gl_hamiltonian(Q, P, x["lam"])
     _same(r["H"], _windows(t, H, 3, "max_rel_change")[1])
     on_so = start == "rotations"
     assert (r["P_orthogonality"].max() < 1e-9) == on_so  # a general point is far from SO(4)
@@ -641,7 +641,7 @@ def test_windowed_loss_and_initial_weights_equal_train() -> None:
          "observables": {"loss": {"every": 1, "windows": 4, "reduce": ["min", "max"]}}}
     )  # fmt: skip
     r = run_scene(sc, cache=False)
-    x0, targets, _ = symrb.toy_classification(30, seed=2)
+    x0, targets, _ = symrb.learning.toy_classification(30, seed=2)
     K0 = 0.1 * np.random.default_rng(5).standard_normal((3, 2, 2))
     tr = symrb.train(x0, targets, K0, np.zeros((3, 2)), steps=20, lr=0.01)
     steps = np.arange(21.0)

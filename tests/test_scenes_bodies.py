@@ -78,7 +78,7 @@ def test_three_second_runs_equal_hand_written_calls() -> None:
     P0 = Q0 @ (0.5 * M0)
     sym = symrb.symmetric_flow(Q0, P0, lam, 1.0, N)
     Qs, Ms = sym.y.Q, sym.y.M
-    M1 = symrb.symmetric_momentum(Q0, P0)
+    M1 = symrb.symmetric.symmetric_momentum(Q0, P0)
     mv2 = symrb.mv_algorithm2(Qs[1], M1, lam, N)  # N steps: M_{N+1} is the momentum at t_N
     R = symrb.random_SO(3, seed=4)
     sym_r = symrb.symmetric_flow(R @ Q0, R @ P0, lam, 1.0, N)
@@ -112,7 +112,7 @@ def test_mv_algorithm1_scene_equals_hand_written_calls() -> None:
     x = scene_inputs(sc)
     Q0, M0, lam = x["Q0"], x["M0"], x["lam"]
     sym = symrb.symmetric_flow(Q0, Q0 @ (0.5 * M0), lam, 1.0, 1)  # Q_1: the first step
-    M1 = symrb.symmetric_momentum(Q0, Q0 @ (0.5 * M0))
+    M1 = symrb.symmetric.symmetric_momentum(Q0, Q0 @ (0.5 * M0))
     mv1 = symrb.mv_algorithm1(Q0, sym.y.Q[1], lam, N - 1)
     mv2 = symrb.mv_algorithm2(sym.y.Q[1], M1, lam, N - 1)  # Q only: N - 1 steps from Q_1
     R = symrb.random_SO(3, seed=4)
@@ -163,7 +163,7 @@ def test_mv_algorithm2_from_the_first_step_every_k_steps(observables) -> None:
     x = scene_inputs(sc)
     # Q_1 of the symmetric first step; M_1 = h (Q0^T P0 - P0^T Q0), P0 = Q0 M0 / 2 (D12)
     Q1 = symrb.discrete_rigid_body_flow(x["Q0"], x["M0"], x["lam"], h, 1).y.Q[1]
-    M1 = h * symrb.symmetric_momentum(x["Q0"], x["Q0"] @ (0.5 * x["M0"]))
+    M1 = h * symrb.symmetric.symmetric_momentum(x["Q0"], x["Q0"] @ (0.5 * x["M0"]))
     save = 1 if "Q" in observables else 3
     run = symrb.mv_algorithm2(Q1, M1, x["lam"], N, save_every=save)
     M = run.y.M[np.arange(0, N + 1, 3) // save] / h  # M_{k+1} / h at t_k, k = 0, 3, ..., N
@@ -212,7 +212,7 @@ def test_the_agreement_scenes_give_the_experiments_windows() -> None:
     np.testing.assert_allclose(a["Q_gap"][:, 2], run.window["wrong_index"], rtol=1e-11)
     assert np.abs(a["Q_gap"][:, 2] - run.window["wrong_index"]).max() < steps * np.finfo(float).eps
     # the experiment's relative momentum gap: divided by the size of M_1 = Q0^T P0 - P0^T Q0
-    M1 = symrb.symmetric_momentum(Q0, Q0 @ (0.5 * M))
+    M1 = symrb.symmetric.symmetric_momentum(Q0, Q0 @ (0.5 * M))
     _same(a["M_gap"][:, 0] / np.abs(M1).max(), run.window["momentum"])
     # the discretisation error: the experiment's reference starts from M_1 (= M0 to rounding)
     early = load_scene(SCENES / "agreement_discretisation.toml").model_dump(
@@ -312,7 +312,9 @@ def test_norm_conservation_scenes_equal_the_experiment() -> None:
     A = np.eye(4)
     A[:2, :2] = [[0.0, -1.0], [1.0, 0.0]]
     A[2:4, 2:4] = [[0.6, -0.8], [0.8, 0.6]]
-    starts = [symrb.P_from_M(Q0, M * (r / np.linalg.norm(M, 2))) for r in radii] + [Q0 @ A]
+    starts = [symrb.symmetric.P_from_M(Q0, M * (r / np.linalg.norm(M, 2))) for r in radii] + [
+        Q0 @ A
+    ]
     ts = np.linspace(0.0, T, 301)
     for P0, res in zip(starts, [*out.results, on_C], strict=True):
         sol = symrb.integrate(symrb.SymmetricRigidBody, (0.0, T), {"Q": Q0, "P": P0},
@@ -359,7 +361,7 @@ def test_rotated_symmetric_rigid_body_and_its_own_momenta() -> None:
                         {"Q": R @ x["Q0"], "P": R @ x["P0"]}, **kw)  # fmt: skip
     assert r["Q_gap"].shape == (5, 1)  # an array of one [[compare]] table: one column
     _same(r["Q_gap"][:, 0], _gap(a.y.Q, R.T @ b.y.Q))
-    _same(r["M_gap"][:, 0], _gap(a.y.M, symrb.symmetric_momentum(b.y.Q, b.y.P)))
+    _same(r["M_gap"][:, 0], _gap(a.y.M, symrb.symmetric.symmetric_momentum(b.y.Q, b.y.P)))
     assert r["Q_gap"].max() < 1e-6
 
 

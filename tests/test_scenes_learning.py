@@ -105,11 +105,11 @@ def test_gradient_scene_equals_train_so_gradient() -> None:
     _same(r["residual"], res.residuals[::3])
     _same(r.times["residual"], np.arange(0, res.iterations + 1, 3, dtype=float))
     _same(r["U"], res.U[None])
-    Q, P = symrb.so_network_costates(Q0, res.U, T)
+    Q, P = symrb.learning.so_network_costates(Q0, res.U, T)
     _same(r["Q"], Q[None])
-    _same(r["Q"], symrb.so_network_forward(Q0, res.U)[None])
+    _same(r["Q"], symrb.learning.so_network_forward(Q0, res.U)[None])
     _same(r["costates"], P[None])
-    _same(r["extremal_residual"], symrb.so_extremal_residual(Q0, res.U, lam, T, 0.5)[None])
+    _same(r["extremal_residual"], symrb.learning.so_extremal_residual(Q0, res.U, lam, T, 0.5)[None])
     _same(r["iterations"], [res.iterations])
     _same(r["converged"], [1])
     for name in ("U", "Q", "costates", "extremal_residual", "iterations", "converged"):
@@ -354,7 +354,7 @@ def test_shooting_needs_the_running_cost() -> None:
 
 
 def test_the_scene_class_is_public_and_documented() -> None:
-    assert symrb.SONetworkScene is SONetworkScene
+    assert symrb.scenes.SONetworkScene is SONetworkScene
     assert SONetworkScene.__module__ == "symrb.scenes"
     assert type(load_scene(SO)) is SONetworkScene
 
@@ -371,7 +371,7 @@ DIGITS = {"system": "resnet", "effects": ["terminal_cost"],
 
 def test_digits_scene_equals_train_and_resnet_predict() -> None:
     r = run_scene(DIGITS, cache=False)
-    task = symrb.digits_task(6, seed=4)
+    task = symrb.learning.digits_task(6, seed=4)
     n = task.x_train.shape[1]
     assert n == 16
     x = scene_inputs(parse_scene(DIGITS))
@@ -381,15 +381,19 @@ def test_digits_scene_equals_train_and_resnet_predict() -> None:
     tr = symrb.train(task.x_train, task.y_train, K0, b0, steps=3, lr=2e-4)
     _same(r["loss"], tr.losses)
     _same(r["K"], tr.K[None])
-    acc = np.mean(symrb.resnet_predict(task.x_train, tr.K, tr.beta, 10) == task.labels_train)
-    test = np.mean(symrb.resnet_predict(task.x_test, tr.K, tr.beta, 10) == task.labels_test)
+    acc = np.mean(
+        symrb.learning.resnet_predict(task.x_train, tr.K, tr.beta, 10) == task.labels_train
+    )
+    test = np.mean(
+        symrb.learning.resnet_predict(task.x_test, tr.K, tr.beta, 10) == task.labels_test
+    )
     _same(r["accuracy"], [acc])
     _same(r["test_accuracy"], [test])
     assert acc != test  # the two observables read different images
     # parameters.test_fraction reaches digits_task
     held = {**DIGITS["parameters"], "test_fraction": 0.2}
     y = scene_inputs(parse_scene({**DIGITS, "parameters": held}))
-    other = symrb.digits_task(6, 0.2, seed=4)
+    other = symrb.learning.digits_task(6, 0.2, seed=4)
     _same(y["x0"], other.x_train)
     _same(y["labels_test"], other.labels_test)
     assert len(y["labels_test"]) < len(x["labels_test"])
@@ -408,7 +412,7 @@ def test_resnet_msa_scene_equals_train_msa(data: str) -> None:
     _same(r["loss"], tr.losses)
     _same(r["beta"], tr.beta[None])
     if data == "toy":  # the toy accuracy is the sign of x_2, as before
-        states = symrb.resnet_forward(x["x0"], tr.K, tr.beta)
+        states = symrb.learning.resnet_forward(x["x0"], tr.K, tr.beta)
         _same(r["accuracy"], [np.mean(np.sign(states[-1][:, 1]) == x["labels"])])
     plan = plan_scene(sc)
     assert plan.route.startswith("symrb.train_msa(steps=3, rho=0.5, inner_steps=2")

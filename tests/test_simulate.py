@@ -20,8 +20,8 @@ from symrb.engine import mv_flow
 from symrb.errors import InputError
 from symrb.exact import rigid_body_exact
 from symrb.rigid_body import METHODS, RigidBodySolution, simulate
+from symrb.rigid_body.entry import _finite
 from symrb.rigid_body.ivp import NAMES as IVP
-from symrb.rigid_body.simulate import _finite
 
 LAM = np.array([0.7, 1.1, 1.6])
 Q0 = symrb.random_SO(3, seed=3)
@@ -111,9 +111,12 @@ def test_composition_options() -> None:
     ref = composed_rigid_body_flow(Q0, M0, LAM, H, STEPS, 4, step="midpoint", save_every=4)
     _same_raw(sol, ref)
     assert sol.order == 4 and sol.stats["iterations"] == ref.nit > 0
-    step = symrb.MidpointStep(LAM)
+    step = symrb.base_steps.MidpointStep(LAM)
     sol = simulate(Q0, M0, LAM, SPAN, method="composition", h=H, order=2, step=step)
-    _same_raw(sol, composed_rigid_body_flow(Q0, M0, LAM, H, STEPS, 2, step=symrb.MidpointStep(LAM)))
+    _same_raw(
+        sol,
+        composed_rigid_body_flow(Q0, M0, LAM, H, STEPS, 2, step=symrb.base_steps.MidpointStep(LAM)),
+    )
 
 
 @pytest.mark.parametrize(

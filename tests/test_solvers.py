@@ -12,11 +12,11 @@ from symrb import (
     NotConvergedError,
     OutOfDomainError,
     fold_scale,
-    random_lam,
     random_SO,
     random_so,
     solve_moser_veselov,
 )
+from symrb.algebra import random_lam
 
 EPS = np.finfo(float).eps
 

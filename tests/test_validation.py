@@ -25,14 +25,16 @@ Q = symrb.random_SO(3, seed=0)
         (lambda c: symrb.J(M, c(LAM)), "lam"),
         (lambda c: symrb.hat(c(np.array([1.0, 2.0, 3.0]))), "v"),
         (lambda c: symrb.solve_moser_veselov(c(M), LAM), "M"),
-        (lambda c: symrb.symmetric_momentum(c(Q), Q), "Q"),
-        (lambda c: symrb.P_from_M(Q, c(M)), "M"),
+        (lambda c: symrb.symmetric.symmetric_momentum(c(Q), Q), "Q"),
+        (lambda c: symrb.symmetric.P_from_M(Q, c(M)), "M"),
         (lambda c: symrb.mv_algorithm2(Q, c(M), LAM, 2), "M"),
         (lambda c: symrb.symmetric_flow(c(Q), Q, LAM, 0.1, 2), "Q0"),
         (lambda c: symrb.kinetic_energy(c(M), LAM), "M"),
-        (lambda c: symrb.double_bracket_rhs(c(M), M), "x"),
+        (lambda c: symrb.orbits.double_bracket_rhs(c(M), M), "x"),
         (
-            lambda c: symrb.resnet_forward(c(np.ones(2)), np.zeros((1, 2, 2)), np.zeros((1, 2))),
+            lambda c: symrb.learning.resnet_forward(
+                c(np.ones(2)), np.zeros((1, 2, 2)), np.zeros((1, 2))
+            ),
             "x0",
         ),
         (lambda c: symrb.integrate(symrb.RigidBody, (0, 1), (Q, c(M)), lam=LAM), "y0['M']"),

@@ -46,12 +46,12 @@ SNIPPET = textwrap.dedent(
     # run generated kernels through their wrappers, on a batch
     Ms = symrb.random_so(3, (4,), scale=0.1, seed=1)
     Qs = symrb.random_SO(3, (4,), seed=2)
-    Qdot, Mdot = symrb.rigid_body_rhs(Qs, Ms, lam)
+    Qdot, Mdot = symrb.rigid_body.rigid_body_rhs(Qs, Ms, lam)
     assert Mdot.shape == (4, 3, 3) and np.allclose(Mdot, -np.swapaxes(Mdot, -1, -2))
     assert symrb.manakov_integrals(Ms, lam).shape == (4, 6)
     U = symrb.solve_moser_veselov(Ms, lam)
-    assert np.allclose(symrb.J_D(U, lam), Ms)
-    P = symrb.P_from_M(Qs, Ms)
+    assert np.allclose(symrb.algebra.J_D(U, lam), Ms)
+    P = symrb.symmetric.P_from_M(Qs, Ms)
     assert np.allclose(np.swapaxes(Qs, -1, -2) @ P - np.swapaxes(P, -1, -2) @ Qs, Ms)
 
     public = [

@@ -1,8 +1,8 @@
 r"""M4: the orders of symrb's composed and textbook rigid body integrators (not the paper's).
 
 The Moser-Veselov map is symmetric (time-reversible), so its symmetric compositions raise the
-order.  Evidence: the observed orders of ``symrb.composed_rigid_body_flow`` (4, 6, 8),
-``symrb.rkmk4_rigid_body_flow`` (4) and ``symrb.midpoint_rigid_body_flow`` (2) against the Jacobi
+order.  Evidence: the observed orders of ``symrb.compose.composed_rigid_body_flow`` (4, 6, 8),
+``symrb.compose.rkmk4_rigid_body_flow`` (4) and ``symrb.compose.midpoint_rigid_body_flow`` (2) against the Jacobi
 elliptic solution of Euler's equations (:func:`derivations.reference.euler_elliptic`).
 """
 
@@ -25,17 +25,17 @@ M4 = claim(
     "equations is the nominal one.",
     expected="holds",
     section="symrb",
-    where="symrb.composed_rigid_body_flow, symrb.rkmk4_rigid_body_flow and "
-    "symrb.midpoint_rigid_body_flow",
+    where="symrb.compose.composed_rigid_body_flow, symrb.compose.rkmk4_rigid_body_flow and "
+    "symrb.compose.midpoint_rigid_body_flow",
 )
 
 
 @M4.check(Level.FLOAT64, tol=0.2)
 def m4_compositions_order_against_elliptic() -> float:
     """The MV-Algorithm 2 map is symmetric (time-reversible), so its symmetric compositions
-    raise the order: symrb.composed_rigid_body_flow (orders 4, 6, 8, the engine's MV step),
-    and the textbook alternatives symrb.rkmk4_rigid_body_flow (4) and
-    symrb.midpoint_rigid_body_flow (2), n = 3, against the Jacobi elliptic solution of Euler's
+    raise the order: symrb.compose.composed_rigid_body_flow (orders 4, 6, 8, the engine's MV step),
+    and the textbook alternatives symrb.compose.rkmk4_rigid_body_flow (4) and
+    symrb.compose.midpoint_rigid_body_flow (2), n = 3, against the Jacobi elliptic solution of Euler's
     equations (reference.euler_elliptic) at T = 2: the error in M at steps h and h/2 gives the
     observed order log2(e(h)/e(h/2)); largest |observed - nominal| over the five methods."""
     import symrb
@@ -51,11 +51,11 @@ def m4_compositions_order_against_elliptic() -> float:
         return float(np.abs(ref.vee(sol.y.M[-1]) - m[-1]).max())
 
     cases = [  # (flow, options, nominal order, step h: errors well above rounding)
-        (symrb.composed_rigid_body_flow, {"order": 4}, 4, 0.2),
-        (symrb.composed_rigid_body_flow, {"order": 6}, 6, 0.2),
-        (symrb.composed_rigid_body_flow, {"order": 8}, 8, 0.25),
-        (symrb.rkmk4_rigid_body_flow, {}, 4, 0.1),
-        (symrb.midpoint_rigid_body_flow, {}, 2, 0.05),
+        (symrb.compose.composed_rigid_body_flow, {"order": 4}, 4, 0.2),
+        (symrb.compose.composed_rigid_body_flow, {"order": 6}, 6, 0.2),
+        (symrb.compose.composed_rigid_body_flow, {"order": 8}, 8, 0.25),
+        (symrb.compose.rkmk4_rigid_body_flow, {}, 4, 0.1),
+        (symrb.compose.midpoint_rigid_body_flow, {}, 2, 0.05),
     ]
     gaps = []
     for flow, kw, p, h in cases:

@@ -1,4 +1,4 @@
-"""M6: symrb's solver of M = Q^T P - P^T Q for a rotation P (``symrb.P_from_M``).
+"""M6: symrb's solver of M = Q^T P - P^T Q for a rotation P (``symrb.symmetric.P_from_M``).
 
 Not a statement of the paper: S10 shows that P = Q exp(sinh^-1(M/2)) solves the equation for
 ||M||_op < 2, and that on skew matrices exp(sinh^-1 X) = X + (I + X^2)^(1/2).  symrb computes this
@@ -29,19 +29,19 @@ M6 = claim(
     "M6",
     label="",
     title="$P$ from $M$ on the real Schur form",
-    statement="`symrb.P_from_M(Q, M)` returns the rotation $P$ of S10 for every skew $M$ with "
+    statement="`symrb.symmetric.P_from_M(Q, M)` returns the rotation $P$ of S10 for every skew $M$ with "
     "$\\|M\\|_{\\mathrm{op}}$ below 2, to rounding away from the boundary and within the "
     "conditioning of $\\sinh^{-1}$ near it.",
     expected="holds",
     section="symrb",
-    where="`symrb.P_from_M` (`symrb/continuous.py`), used by the scenes and experiments to start "
+    where="`symrb.symmetric.P_from_M` (`symrb/continuous.py`), used by the scenes and experiments to start "
     "the symmetric rigid body from a body momentum",
 )
 
 
 @M6.check(Level.FLOAT64, tol=1e-11)
 def m6_against_displayed_formulas() -> float:
-    """symrb.P_from_M (real Schur form) against S10's displayed corrected formula (Hermitian
+    """symrb.symmetric.P_from_M (real Schur form) against S10's displayed corrected formula (Hermitian
     eigen-decomposition and expm) and its displayed closed form (symmetric eigen-decomposition),
     n = 3..6, ||M||_op from 0.1 to 0.995 times S10's displayed domain bound: max difference."""
     import symrb
@@ -54,7 +54,7 @@ def m6_against_displayed_formulas() -> float:
             Mk = ref.random_skew(k, rng)
             Mk *= r / np.linalg.norm(Mk, 2)
             Qk = ref.random_rotation(k, rng)
-            got = symrb.P_from_M(Qk, Mk)
+            got = symrb.symmetric.P_from_M(Qk, Mk)
             for formula in (S10.formulas["corrected"], CLOSED):
                 errs.append(np.abs(got - evaluate(formula.rhs, {"Q": Qk, "M": Mk}, ops)).max())
     return float(np.max(errs))
@@ -62,7 +62,7 @@ def m6_against_displayed_formulas() -> float:
 
 @M6.check(Level.MPMATH, tol=10.0)
 def m6_conditioning_near_boundary() -> float:
-    """symrb.P_from_M at ||M||_op = 2(1 - delta), delta = 1e-4, 1e-8, 1e-12 (n = 4), against the
+    """symrb.symmetric.P_from_M at ||M||_op = 2(1 - delta), delta = 1e-4, 1e-8, 1e-12 (n = 4), against the
     60-digit P of S10's displayed closed form: the error in units of eps/sqrt(delta), the
     conditioning of asinh at the boundary."""
     import symrb
@@ -71,6 +71,6 @@ def m6_conditioning_near_boundary() -> float:
     ratio = []
     with mp.workdps(DPS):
         for delta, Mf, Pm in points:
-            err = float(mp.mnorm(mp.matrix(symrb.P_from_M(Qf, Mf).tolist()) - Pm, 1))
+            err = float(mp.mnorm(mp.matrix(symrb.symmetric.P_from_M(Qf, Mf).tolist()) - Pm, 1))
             ratio.append(err * np.sqrt(delta) / np.finfo(float).eps)
     return float(np.max(ratio))

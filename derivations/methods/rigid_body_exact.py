@@ -19,13 +19,13 @@ M5 = claim(
     "M5",
     label="",
     title="The exact solution of the rigid body for $n = 3$",
-    statement="`symrb.rigid_body_exact` returns the attitude and body momentum of the rigid body "
+    statement="`symrb.exact.rigid_body_exact` returns the attitude and body momentum of the rigid body "
     "of S2 for $n = 3$ at the requested times, for every body with $J$ positive definite (a "
     "steady rotation, a symmetric body, a momentum circling the largest or the smallest axis), "
     "to the accuracy of an independent solution.",
     expected="holds",
     section="symrb",
-    where="`symrb.rigid_body_exact` (`symrb/exact.py`), the reference of `symrb bench` and of "
+    where="`symrb.exact.rigid_body_exact` (`symrb/exact.py`), the reference of `symrb bench` and of "
     "the accuracy tests of `symrb.integrate` for the rigid body",
 )
 

@@ -123,7 +123,7 @@ class SweepInfo:
     >>> import symrb
     >>> x0, y = np.array([[0.5, -0.5], [1.0, 0.0]]), np.array([[1.0, 0.0], [0.0, 1.0]])
     >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))
-    >>> Phi, dK, dbeta, info = symrb.loss_gradients(x0, K, beta, y, return_info=True)
+    >>> Phi, dK, dbeta, info = symrb.learning.loss_gradients(x0, K, beta, y, return_info=True)
     >>> print(round(info.condition, 3), info.layers)
     1.728 3
     """

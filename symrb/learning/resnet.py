@@ -141,7 +141,7 @@ def resnet_forward(
     >>> import symrb
     >>> x0 = np.array([[0.5, -0.5], [1.0, 0.0]])  # two samples in the plane
     >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))  # three layers
-    >>> states = symrb.resnet_forward(x0, K, beta)
+    >>> states = symrb.learning.resnet_forward(x0, K, beta)
     >>> states.shape
     (4, 2, 2)
     >>> print(states[-1].round(4))
@@ -176,7 +176,7 @@ def squared_error(xN: ArrayLike, targets: ArrayLike) -> float:
     Examples
     --------
     >>> import symrb
-    >>> print(symrb.squared_error([[1.0, 2.0], [0.0, 0.0]], [[1.0, 0.0], [0.0, 1.0]]))
+    >>> print(symrb.learning.squared_error([[1.0, 2.0], [0.0, 0.0]], [[1.0, 0.0], [0.0, 1.0]]))
     2.5
     """
     a = v.as_float_array(xN, "xN")
@@ -313,8 +313,8 @@ def costate_sweep(
     >>> import symrb
     >>> x0, y = np.array([[0.5, -0.5], [1.0, 0.0]]), np.array([[1.0, 0.0], [0.0, 1.0]])
     >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))
-    >>> states = symrb.resnet_forward(x0, K, beta)
-    >>> p = symrb.costate_sweep(states, K, beta, y)
+    >>> states = symrb.learning.resnet_forward(x0, K, beta)
+    >>> p = symrb.learning.costate_sweep(states, K, beta, y)
     >>> bool(np.allclose(p[-1], y - states[-1]))  # p_N = -(x_N - y)
     True
     """
@@ -398,11 +398,11 @@ def loss_gradients(
     >>> import symrb
     >>> x0, y = np.array([[0.5, -0.5], [1.0, 0.0]]), np.array([[1.0, 0.0], [0.0, 1.0]])
     >>> K, beta = np.full((3, 2, 2), 0.1), np.zeros((3, 2))
-    >>> Phi, dK, dbeta = symrb.loss_gradients(x0, K, beta, y)
+    >>> Phi, dK, dbeta = symrb.learning.loss_gradients(x0, K, beta, y)
     >>> E = np.zeros_like(K)
     >>> E[0, 0, 1] = 1e-6
-    >>> fd = (symrb.loss_gradients(x0, K + E, beta, y)[0]
-    ...       - symrb.loss_gradients(x0, K - E, beta, y)[0]) / 2e-6
+    >>> fd = (symrb.learning.loss_gradients(x0, K + E, beta, y)[0]
+    ...       - symrb.learning.loss_gradients(x0, K - E, beta, y)[0]) / 2e-6
     >>> print(round(float(dK[0, 0, 1]), 6), round(fd, 6))
     0.36 0.36
     """
@@ -432,7 +432,7 @@ class TrainResult:
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> x0, y, _ = symrb.toy_classification(50, seed=0)
+    >>> x0, y, _ = symrb.learning.toy_classification(50, seed=0)
     >>> result = symrb.train(x0, y, np.zeros((2, 2, 2)), np.zeros((2, 2)), steps=10, lr=0.01)
     >>> result.K.shape, result.losses.shape
     ((2, 2, 2), (11,))
@@ -487,7 +487,7 @@ def train(
     --------
     >>> import numpy as np
     >>> import symrb
-    >>> x0, y, _ = symrb.toy_classification(200, seed=0)
+    >>> x0, y, _ = symrb.learning.toy_classification(200, seed=0)
     >>> K, beta = np.zeros((4, 2, 2)), np.zeros((4, 2))
     >>> result = symrb.train(x0, y, K, beta, steps=50, lr=0.005)
     >>> print(result.losses[[0, -1]].round(2))
@@ -617,7 +617,7 @@ def train_msa(
     >>> import numpy as np
     >>> import symrb
     >>> from symrb.learning import train_msa
-    >>> x0, y, _ = symrb.toy_classification(200, seed=0)
+    >>> x0, y, _ = symrb.learning.toy_classification(200, seed=0)
     >>> K, beta = np.zeros((4, 2, 2)), np.zeros((4, 2))
     >>> result = train_msa(x0, y, K, beta, steps=20, inner_lr=0.001)
     >>> bool(result.losses[-1] < result.losses[0])

@@ -46,7 +46,7 @@ def toy_classification(num: int = 200, seed: int | np.random.Generator | None = 
     Examples
     --------
     >>> import symrb
-    >>> x0, targets, labels = symrb.toy_classification(200, seed=0)
+    >>> x0, targets, labels = symrb.learning.toy_classification(200, seed=0)
     >>> x0.shape, targets.shape, int((labels > 0).sum())
     ((200, 2), (200, 2), 99)
     """

@@ -60,7 +60,7 @@ def one_sample_second_term(x0: ArrayLike, N: ArrayLike, t: ArrayLike) -> Array:
     >>> import numpy as np
     >>> import symrb
     >>> x0, N = symrb.hat([0.5, 0.0, 0.0]), symrb.hat([0.0, 0.0, 1.0])  # at the angle pi/2
-    >>> print(symrb.one_sample_second_term(x0, N, [0.0, 2.0, 8.0]).round(6))
+    >>> print(symrb.orbits.one_sample_second_term(x0, N, [0.0, 2.0, 8.0]).round(6))
     [0.5      0.324027 0.018309]
     >>> x = symrb.double_bracket_flow(x0, N, [8.0])[0]
     >>> c = symrb.commutator(N, symrb.commutator(N, x))
@@ -113,7 +113,7 @@ def two_sample_bound(x0: ArrayLike, N: ArrayLike) -> float:
     --------
     >>> import symrb
     >>> x0 = [symrb.hat([1.0, 0.0, 0.0]), symrb.hat([0.0, 1.0, 0.0])]  # beta = pi/2
-    >>> round(symrb.two_sample_bound(x0, symrb.hat([0.0, 0.0, 2.0])), 6)  # 4 sin(pi/4)
+    >>> round(symrb.orbits.two_sample_bound(x0, symrb.hat([0.0, 0.0, 2.0])), 6)  # 4 sin(pi/4)
     2.828427
     """
     xx, nn = pair_xN(x0, N, "x0")

@@ -42,7 +42,7 @@ def double_bracket_rhs(x: ArrayLike, N: ArrayLike) -> Array:
 
     >>> import symrb
     >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
-    >>> xdot = symrb.double_bracket_rhs(x, N)
+    >>> xdot = symrb.orbits.double_bracket_rhs(x, N)
     >>> print(symrb.pairing(xdot, N), -symrb.pairing(*2 * [symrb.commutator(x, N)]))
     -1.25 -1.25
     """

@@ -38,8 +38,8 @@ def orbit_extremal_rhs(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> tuple[Array,
     >>> import numpy as np
     >>> import symrb
     >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
-    >>> xdot, pdot = symrb.orbit_extremal_rhs(x, -N, N)
-    >>> bool(np.allclose(xdot, symrb.double_bracket_rhs(x, N)))
+    >>> xdot, pdot = symrb.orbits.orbit_extremal_rhs(x, -N, N)
+    >>> bool(np.allclose(xdot, symrb.orbits.double_bracket_rhs(x, N)))
     True
     """
     xx, nn = pair_xN(x, N)
@@ -68,7 +68,7 @@ def orbit_hamiltonian(x: ArrayLike, p: ArrayLike, N: ArrayLike) -> Array:
     >>> import numpy as np
     >>> import symrb
     >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
-    >>> print(round(float(symrb.orbit_hamiltonian(x, -N, N)), 6) + 0.0)  # 0 on this extremal
+    >>> print(round(float(symrb.orbits.orbit_hamiltonian(x, -N, N)), 6) + 0.0)  # 0 on this extremal
     0.0
     """
     xx, nn = pair_xN(x, N)
@@ -93,7 +93,7 @@ def brockett_potential(x: ArrayLike, N: ArrayLike) -> Array:
     --------
     >>> import symrb
     >>> x, N = symrb.hat([1.0, 0.5, 0.2]), symrb.hat([0.0, 0.0, 1.0])
-    >>> print(symrb.brockett_potential(x, N))  # -|x x n|^2 / 2 for n = 3
+    >>> print(symrb.orbits.brockett_potential(x, N))  # -|x x n|^2 / 2 for n = 3
     -0.625
     """
     xx, nn = pair_xN(x, N)

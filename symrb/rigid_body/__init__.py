@@ -4,6 +4,8 @@ method (:func:`simulate`, the methods in :data:`METHODS`, one module per method 
 from __future__ import annotations
 
 from ._request import RigidBodySolution
+from .entry import METHODS as METHODS
+from .entry import simulate
 from .invariants import (
     casimir_traces,
     euler_rhs_so3,
@@ -11,8 +13,6 @@ from .invariants import (
     manakov_integrals,
     rigid_body_rhs,
 )
-from .simulate import METHODS as METHODS
-from .simulate import simulate
 
 __all__ = [
     "rigid_body_rhs",

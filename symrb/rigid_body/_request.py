@@ -40,8 +40,8 @@ class RigidBodySolution:
         Counts of the run: ``nfev`` (``solve_ivp`` methods), ``steps`` (fixed-step methods),
         ``newton_iterations`` (``"mv"``), ``iterations`` (``"composition"``, ``"midpoint"``).
     raw : object
-        The implementation's own result (:class:`symrb.FlowSolution`,
-        :class:`symrb.DiscreteFlowSolution` or :class:`symrb.exact.ExactSolution`), with every
+        The implementation's own result (:class:`symrb.continuous.FlowSolution`,
+        :class:`symrb.paper.DiscreteFlowSolution` or :class:`symrb.exact.ExactSolution`), with every
         detail it reports.
 
     Examples

@@ -30,7 +30,7 @@ METHOD = Method(
     fixed_step=True,
     summary=(
         "a symmetric composition of the MV step (or of option step: 'midpoint' or an object); "
-        "order 2, 4, 6, 8; option kind: the coefficients (symrb.composition_coefficients)"
+        "order 2, 4, 6, 8; option kind: the coefficients (symrb.composition.composition_coefficients)"
     ),
     orders=(2, 4, 6, 8),
     default_order=4,

@@ -52,8 +52,8 @@ def rigid_body_rhs(Q: ArrayLike, M: ArrayLike, lam: ArrayLike) -> tuple[Array, A
     >>> import numpy as np
     >>> import symrb
     >>> lam, m = np.array([0.7, 1.1, 1.6]), np.array([0.5, 1.0, 1.5])
-    >>> Qdot, Mdot = symrb.rigid_body_rhs(np.eye(3), symrb.hat(m), lam)
-    >>> print(symrb.vee(Mdot).round(4), symrb.euler_rhs_so3(m, lam).round(4))
+    >>> Qdot, Mdot = symrb.rigid_body.rigid_body_rhs(np.eye(3), symrb.hat(m), lam)
+    >>> print(symrb.vee(Mdot).round(4), symrb.rigid_body.euler_rhs_so3(m, lam).round(4))
     [ 0.1812 -0.1389  0.0322] [ 0.1812 -0.1389  0.0322]
     """
     L = v.inertia(lam)
@@ -85,7 +85,7 @@ def kinetic_energy(M: ArrayLike, lam: ArrayLike) -> Array:
     >>> import numpy as np
     >>> import symrb
     >>> lam, m = np.array([0.7, 1.1, 1.6]), np.array([0.5, 1.0, 1.5])
-    >>> I = symrb.inertia_from_lam(lam)
+    >>> I = symrb.algebra.inertia_from_lam(lam)
     >>> print(round(float(symrb.kinetic_energy(symrb.hat(m), lam)), 6))
     0.888688
     >>> print(round(float(np.sum(m**2 / (2 * I))), 6))
@@ -174,7 +174,7 @@ def euler_rhs_so3(m: ArrayLike, lam: ArrayLike) -> Array:
     Examples
     --------
     >>> import symrb
-    >>> print(symrb.euler_rhs_so3([0.5, 1.0, 1.5], [0.7, 1.1, 1.6]).round(4))
+    >>> print(symrb.rigid_body.euler_rhs_so3([0.5, 1.0, 1.5], [0.7, 1.1, 1.6]).round(4))
     [ 0.1812 -0.1389  0.0322]
     """
     L = v.inertia(lam)

@@ -110,7 +110,7 @@ def time_step_scaling(
         The number of steps :math:`h_0, h_0/2, \dots`, >= 2.
     seed : int, optional
         The seed of :math:`\Omega` and :math:`\Lambda` (:func:`symrb.random_so`,
-        :func:`symrb.random_lam`).
+        :func:`symrb.algebra.random_lam`).
 
     Returns
     -------
@@ -129,10 +129,10 @@ def time_step_scaling(
     halvings = v.count(halvings, "halvings", 2)
     rng = np.random.default_rng(seed)
     Omega = symrb.random_so(n, seed=rng)
-    lam = symrb.random_lam(n, seed=rng)
+    lam = symrb.algebra.random_lam(n, seed=rng)
     M = symrb.J(Omega, lam)
     hs = np.asarray(h0 / 2.0 ** np.arange(halvings), dtype=float)
-    err = np.array([np.linalg.norm(symrb.J_D(expm(h * Omega), lam) - h * M) for h in hs])
+    err = np.array([np.linalg.norm(symrb.algebra.J_D(expm(h * Omega), lam) - h * M) for h in hs])
     O2L = Omega @ Omega * lam  # Omega^2 Lambda: column j scaled by lam_j
     leading = float(np.linalg.norm(O2L - O2L.T) / 2)  # (Omega^2 Lambda)^T = Lambda Omega^2
     return TimeStepScaling(
@@ -165,7 +165,7 @@ class LayerJacobian:
 
 
 def layer_jacobian(scales: ArrayLike | None = None, n: int = 3, seed: int = 0) -> LayerJacobian:
-    r"""The Jacobian in :math:`x` of one layer of :func:`symrb.resnet_forward` as the weights
+    r"""The Jacobian in :math:`x` of one layer of :func:`symrb.learning.resnet_forward` as the weights
     shrink: a residual layer tends to the identity, a plain layer to zero.
 
     The Jacobian is taken by central differences (step :math:`10^{-6}`) at a random point, with
@@ -207,8 +207,8 @@ def layer_jacobian(scales: ArrayLike | None = None, n: int = 3, seed: int = 0) -
     def jacobian(c: float, residual: bool) -> Array:
         cols = []
         for e in np.eye(n):
-            plus = symrb.resnet_forward(x1 + step * e, c * K1, b1, residual=residual)[-1]
-            minus = symrb.resnet_forward(x1 - step * e, c * K1, b1, residual=residual)[-1]
+            plus = symrb.learning.resnet_forward(x1 + step * e, c * K1, b1, residual=residual)[-1]
+            minus = symrb.learning.resnet_forward(x1 - step * e, c * K1, b1, residual=residual)[-1]
             cols.append((plus - minus) / (2 * step))
         return np.array(cols).T
 
@@ -349,7 +349,7 @@ def solver_accuracy(
     r"""Solve :math:`J_D(U) = M` with :func:`symrb.solve_moser_veselov` on random problems at given
     fractions of the way to the fold (:func:`symrb.fold_scale`), and measure the solution.
 
-    For each dimension the diagonal of :math:`\Lambda` is drawn by :func:`symrb.random_lam` and a
+    For each dimension the diagonal of :math:`\Lambda` is drawn by :func:`symrb.algebra.random_lam` and a
     direction :math:`D` by :func:`symrb.random_so`; :math:`M = f\,t^*D` for each fraction
     :math:`f`.
 
@@ -384,7 +384,7 @@ def solver_accuracy(
     rng = np.random.default_rng(seed)
     rows: list[tuple[int, float, float, float, float, int, float]] = []
     for nn in dims:
-        lam = symrb.random_lam(nn, seed=rng)
+        lam = symrb.algebra.random_lam(nn, seed=rng)
         D = symrb.random_so(nn, seed=rng)
         t_star = float(symrb.fold_scale(D, lam))
         for f in fr:
@@ -460,7 +460,7 @@ def fold_approach(
         The distances :math:`d` to the fold, in (0, 1); default 40 from :math:`10^{-10}` to
         :math:`0.5`, evenly spaced in the logarithm.
     seed_lam, seed_dir : int, optional
-        The seeds of :math:`\Lambda` (:func:`symrb.random_lam`) and of the direction :math:`D`
+        The seeds of :math:`\Lambda` (:func:`symrb.algebra.random_lam`) and of the direction :math:`D`
         (:func:`symrb.random_so`).
 
     Returns
@@ -483,7 +483,7 @@ def fold_approach(
         dist = np.asarray(v.as_float_array(distances, "distances"), dtype=float).reshape(-1)
     if dist.size < 2 or not np.all((dist > 0) & (dist < 1)):
         raise InputError(f"distances must be at least two numbers in (0, 1), got {dist!r}")
-    lam = symrb.random_lam(n, seed=seed_lam)
+    lam = symrb.algebra.random_lam(n, seed=seed_lam)
     D = symrb.random_so(n, seed=seed_dir)
     t_star = float(symrb.fold_scale(D, lam))
     pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
@@ -599,7 +599,7 @@ def solver_cost(
     warm = np.empty((len(dims), repeats))
     with _one_blas_thread() as pinned:
         for row, nn in enumerate(dims):
-            lam = symrb.random_lam(nn, seed=rng)
+            lam = symrb.algebra.random_lam(nn, seed=rng)
             D = symrb.random_so(nn, seed=rng)
             M = 0.5 * float(symrb.fold_scale(D, lam)) * D
             U0 = np.asarray(symrb.solve_moser_veselov(0.99 * M, lam))

@@ -121,7 +121,7 @@ def mclachlan_scovel_map(
     tol = _positive(tol, "tol")
     lam = np.linspace(0.6, 1.9, n)
     Q0 = symrb.random_SO(n, seed=seed)
-    P0 = symrb.P_from_M(Q0, _with_norm(n, 1.4, seed + 1))
+    P0 = symrb.symmetric.P_from_M(Q0, _with_norm(n, 1.4, seed + 1))
     B0 = P0 - Q0 @ P0.T @ Q0
     ts = np.linspace(0.0, T, _count(samples, "samples", 2))
     kw: dict[str, Any] = dict(lam=lam, rtol=tol, atol=tol, t_eval=ts)
@@ -162,7 +162,7 @@ def shared_control(
     normal entries (standard deviation 0.3), are integrated by
     :class:`symrb.MultiSampleSymmetricRigidBody`; the rigid body starts at :math:`Q = I`,
     :math:`M = \sum_a M^a(0)` with :math:`M^a = (Q^a)^TP^a - (P^a)^TQ^a`
-    (:func:`symrb.symmetric_momentum`).
+    (:func:`symrb.symmetric.symmetric_momentum`).
 
     Parameters
     ----------
@@ -198,7 +198,7 @@ def shared_control(
     ts = np.linspace(0.0, T, 101)
     kw: dict[str, Any] = dict(lam=lam, rtol=tol, atol=tol, t_eval=ts)
     learn = symrb.integrate(symrb.MultiSampleSymmetricRigidBody, (0.0, T), {"Q": Qa, "P": Pa}, **kw)
-    total = symrb.symmetric_momentum(learn.y.Q, learn.y.P).sum(axis=-3)
+    total = symrb.symmetric.symmetric_momentum(learn.y.Q, learn.y.P).sum(axis=-3)
     rb = symrb.integrate(symrb.RigidBody, (0.0, T), {"Q": np.eye(n), "M": total[0]}, **kw)
     if not (learn.success and rb.success):
         raise RuntimeError(f"integration failed: {learn.message}, {rb.message}")
@@ -257,7 +257,7 @@ def momentum_norms(
     for k in ns:
         Q = symrb.random_SO(k, (count,), seed=seed + k)
         P = symrb.random_SO(k, (count,), seed=seed + k + 100)
-        rows.append(np.linalg.norm(symrb.symmetric_momentum(Q, P), 2, axis=(-2, -1)))
+        rows.append(np.linalg.norm(symrb.symmetric.symmetric_momentum(Q, P), 2, axis=(-2, -1)))
     return MomentumNorms(sizes=ns, norms=np.array(rows))
 
 
@@ -270,12 +270,12 @@ class RotationAngles:
     theta : ndarray, shape (K,)
         The rotation speeds: :math:`M` has the eigenvalues :math:`\pm i\theta`.
     angle : ndarray, shape (K,)
-        The rotation angle of :math:`Q^TP` for :math:`P` from :func:`symrb.P_from_M` (NaN where
+        The rotation angle of :math:`Q^TP` for :math:`P` from :func:`symrb.symmetric.P_from_M` (NaN where
         it refuses, :math:`\theta \ge 2`).
     exact : ndarray, shape (K,)
         :math:`\arcsin(\theta/2)` (NaN for :math:`\theta > 2`, where it is not real).
     refused : ndarray of bool, shape (K,)
-        Where :func:`symrb.P_from_M` raised :class:`symrb.OutOfDomainError`.
+        Where :func:`symrb.symmetric.P_from_M` raised :class:`symrb.OutOfDomainError`.
     """
 
     theta: Array
@@ -289,7 +289,7 @@ def rotation_angles(theta: ArrayLike) -> RotationAngles:
     :math:`\pm i\theta` (S10).
 
     For :math:`M = \theta\begin{pmatrix}0&-1\\1&0\end{pmatrix}` (and :math:`Q = I`), the
-    rotation :math:`P` from :func:`symrb.P_from_M` has the angle
+    rotation :math:`P` from :func:`symrb.symmetric.P_from_M` has the angle
     :math:`\operatorname{atan2}(P_{10}, P_{00})`, which should be :math:`\arcsin(\theta/2)`.
 
     Parameters
@@ -300,7 +300,7 @@ def rotation_angles(theta: ArrayLike) -> RotationAngles:
     Returns
     -------
     RotationAngles
-        The angles of :func:`symrb.P_from_M` and :math:`\arcsin(\theta/2)`.
+        The angles of :func:`symrb.symmetric.P_from_M` and :math:`\arcsin(\theta/2)`.
 
     Examples
     --------
@@ -318,7 +318,7 @@ def rotation_angles(theta: ArrayLike) -> RotationAngles:
     for i, value in enumerate(th):
         M = value * np.array([[0.0, -1.0], [1.0, 0.0]])
         try:
-            P = symrb.P_from_M(np.eye(2), M)
+            P = symrb.symmetric.P_from_M(np.eye(2), M)
         except OutOfDomainError:
             refused[i] = True
             continue
@@ -370,10 +370,10 @@ def _exp_asinh_half_reference(M: Array, dps: int) -> Array:
 def boundary_accuracy(
     deltas: ArrayLike | None = None, n: int = 5, seed: int = 5, dps: int = 60
 ) -> BoundaryAccuracy:
-    r"""How accurate :func:`symrb.P_from_M` is as :math:`\|M\|_{op}` approaches 2 (S10).
+    r"""How accurate :func:`symrb.symmetric.P_from_M` is as :math:`\|M\|_{op}` approaches 2 (S10).
 
     One random skew :math:`M` (size n) is scaled to :math:`\|M\|_{op} = 2(1 - \delta)` for each
-    :math:`\delta`; :math:`P` from :func:`symrb.P_from_M` with :math:`Q = I` is compared with the
+    :math:`\delta`; :math:`P` from :func:`symrb.symmetric.P_from_M` with :math:`Q = I` is compared with the
     closed form :math:`M/2 + (I + M^2/4)^{1/2}` evaluated in ``dps`` digits (mpmath, needed).
 
     Parameters
@@ -411,7 +411,7 @@ def boundary_accuracy(
     res, orth, fwd = [], [], []
     for d in ds:
         M = base * (2 * (1 - d))
-        P = symrb.P_from_M(eye, M)
+        P = symrb.symmetric.P_from_M(eye, M)
         res.append(np.abs(P - P.T - M).max())
         orth.append(np.abs(P.T @ P - eye).max())
         fwd.append(np.abs(P - _exp_asinh_half_reference(M, dps)).max())

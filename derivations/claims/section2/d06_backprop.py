@@ -394,7 +394,7 @@ def d6_residual_layer_is_residual() -> sp.Expr:
 
 @D6.check(Level.FLOAT64, tol=1e-12)
 def d6_float64() -> float:
-    """symrb.resnet_forward, symrb.costate_sweep and symrb.loss_gradients (both activations, both
+    """symrb.learning.resnet_forward, symrb.learning.costate_sweep and symrb.learning.loss_gradients (both activations, both
     layers; n = 3, N = 4, M = 5, 2 random networks) against an independent NumPy forward pass and
     complex-step derivatives of its loss: states, -p (D5's sign) against dPhi/dx^a_k, and the
     weight gradients; largest error relative to the largest reference entry."""
@@ -403,9 +403,9 @@ def d6_float64() -> float:
     errors = []
     for seed, act, res in itertools.product(range(2), ACTIVATIONS, (True, False)):
         x0, Ks, bs, ys = random_network(seed)
-        states = symrb.resnet_forward(x0, Ks, bs, activation=act, residual=res)
-        p = symrb.costate_sweep(states, Ks, bs, ys, activation=act, residual=res)
-        _loss, gK, gb = symrb.loss_gradients(x0, Ks, bs, ys, activation=act, residual=res)
+        states = symrb.learning.resnet_forward(x0, Ks, bs, activation=act, residual=res)
+        p = symrb.learning.costate_sweep(states, Ks, bs, ys, activation=act, residual=res)
+        _loss, gK, gb = symrb.learning.loss_gradients(x0, Ks, bs, ys, activation=act, residual=res)
         ref_states = _reference_forward(x0, Ks, bs, act, res)
         cK, cb = complex_step_gradients(x0, Ks, bs, ys, act, res)
         cx = complex_step_state_gradients(ref_states, Ks, bs, ys, act, res)

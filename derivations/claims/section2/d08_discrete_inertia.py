@@ -126,7 +126,7 @@ def d8_transport() -> sp.Expr:
 
 @D8.check(Level.FLOAT64, tol=1e-15)
 def d8_symrb_JD_pointwise() -> float:
-    """symrb.J_D(U) and symrb.jd_residual(U, 0) (the emitted kernel) against reference.J_D
+    """symrb.algebra.J_D(U) and symrb.paper.jd_residual(U, 0) (the emitted kernel) against reference.J_D
     (explicit diagonal matrices), n = 2..6, 20 general U and 20 rotations each: max difference
     over max|U| max(lam)."""
     import symrb
@@ -143,8 +143,8 @@ def d8_symrb_JD_pointwise() -> float:
         )
         want = ref.J_D(Us, lam)
         scale = np.abs(Us).max() * lam.max()
-        worst.append(np.abs(symrb.J_D(Us, lam) - want).max() / scale)
-        got = symrb.jd_residual(Us, np.zeros((k, k)), lam)
+        worst.append(np.abs(symrb.algebra.J_D(Us, lam) - want).max() / scale)
+        got = symrb.paper.jd_residual(Us, np.zeros((k, k)), lam)
         worst.append(np.abs(got - want).max() / scale)
     return float(np.max(worst))
 

@@ -145,7 +145,7 @@ def d12_mv2_equals_symmetric_50_digits() -> float:
 @D12.check(Level.FLOAT64, tol=1e-13)
 def d12_symrb_momenta_against_50_digits() -> float:
     """symrb.mv_algorithm2 from (Q_1, M_1) returns M_{k+1} equal to the 50-digit Mdef1 momenta
-    h(Q_k^T P_k - P_k^T Q_k) of the symmetric reference run, and symrb.symmetric_step's U_k at
+    h(Q_k^T P_k - P_k^T Q_k) of the symmetric reference run, and symrb.paper.symmetric_step's U_k at
     the reference states has J_D(U_k) (reference.J_D) equal to them (n = 3, 12 steps): max
     absolute error."""
     import symrb
@@ -153,6 +153,6 @@ def d12_symrb_momenta_against_50_digits() -> float:
     run = _mp_run()
     Qf, Pf, Msf = run["Qf"], run["Pf"], run["Msf"]
     MB = symrb.mv_algorithm2(Qf[1], Msf[0], _LAM3, _STEPS - 1).y.M
-    _Q1, _P1, Us = symrb.symmetric_step(Qf[:-1], Pf[:-1], _LAM3, _H)  # a batch of 12 states
+    _Q1, _P1, Us = symrb.paper.symmetric_step(Qf[:-1], Pf[:-1], _LAM3, _H)  # a batch of 12 states
     errs = [np.abs(MB - Msf[:-1]).max(), np.abs(ref.J_D(Us, _LAM3) - Msf[:-1]).max()]
     return float(np.max(errs))

@@ -38,7 +38,7 @@ def cost_and_forward() -> tuple[Any, ...]:
             xx = y[:-1].reshape(M, k, k)
             uu = u0 + tt * u1 + h * (d0 + tt * d1)
             dx, _ = orbit_rhs_with_control(xx, xx, uu, N_)
-            run = 0.5 * np_norm2(uu) - np.sum(symrb.brockett_potential(xx, N_))
+            run = 0.5 * np_norm2(uu) - np.sum(symrb.orbits.brockett_potential(xx, N_))
             return np.concatenate([dx.ravel(), [run]])
 
         s = solve_ivp(f, (0, 1.0), np.concatenate([x0.ravel(), [0.0]]), **opts)

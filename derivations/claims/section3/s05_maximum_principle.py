@@ -204,7 +204,7 @@ def s5_corrected_hamiltonian() -> sp.Integer:
 
 @S5.check(Level.FLOAT64, tol=1e-9)
 def s5_first_variation() -> float:
-    """Extremals are critical points: along a trajectory of symrb.symmetric_rigid_body_rhs
+    """Extremals are critical points: along a trajectory of symrb.symmetric.symmetric_rigid_body_rhs
     (n = 4, P in gl(n), t in [0, 2], DOP853 rtol 1e-13), the first variation of the cost in a
     control direction dU, int 1/2 <J U, dU> dt with J from the reference, equals <P_T, dQ_T> in
     the displayed pairing, dQ from the tangent-linear equation dQdot = dQ U + Q dU, dQ(0) = 0.
@@ -222,7 +222,7 @@ def s5_first_variation() -> float:
 
     def field(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         Qy, Py = y[:size].reshape(k, k), y[size : 2 * size].reshape(k, k)
-        dQ, dP = symrb.symmetric_rigid_body_rhs(Qy, Py, lam)
+        dQ, dP = symrb.symmetric.symmetric_rigid_body_rhs(Qy, Py, lam)
         return dQ, dP, np.linalg.solve(Qy, dQ)  # U = Q^{-1} Qdot
 
     def f(t: float, y: np.ndarray) -> np.ndarray:

@@ -122,8 +122,8 @@ def s8_two_samples() -> sp.Integer:
 
 @S8.check(Level.FLOAT64, tol=1e-13)
 def s8_symrb_multi_sample() -> float:
-    """symrb.multi_sample_control against sum_a J^-1((Q^a)^T P^a - (P^a)^T Q^a) with J^-1 from the
-    reference linear solve, and symrb.multi_sample_rhs against (Q^a U, P^a U), for m = 1, 2, 5
+    """symrb.symmetric.multi_sample_control against sum_a J^-1((Q^a)^T P^a - (P^a)^T Q^a) with J^-1 from the
+    reference linear solve, and symrb.symmetric.multi_sample_rhs against (Q^a U, P^a U), for m = 1, 2, 5
     samples, n = 3, 4, batches of 3: max difference relative to the size of the reference U."""
     import symrb
 
@@ -137,8 +137,10 @@ def s8_symrb_multi_sample() -> float:
             moments = np.swapaxes(Qs, -1, -2) @ Ps - np.swapaxes(Ps, -1, -2) @ Qs
             want = ref.J_inv(moments, lam).sum(axis=1)
             size = np.abs(want).max()
-            errs.append(np.abs(symrb.multi_sample_control(Qs, Ps, lam) - want).max() / size)
-            dQ, dP = symrb.multi_sample_rhs(Qs, Ps, lam)
+            errs.append(
+                np.abs(symrb.symmetric.multi_sample_control(Qs, Ps, lam) - want).max() / size
+            )
+            dQ, dP = symrb.symmetric.multi_sample_rhs(Qs, Ps, lam)
             errs.append(np.abs(dQ - Qs @ want[:, None]).max() / size)
             errs.append(np.abs(dP - Ps @ want[:, None]).max() / size / np.abs(Ps).max())
     return float(np.max(errs))
@@ -148,7 +150,7 @@ def endpoint_mismatch(coefficient: float) -> float:
     """Relative mismatch of two computations of the derivative of the learning cost
     int_0^1 1/4 <U, JU> dt + sum_a phi(Q^a_1), phi(Q) = 1/2 |Q - R|_F^2 (two samples, n = 3,
     controls linear in t) in a direction dU: forward with the tangent-linear equation, and by the
-    maximum principle as int 1/2 <J(U - symrb.multi_sample_control(Q, P)), dU> dt with P
+    maximum principle as int 1/2 <J(U - symrb.symmetric.multi_sample_control(Q, P)), dU> dt with P
     integrated backward from P^a_1 = coefficient * dphi/dQ^a_1 (entrywise derivative Q - R).
     Zero only for the coefficient -2."""
     from scipy.integrate import solve_ivp
@@ -189,7 +191,7 @@ def endpoint_mismatch(coefficient: float) -> float:
     for t, wt in zip(ts, ws, strict=True):
         Qt = a.sol(t)[:size].reshape(count, k, k)
         Pt = b.sol(t).reshape(count, k, k)
-        gap = U0 + t * U1 - symrb.multi_sample_control(Qt, Pt, lam)
+        gap = U0 + t * U1 - symrb.symmetric.multi_sample_control(Qt, Pt, lam)
         d_adjoint += wt * 0.5 * float(ref.pairing(ref.J(gap, lam), V0 + t * V1))
     return abs(d_forward - d_adjoint) / abs(d_forward)
 
@@ -205,7 +207,7 @@ def _endpoint_mismatch(form: str) -> float:
 def s8_printed_endpoint() -> float:
     """The derivative of the learning cost (two samples, n = 3, phi = 1/2 |Q - R|_F^2, controls
     linear in t) in a direction dU, forward (tangent-linear dQ) against the adjoint form
-    int 1/2 <J(U - symrb.multi_sample_control(Q, P)), dU> dt with P integrated backward from the
+    int 1/2 <J(U - symrb.symmetric.multi_sample_control(Q, P)), dU> dt with P integrated backward from the
     printed endpoint condition (its coefficient read from the displayed formula): relative
     mismatch."""
     return _endpoint_mismatch("printed")

@@ -66,7 +66,7 @@ def s9_no_bound_on_gl() -> sp.Integer:
 
 @S9.check(Level.FLOAT64, tol=1e-12)
 def s9_sampled_bound() -> float:
-    """symrb.symmetric_momentum of 3000 random pairs of reference rotations (n = 2..7): by how
+    """symrb.symmetric.symmetric_momentum of 3000 random pairs of reference rotations (n = 2..7): by how
     much its largest operator norm exceeds the displayed bound (0 when it does not)."""
     import symrb
 
@@ -75,7 +75,9 @@ def s9_sampled_bound() -> float:
     for k in range(2, 8):
         Qs = np.stack([ref.random_rotation(k, rng) for _ in range(500)])
         Ps = np.stack([ref.random_rotation(k, rng) for _ in range(500)])
-        norms.append(np.linalg.norm(symrb.symmetric_momentum(Qs, Ps), 2, axis=(-2, -1)).max())
+        norms.append(
+            np.linalg.norm(symrb.symmetric.symmetric_momentum(Qs, Ps), 2, axis=(-2, -1)).max()
+        )
     return float(np.max([0.0, np.max(norms) - float(BOUND.rhs)]))
 
 
@@ -83,7 +85,7 @@ def s9_sampled_bound() -> float:
 def s9_bound_attained() -> float:
     """The bound is attained: for Q^T P an orthogonal matrix with a rotation by pi/2 in some
     plane (random Q, random rotation on the complement, n = 3..6), the operator norm of
-    symrb.symmetric_momentum(Q, P) minus the displayed bound, in absolute value."""
+    symrb.symmetric.symmetric_momentum(Q, P) minus the displayed bound, in absolute value."""
     from scipy.linalg import block_diag
 
     import symrb
@@ -95,5 +97,7 @@ def s9_bound_attained() -> float:
         V = ref.random_rotation(k, rng)
         A = V @ block_diag(np.array([[0.0, -1.0], [1.0, 0.0]]), rest) @ V.T
         Qk = ref.random_rotation(k, rng)
-        errs.append(np.linalg.norm(symrb.symmetric_momentum(Qk, Qk @ A), 2) - float(BOUND.rhs))
+        errs.append(
+            np.linalg.norm(symrb.symmetric.symmetric_momentum(Qk, Qk @ A), 2) - float(BOUND.rhs)
+        )
     return float(np.max(np.abs(errs)))

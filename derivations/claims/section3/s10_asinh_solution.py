@@ -5,7 +5,7 @@ Erratum: the printed exponent "sinh^-1 M/2" is ambiguous; read as (sinh^-1 M)/2 
 sinh^-1(M/2) (the reading that matches the domain ||M/2||_op < 1 of the series) it holds, and on
 skew matrices exp(sinh^-1 X) = X + (I + X^2)^(1/2).  The evidence evaluates the displayed formulas
 on an eigenvalue (symbolic), with matrices (float64) and near the boundary of the domain in 60
-digits.  symrb's own solver of this equation, ``symrb.P_from_M``, is checked by M6
+digits.  symrb's own solver of this equation, ``symrb.symmetric.P_from_M``, is checked by M6
 (``derivations/methods/p_from_m.py``) against the formulas displayed here.
 """
 
@@ -41,7 +41,7 @@ S10 = claim(
     "$\\|M/2\\|_{\\mathrm{op}} < 1$ of the series. The slip is notational: read as "
     "$\\sinh^{-1}(M/2)$ the proposition holds; read as $(\\sinh^{-1} M)/2$ it fails even where "
     "the series converges. On skew matrices $\\exp(\\sinh^{-1} X) = X + (I + X^2)^{1/2}$, which "
-    "is how `symrb.P_from_M` computes it (on the real Schur form). The solution is not unique: "
+    "is how `symrb.symmetric.P_from_M` computes it (on the real Schur form). The solution is not unique: "
     "eigen-angles $\\varphi$ and $\\pi - \\varphi$ of $Q^T P$ give the same $M$; this one has "
     "$\\lvert\\varphi\\rvert < \\pi/2$.",
     section="3.3",

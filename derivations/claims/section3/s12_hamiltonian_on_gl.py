@@ -156,7 +156,7 @@ def s12_quarter_energy_general_n() -> sp.Integer:
 
 @S12.check(Level.FLOAT64, tol=1e-13)
 def s12_symrb_pointwise() -> float:
-    """symrb.gl_hamiltonian against 1/4 <J^-1(M), M> and symrb.symmetric_rigid_body_rhs against
+    """symrb.symmetric.gl_hamiltonian against 1/4 <J^-1(M), M> and symrb.symmetric.symmetric_rigid_body_rhs against
     the reference field, J^-1 by the reference linear solve, M = Q^T P - P^T Q in NumPy, n = 2..6,
     batches of 20 random (Q in SO(n), P in gl(n)): max difference relative to the reference
     values' size."""
@@ -170,9 +170,11 @@ def s12_symrb_pointwise() -> float:
         Ps = rng.standard_normal((20, k, k))
         Ms = np.swapaxes(Qs, -1, -2) @ Ps - np.swapaxes(Ps, -1, -2) @ Qs
         want_H = 0.25 * ref.pairing(ref.J_inv(Ms, lam), Ms)
-        errs.append(np.abs(symrb.gl_hamiltonian(Qs, Ps, lam) - want_H).max() / want_H.max())
+        errs.append(
+            np.abs(symrb.symmetric.gl_hamiltonian(Qs, Ps, lam) - want_H).max() / want_H.max()
+        )
         for got, want in zip(
-            symrb.symmetric_rigid_body_rhs(Qs, Ps, lam),
+            symrb.symmetric.symmetric_rigid_body_rhs(Qs, Ps, lam),
             ref.symmetric_field(Qs, Ps, lam),
             strict=True,
         ):

@@ -339,7 +339,7 @@ def s13_coordinates() -> sp.Expr:
 
 @S13.check(Level.FLOAT64, tol=1e-14)
 def s13_symrb_hamiltonian() -> float:
-    """symrb.orbit_hamiltonian against 1/2 ||[p, x]||^2 - 1/2 ||[x, N]||^2 computed in NumPy
+    """symrb.orbits.orbit_hamiltonian against 1/2 ||[p, x]||^2 - 1/2 ||[x, N]||^2 computed in NumPy
     with ||a||^2 = -1/2 tr(a a), n = 3..6, 20 random skew (x, p, N) each: max difference relative
     to ||p||^2 ||x||^2 + ||x||^2 ||N||^2."""
     import symrb
@@ -350,5 +350,5 @@ def s13_symrb_hamiltonian() -> float:
         x_, p_, N_ = (np.stack([ref.random_skew(k, rng) for _ in range(20)]) for _ in range(3))
         want = 0.5 * np_norm2(np_comm(p_, x_)) - 0.5 * np_norm2(np_comm(x_, N_))
         size = np_norm2(p_) * np_norm2(x_) + np_norm2(x_) * np_norm2(N_)
-        worst.append(np.max(np.abs(symrb.orbit_hamiltonian(x_, p_, N_) - want) / size))
+        worst.append(np.max(np.abs(symrb.orbits.orbit_hamiltonian(x_, p_, N_) - want) / size))
     return float(np.max(worst))

@@ -192,8 +192,8 @@ def s14_toda() -> sp.Expr:
 
 @S14.check(Level.FLOAT64, tol=1e-14)
 def s14_symrb_potential_and_double_bracket() -> float:
-    """symrb.brockett_potential against -1/2 ||[x, N]||^2 in NumPy (n = 3..6) and
-    symrb.double_bracket_rhs against hat(xi x (xi x nu)) with numpy.cross (n = 3) and NumPy
+    """symrb.orbits.brockett_potential against -1/2 ||[x, N]||^2 in NumPy (n = 3..6) and
+    symrb.orbits.double_bracket_rhs against hat(xi x (xi x nu)) with numpy.cross (n = 3) and NumPy
     commutators (n = 4..6), 20 random skew pairs each: max difference relative to ||x||^2 ||N||^2
     (potential) and ||x||^2 ||N|| (field)."""
     import symrb
@@ -204,13 +204,15 @@ def s14_symrb_potential_and_double_bracket() -> float:
         x_, N_ = (np.stack([ref.random_skew(k, rng) for _ in range(20)]) for _ in range(2))
         nx, nN = np.sqrt(np_norm2(x_)), np.sqrt(np_norm2(N_))
         want_V = -0.5 * np_norm2(np_comm(x_, N_))
-        worst.append(np.max(np.abs(symrb.brockett_potential(x_, N_) - want_V) / (nx * nN) ** 2))
+        worst.append(
+            np.max(np.abs(symrb.orbits.brockett_potential(x_, N_) - want_V) / (nx * nN) ** 2)
+        )
         if k == 3:
             xi, nu = ref.vee(x_), ref.vee(N_)
             want = ref.hat(np.cross(xi, np.cross(xi, nu)))
         else:
             want = np_comm(x_, np_comm(x_, N_))
-        err = np.abs(symrb.double_bracket_rhs(x_, N_) - want).max(axis=(-2, -1))
+        err = np.abs(symrb.orbits.double_bracket_rhs(x_, N_) - want).max(axis=(-2, -1))
         worst.append(np.max(err / (nx**2 * nN)))
     return float(np.max(worst))
 
@@ -235,7 +237,7 @@ def _complex_step_field(
 
 @S14.check(Level.FLOAT64, tol=1e-13)
 def s14_symrb_extremal_field() -> float:
-    """symrb.orbit_extremal_rhs against Hamilton's equations of the independent NumPy
+    """symrb.orbits.orbit_extremal_rhs against Hamilton's equations of the independent NumPy
     H* = 1/2 ||[p, x]||^2 - 1/2 ||[x, N]||^2, differentiated by the complex step along an
     orthonormal basis of so(n), n = 3..5, 20 random skew (x, p, N) each: max difference relative
     to the largest entry of the reference field."""
@@ -246,7 +248,7 @@ def s14_symrb_extremal_field() -> float:
     for k in range(3, 6):
         x_, p_, N_ = (np.stack([ref.random_skew(k, rng) for _ in range(20)]) for _ in range(3))
         want = _complex_step_field(x_, p_, N_)
-        got = symrb.orbit_extremal_rhs(x_, p_, N_)
+        got = symrb.orbits.orbit_extremal_rhs(x_, p_, N_)
         for g, w_ in zip(got, want, strict=True):
             worst.append(np.max(np.abs(g - w_)) / np.max(np.abs(w_)))
     return float(np.max(worst))
@@ -257,7 +259,7 @@ def s14_toda_flow() -> float:
     """The emitted double bracket field on x = iL, N = iD, integrated as Ldot = -[L, [L, D]]
     (DOP853, rtol 1e-11, k = 5, t in [0, 3]), against Flaschka's Toda equations integrated on
     (a, b): max entry difference.  It calls the generated kernel symrb._generated.adjoint_orbits
-    directly because the public symrb.double_bracket_rhs accepts skew x only (L is symmetric)."""
+    directly because the public symrb.orbits.double_bracket_rhs accepts skew x only (L is symmetric)."""
     from scipy.integrate import solve_ivp
 
     from symrb._generated.adjoint_orbits import double_bracket_rhs

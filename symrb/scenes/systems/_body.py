@@ -39,7 +39,7 @@ class Continuous(_Model):
 
 
 class MV(_Model):
-    """The Moser-Veselov engine ``symrb.mv_flow`` at step ``h``; ``order`` 4-10 (n = 3) the
+    """The Moser-Veselov engine ``symrb.engine.mv_flow`` at step ``h``; ``order`` 4-10 (n = 3) the
     preprocessed method."""
 
     kind: Literal["mv"]

@@ -51,8 +51,8 @@ class ExtendedMSA(_Model):
 
 class NetworkParameters(_Model):
     """The ResNet of Section 2, Remark 1 on the data ``data``: ``"toy"`` (the default),
-    ``symrb.toy_classification(samples, seed)`` in the plane (width 2), or ``"digits"``,
-    ``symrb.digits_task(features, test_fraction, seed)`` (scikit-learn's digits: width
+    ``symrb.learning.toy_classification(samples, seed)`` in the plane (width 2), or ``"digits"``,
+    ``symrb.learning.digits_task(features, test_fraction, seed)`` (scikit-learn's digits: width
     ``features + 10``; ``seed`` draws the split, ``test_fraction`` of the images are held out).
     ``layers`` layers, started from zero biases and the weights ``K0_scale`` times standard normal
     numbers drawn from ``numpy.random.default_rng(K0_seed)`` (zero weights when ``K0_scale = 0``,
@@ -90,7 +90,7 @@ class ResNetScene(_SceneBase):
 
     ``accuracy`` is the share of the training samples classified right: on the toy data the
     sign of the second entry of :math:`x_N` against the label, on the digits
-    ``symrb.resnet_predict`` with the task's ten classes; ``test_accuracy`` (digits only) the
+    ``symrb.learning.resnet_predict`` with the task's ten classes; ``test_accuracy`` (digits only) the
     same on the held-out images.
 
     Examples
@@ -162,7 +162,7 @@ class ResNetScene(_SceneBase):
             modules += ("algebra",)
             notes.append(f"data: scikit-learn's digits, {p.features} principal components + 10 "
                          f"class entries (width {width}), {S} training images "
-                         f"(symrb.digits_task)")  # fmt: skip
+                         f"(symrb.learning.digits_task)")  # fmt: skip
         else:
             S, width = p.samples, 2
         route, propagated, cost = _training(self, skipped, S, width)
@@ -279,7 +279,7 @@ def _training(
                 "formula": f"{steps} x (forward + costate sweep) of {L} layers x {S} "
                 "samples"}  # fmt: skip
     else:
-        route = "symrb.resnet_forward (no training)"
+        route = "symrb.learning.resnet_forward (no training)"
         propagated = ("states x_k",)
         skipped.append(("costate sweep", "no training steps" if "terminal_cost" in sc.effects
                         else "no terminal cost: nothing to back-propagate"))  # fmt: skip
@@ -289,5 +289,5 @@ def _training(
             "formula": f"one forward pass of {L} layers x {S} samples",
         }
     if "costates" in sc.effects:
-        route += "; symrb.costate_sweep at the end"
+        route += "; symrb.learning.costate_sweep at the end"
     return route, propagated, cost

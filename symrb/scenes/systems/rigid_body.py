@@ -211,7 +211,7 @@ def _plan_mv(
                        f"got n = {n}", [2])  # fmt: skip
     kernels: tuple[str, ...]
     if attitude or n == 3:
-        route = f"symrb.mv_flow(h={integ.h:g}, order={integ.order})"
+        route = f"symrb.engine.mv_flow(h={integ.h:g}, order={integ.order})"
         propagated: tuple[str, ...] = ("Q", "M")
         if not attitude:
             skipped.pop()
@@ -219,7 +219,7 @@ def _plan_mv(
                          "m together (fused), so Q is stepped but not recorded")  # fmt: skip
         kernels = ("discrete_rigid_body.mv3_cayley_step",) if n == 3 else ()
     else:
-        route = (f"symrb.MVStepper(lam).step with an empty attitude, h={integ.h:g}: "
+        route = (f"symrb.engine.MVStepper(lam).step with an empty attitude, h={integ.h:g}: "
                  "M_{k+1} = U^T M_k U needs only U")  # fmt: skip
         propagated = ("M",)
         kernels = ()

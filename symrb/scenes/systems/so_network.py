@@ -5,7 +5,7 @@ Samples :math:`Q^a_0 \in SO(n)` pass through layers :math:`Q^a_{k+1} = Q^a_kU_k`
 controls :math:`U_k \in SO(n)`; the loss is the data term :math:`\sum_a\frac12\|Q^a_N -
 T^a\|_F^2` (effect ``terminal_cost``) plus, with the effect ``running_cost``, the penalty
 :math:`\alpha\sum_k\operatorname{tr}(\Lambda(I - U_k))` (see :func:`symrb.so_network_gradients`).
-The task is :func:`symrb.so_rotation_task`; training starts from :math:`U_k = I` and runs one of
+The task is :func:`symrb.learning.so_rotation_task`; training starts from :math:`U_k = I` and runs one of
 the three trainers of :mod:`symrb.learning`.
 """
 
@@ -28,7 +28,7 @@ __all__ = ["SONetworkScene"]
 
 
 class SONetworkParameters(_Model):
-    r"""The task and the network: ``symrb.so_rotation_task(n, samples, angle, noise, seed)``
+    r"""The task and the network: ``symrb.learning.so_rotation_task(n, samples, angle, noise, seed)``
     (its defaults), ``layers`` controls :math:`U_k`, started from :math:`U_k = I`; with the
     effect ``running_cost`` its weight ``alpha`` (> 0, default 1) and the diagonal ``lam`` of
     :math:`\Lambda` (positive, n entries; default ``numpy.linspace(1, 2, n)``)."""
@@ -109,7 +109,7 @@ _SWEEP_KERNELS = (
 @register_system
 class SONetworkScene(_SceneBase):
     r"""The SO(n) network of the learning theorem (claim D9) trained on
-    :func:`symrb.so_rotation_task` from :math:`U_k = I`.
+    :func:`symrb.learning.so_rotation_task` from :math:`U_k = I`.
 
     Effects: ``terminal_cost`` (required: the data term, the loss the trainers descend),
     ``running_cost`` (the control penalty :math:`\alpha\sum_k\operatorname{tr}(\Lambda(I -
@@ -130,9 +130,9 @@ class SONetworkScene(_SceneBase):
       allowed) or ``"end"`` (the final iterate).  The trainers evaluate both at every iteration
       anyway (the stopping test).
     - ``U`` (the final controls, shape (N, n, n)), ``Q`` (their layers
-      :func:`symrb.so_network_forward`, (N + 1, M, n, n)), ``costates``
-      (:func:`symrb.so_network_costates`, (N + 1, M, n, n); effect ``costates``),
-      ``extremal_residual`` (:func:`symrb.so_extremal_residual`: :math:`r_k`, (N,)),
+      :func:`symrb.learning.so_network_forward`, (N + 1, M, n, n)), ``costates``
+      (:func:`symrb.learning.so_network_costates`, (N + 1, M, n, n); effect ``costates``),
+      ``extremal_residual`` (:func:`symrb.learning.so_extremal_residual`: :math:`r_k`, (N,)),
       ``iterations`` (the iterations done; shooting: the evaluations) and ``converged`` (1 if the
       trainer's stopping test was met, else 0): at the end only.
 

@@ -50,7 +50,7 @@ class SymmetricBodyParameters(BodyParameters):
     r"""A body for the symmetric rigid body, with ``start``: where :math:`(Q_0, P_0)` comes from.
 
     ``"momentum"`` (the default): :math:`Q_0` as ``Q0`` says and :math:`P_0 = P(Q_0, M_0)`
-    (:func:`symrb.P_from_M`), so that :math:`Q_0^TP_0 - P_0^TQ_0 = M_0`. ``"rotations"``:
+    (:func:`symrb.symmetric.P_from_M`), so that :math:`Q_0^TP_0 - P_0^TQ_0 = M_0`. ``"rotations"``:
     :math:`(Q_0, P_0)` = ``random_SO(n, (2,), seed=seed)``, a Haar-random pair in
     :math:`SO(n)^2`. ``"general"``: :math:`(Q_0, P_0)` with standard normal entries from
     ``numpy.random.default_rng(seed)``, a point of :math:`\mathfrak{gl}(n)^2` off

@@ -73,7 +73,7 @@ def _endpoint_gradient(form: str) -> float:
 @S15.check(Level.FLOAT64, tol=1e-6, form="printed")
 def s15_printed_endpoint_gradient() -> float:
     """The adjoint directional derivative of the cost with the printed p_T (so(3), two samples,
-    T = 1, Brockett's V from symrb.brockett_potential, emitted state-costate field) against
+    T = 1, Brockett's V from symrb.orbits.brockett_potential, emitted state-costate field) against
     central differences of the cost: relative difference (must be large)."""
     return _endpoint_gradient("printed")
 
@@ -155,7 +155,7 @@ def s15_one_sample_bvp() -> float:
     """One sample on so(3), T = 1, 2, 4, 8, 16: symrb.solve_orbit_bvp from the guess p = 0 against
     the exact solution (p = -N, x the double bracket flow in closed form from the displayed
     phase): max of |x_T - exact| / ||x_0||, |p + N| / ||N|| over the mesh and the difference of
-    ||[N, [N, x_T]]|| from the emitted closed form (symrb.one_sample_second_term) relative to
+    ||[N, [N, x_T]]|| from the emitted closed form (symrb.orbits.one_sample_second_term) relative to
     ||N||^2 ||x_0||."""
     import symrb
 
@@ -167,7 +167,7 @@ def s15_one_sample_bvp() -> float:
         np.array(ONE_SAMPLE_HORIZONS),
         sp.lambdify((_r, _s, _tau0, T), _phase_tau(), "numpy"),
     )
-    decay = symrb.one_sample_second_term(x0, N_, ONE_SAMPLE_HORIZONS)
+    decay = symrb.orbits.one_sample_second_term(x0, N_, ONE_SAMPLE_HORIZONS)
     errs = []
     for i, Tk in enumerate(ONE_SAMPLE_HORIZONS):
         res = one_sample_runs()[Tk]
@@ -288,7 +288,7 @@ def s15_two_samples_second_term() -> float:
 @S15.check(Level.FLOAT64, tol=1e-5, form="corrected")
 def s15_two_samples_above_bound() -> float:
     """The same solutions stay above the bound and conserve <x^1, x^2> and ||x^a||: max over T of
-    the relative shortfall below symrb.two_sample_bound (the emitted kernel) plus the relative
+    the relative shortfall below symrb.orbits.two_sample_bound (the emitted kernel) plus the relative
     drift of the invariants, plus the relative difference of that bound (and of the emitted
     expression) from the displayed bound evaluated on the data."""
     import symrb
@@ -297,7 +297,9 @@ def s15_two_samples_above_bound() -> float:
     second = np.array([row["second"] for row in rows])  # NaN for a failed solve: stays NaN
     displayed = rows[0]["bound"]
     X0, N_ = two_sample_data()
-    shipped = float(symrb.two_sample_bound(X0, N_))  # the emitted kernel, through its wrapper
+    shipped = float(
+        symrb.orbits.two_sample_bound(X0, N_)
+    )  # the emitted kernel, through its wrapper
     norms = np.sqrt(np_norm2(X0))
     emitted = float(TWO_SAMPLE_BOUND["bound"].subs({  # the emitted expression, by SymPy
         _r1: norms[0], _r2: norms[1], _s: np.sqrt(np_norm2(N_)), _p12: np_pair(X0[0], X0[1]),
