@@ -97,101 +97,98 @@ def _pin_blas() -> None:
     threadpool_limits(limits=1)
 
 
-def run(repeats: int = 5, sweep_repeats: int = 3, pair_repeats: int = 21) -> dict:
-    from threadpoolctl import threadpool_limits
-
-    out: dict = {
-        "what": "scenes (symrb.scenes): planner savings, overhead, cache, Dask sweep",
-        "clock": "in-process pairs (1, 2): time.process_time (CPU seconds of this process), "
-        "medians of interleaved repeats; cached reruns and the Dask sweep: time.perf_counter "
-        "(wall seconds); BLAS pinned to 1 thread here and in the Dask workers",
-        "machine": f"{platform.machine()}, {os.cpu_count()} logical CPUs, "
-        f"{platform.python_implementation()} {platform.python_version()}",
-        "numpy": np.__version__,
-        "repeats": repeats,
-        "pair_repeats": pair_repeats,
+def _attitude_savings(pair_repeats: int) -> dict:
+    """1. momentum only vs with attitude (DOP853 and the Moser-Veselov engine)."""
+    out: dict = {}
+    cont = {"kind": "continuous", "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}
+    m_only, with_q = _rb([], cont), _rb(["attitude"], cont)
+    a, b = _pair(lambda: scenes.run_scene(m_only, cache=False),
+                 lambda: scenes.run_scene(with_q, cache=False), pair_repeats)  # fmt: skip
+    out["momentum_only_vs_attitude"] = {
+        "scene": "rigid_body n = 10, T = 100, DOP853 rtol 1e-10, energy at 101 times, M at T",
+        "momentum_only_seconds": a,
+        "with_attitude_seconds": b,
+        "ratio": b["pair_ratio_median"],
+        "ratio_of_medians": b["median"] / a["median"],
+        "goal": ">= 2",
+        "nfev": {
+            "momentum_only": _nfev(m_only),
+            "with_attitude": _nfev(with_q),
+        },
     }
-    with threadpool_limits(limits=1):
-        # 1. momentum only vs with attitude -------------------------------------------------
-        cont = {"kind": "continuous", "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}
-        m_only, with_q = _rb([], cont), _rb(["attitude"], cont)
-        a, b = _pair(lambda: scenes.run_scene(m_only, cache=False),
-                     lambda: scenes.run_scene(with_q, cache=False), pair_repeats)  # fmt: skip
-        out["momentum_only_vs_attitude"] = {
-            "scene": "rigid_body n = 10, T = 100, DOP853 rtol 1e-10, energy at 101 times, M at T",
-            "momentum_only_seconds": a,
-            "with_attitude_seconds": b,
-            "ratio": b["pair_ratio_median"],
-            "ratio_of_medians": b["median"] / a["median"],
-            "goal": ">= 2",
-            "nfev": {
-                "momentum_only": _nfev(m_only),
-                "with_attitude": _nfev(with_q),
-            },
-        }
-        mv = {"kind": "mv", "h": 0.1}
-        mv_m, mv_q = _rb([], mv), _rb(["attitude"], mv)
-        a, b = _pair(lambda: scenes.run_scene(mv_m, cache=False),
-                     lambda: scenes.run_scene(mv_q, cache=False), pair_repeats)  # fmt: skip
-        out["mv_momentum_only_vs_attitude"] = {
-            "scene": "rigid_body n = 10, T = 100, Moser-Veselov engine h = 0.1 (1000 steps)",
-            "momentum_only_seconds": a,
-            "with_attitude_seconds": b,
-            "ratio": b["pair_ratio_median"],
-            "ratio_of_medians": b["median"] / a["median"],
-            "note": "the momentum map skips only the product Q U of each step; the Newton solve "
-            "of U Lambda - Lambda U^T = h M dominates",
-        }
+    mv = {"kind": "mv", "h": 0.1}
+    mv_m, mv_q = _rb([], mv), _rb(["attitude"], mv)
+    a, b = _pair(lambda: scenes.run_scene(mv_m, cache=False),
+                 lambda: scenes.run_scene(mv_q, cache=False), pair_repeats)  # fmt: skip
+    out["mv_momentum_only_vs_attitude"] = {
+        "scene": "rigid_body n = 10, T = 100, Moser-Veselov engine h = 0.1 (1000 steps)",
+        "momentum_only_seconds": a,
+        "with_attitude_seconds": b,
+        "ratio": b["pair_ratio_median"],
+        "ratio_of_medians": b["median"] / a["median"],
+        "note": "the momentum map skips only the product Q U of each step; the Newton solve "
+        "of U Lambda - Lambda U^T = h M dominates",
+    }
+    return out
 
-        # 2. scene vs hand-written calls --------------------------------------------------------
-        x = scenes.scene_inputs(with_q)
-        t_eval = np.linspace(0.0, 100.0, 101)
 
-        def by_hand() -> object:
-            sol = symrb.integrate(
-                symrb.RigidBody, (0.0, 100.0), {"Q": x["Q0"], "M": x["M0"]}, lam=x["lam"],
-                method="DOP853", rtol=1e-10, atol=1e-12, t_eval=t_eval,
-            )  # fmt: skip
-            return symrb.kinetic_energy(sol.y.M, x["lam"]), sol.y.M[-1:]
+def _scene_vs_hand_written(pair_repeats: int) -> dict:
+    """2. the attitude scene against the public calls it makes, written by hand."""
+    cont = {"kind": "continuous", "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}
+    with_q = _rb(["attitude"], cont)
+    x = scenes.scene_inputs(with_q)
+    t_eval = np.linspace(0.0, 100.0, 101)
 
-        b, a = _pair(by_hand, lambda: scenes.run_scene(with_q, cache=False), pair_repeats)
-        out["scene_vs_hand_written"] = {
-            "scene": "the attitude scene of 1 against symrb.integrate + symrb.kinetic_energy",
-            "scene_seconds": a,
-            "hand_written_seconds": b,
-            "ratio": a["pair_ratio_median"],
-            "ratio_of_medians": a["median"] / b["median"],
-            "goal": "<= 1.1",
-        }
+    def by_hand() -> object:
+        sol = symrb.integrate(
+            symrb.RigidBody, (0.0, 100.0), {"Q": x["Q0"], "M": x["M0"]}, lam=x["lam"],
+            method="DOP853", rtol=1e-10, atol=1e-12, t_eval=t_eval,
+        )  # fmt: skip
+        return symrb.kinetic_energy(sol.y.M, x["lam"]), sol.y.M[-1:]
 
-        # 3. cached rerun vs first run ----------------------------------------------------------
-        per_scene = {}
-        for book in sorted((ROOT / "book" / "scenes").glob("*.toml")):
-            scenes.run_scene(book, cache=False)  # warm-up (imports)
-            first, again = [], []
-            for _ in range(repeats):
-                tmp = Path(tempfile.mkdtemp(prefix="symrb-bench-"))
-                try:
-                    first.append(_wall(lambda tmp=tmp, b=book: scenes.run_scene(b, cache=tmp)))
-                    again.append(_wall(lambda tmp=tmp, b=book: scenes.run_scene(b, cache=tmp)))
-                finally:
-                    shutil.rmtree(tmp, ignore_errors=True)
-            fa, fb = _stats(first), _stats(again)
-            per_scene[book.name] = {"first_run_seconds": fa, "cached_rerun_seconds": fb,
-                                    "ratio": fa["median"] / fb["median"]}  # fmt: skip
-        best = max(per_scene, key=lambda k: per_scene[k]["first_run_seconds"]["median"])
-        out["cached_rerun"] = {
-            "scene": f"book/scenes/{best} (read from the file each time; the book scene with "
-            "the longest first run)",
-            **per_scene[best],
-            "goal": ">= 100",
-            "every_book_scene": per_scene,
-            "note": "a cached rerun costs ~2-5 ms (TOML, validation, plan, key, npz); the "
-            "ratio grows with the first run's cost",
-        }
+    b, a = _pair(by_hand, lambda: scenes.run_scene(with_q, cache=False), pair_repeats)
+    return {
+        "scene": "the attitude scene of 1 against symrb.integrate + symrb.kinetic_energy",
+        "scene_seconds": a,
+        "hand_written_seconds": b,
+        "ratio": a["pair_ratio_median"],
+        "ratio_of_medians": a["median"] / b["median"],
+        "goal": "<= 1.1",
+    }
 
-    # 4. 64-point sweep, 2-worker LocalCluster vs serial -----------------------------------------
+
+def _cached_rerun(repeats: int) -> dict:
+    """3. cached rerun vs first run, for every book scene."""
+    per_scene = {}
+    for book in sorted((ROOT / "book" / "scenes").glob("*.toml")):
+        scenes.run_scene(book, cache=False)  # warm-up (imports)
+        first, again = [], []
+        for _ in range(repeats):
+            tmp = Path(tempfile.mkdtemp(prefix="symrb-bench-"))
+            try:
+                first.append(_wall(lambda tmp=tmp, b=book: scenes.run_scene(b, cache=tmp)))
+                again.append(_wall(lambda tmp=tmp, b=book: scenes.run_scene(b, cache=tmp)))
+            finally:
+                shutil.rmtree(tmp, ignore_errors=True)
+        fa, fb = _stats(first), _stats(again)
+        per_scene[book.name] = {"first_run_seconds": fa, "cached_rerun_seconds": fb,
+                                "ratio": fa["median"] / fb["median"]}  # fmt: skip
+    best = max(per_scene, key=lambda k: per_scene[k]["first_run_seconds"]["median"])
+    return {
+        "scene": f"book/scenes/{best} (read from the file each time; the book scene with "
+        "the longest first run)",
+        **per_scene[best],
+        "goal": ">= 100",
+        "every_book_scene": per_scene,
+        "note": "a cached rerun costs ~2-5 ms (TOML, validation, plan, key, npz); the "
+        "ratio grows with the first run's cost",
+    }
+
+
+def _sweep_on_local_cluster(sweep_repeats: int) -> dict:
+    """4. a 64-point sweep on a 2-worker LocalCluster against the serial sweep."""
     from dask.distributed import Client, LocalCluster
+    from threadpoolctl import threadpool_limits
 
     base = scenes.parse_scene(
         {
@@ -224,7 +221,7 @@ def run(repeats: int = 5, sweep_repeats: int = 3, pair_repeats: int = 21) -> dic
         for a, b in zip(serial.results, dist.results, strict=True)
     )
     sa, sb = _stats(serial_t), _stats(dask_t)
-    out["sweep_64_local_cluster"] = {
+    return {
         "scene": "rigid_body n = 10, T = 100, DOP853 rtol 1e-10; grid parameters.seed = 0..63",
         "serial_seconds": sa,
         "local_cluster_2_workers_seconds": sb,
@@ -236,6 +233,27 @@ def run(repeats: int = 5, sweep_repeats: int = 3, pair_repeats: int = 21) -> dic
         "note": "the machine has 2 logical CPUs shared with other work, so 2 workers cannot "
         "exceed 2x and lose to any concurrent load",
     }
+
+
+def run(repeats: int = 5, sweep_repeats: int = 3, pair_repeats: int = 21) -> dict:
+    from threadpoolctl import threadpool_limits
+
+    out: dict = {
+        "what": "scenes (symrb.scenes): planner savings, overhead, cache, Dask sweep",
+        "clock": "in-process pairs (1, 2): time.process_time (CPU seconds of this process), "
+        "medians of interleaved repeats; cached reruns and the Dask sweep: time.perf_counter "
+        "(wall seconds); BLAS pinned to 1 thread here and in the Dask workers",
+        "machine": f"{platform.machine()}, {os.cpu_count()} logical CPUs, "
+        f"{platform.python_implementation()} {platform.python_version()}",
+        "numpy": np.__version__,
+        "repeats": repeats,
+        "pair_repeats": pair_repeats,
+    }
+    with threadpool_limits(limits=1):
+        out.update(_attitude_savings(pair_repeats))
+        out["scene_vs_hand_written"] = _scene_vs_hand_written(pair_repeats)
+        out["cached_rerun"] = _cached_rerun(repeats)
+    out["sweep_64_local_cluster"] = _sweep_on_local_cluster(sweep_repeats)
     out["goals_met"] = {
         "momentum_only >= 2x": out["momentum_only_vs_attitude"]["ratio"] >= 2,
         "scene <= 1.1x hand-written": out["scene_vs_hand_written"]["ratio"] <= 1.1,

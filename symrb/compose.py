@@ -40,10 +40,7 @@ shipped; the coefficients are in :mod:`symrb.composition`.
 
 from __future__ import annotations
 
-import contextlib
-import functools
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -54,10 +51,8 @@ from ._docs import fill
 from ._progress import progress_bar
 from ._results import DiscreteFlowSolution, Trajectory
 from ._validate import Array
-from .algebra import hat
 from .base_steps import BaseStep, MidpointStep, RKMK4Step, _lam, _skew
 from .composition import _DEFAULT_KIND, compose_steps, composition_coefficients
-from .continuous import RigidBody, integrate
 from .engine import MVStepper
 from .errors import InputError, NotConvergedError, OutOfDomainError
 
@@ -65,7 +60,6 @@ __all__ = [
     "composed_rigid_body_flow",
     "rkmk4_rigid_body_flow",
     "midpoint_rigid_body_flow",
-    "benchmark_cost",
 ]
 
 # ---------------------------------------------------------------------------------------------
@@ -360,173 +354,3 @@ def midpoint_rigid_body_flow(
         "implicit midpoint",
         progress,
     )
-
-
-# ---------------------------------------------------------------------------------------------
-# benchmark (not a test: it reports process-time ratios measured in one run)
-
-
-def _methods() -> dict[str, tuple[int, Callable[..., DiscreteFlowSolution]]]:
-    def comp(order: int, kind: str, step: str = "mv") -> Callable[..., DiscreteFlowSolution]:
-        def run(Q0: Array, M0: Array, lam: Array, h: float, n: int) -> DiscreteFlowSolution:
-            return composed_rigid_body_flow(
-                Q0, M0, lam, h, n, order, kind=kind, step=step, save_every=max(n, 1)
-            )
-
-        return run
-
-    def other(flow: Callable[..., DiscreteFlowSolution]) -> Callable[..., DiscreteFlowSolution]:
-        def run(Q0: Array, M0: Array, lam: Array, h: float, n: int) -> DiscreteFlowSolution:
-            return flow(Q0, M0, lam, h, n, save_every=max(n, 1))
-
-        return run
-
-    return {
-        "MV (order 2)": (2, comp(2, "triple_jump")),
-        "MV triple jump 4": (4, comp(4, "triple_jump")),
-        "MV Suzuki 4": (4, comp(4, "suzuki")),
-        "MV Yoshida 6": (6, comp(6, "yoshida")),
-        "MV Kahan-Li 6": (6, comp(6, "kahan_li")),
-        "MV McLachlan 8": (8, comp(8, "mclachlan")),
-        "MV Kahan-Li 8": (8, comp(8, "kahan_li")),
-        "RKMK4": (4, other(rkmk4_rigid_body_flow)),
-        "implicit midpoint": (2, other(midpoint_rigid_body_flow)),
-        "midpoint Suzuki 4": (4, comp(4, "suzuki", "midpoint")),
-    }
-
-
-def benchmark_cost(
-    T: float = 10.0,
-    target: float = 1e-8,
-    *,
-    lam: ArrayLike = (0.7, 1.1, 1.6),
-    m0: ArrayLike = (0.5, 1.0, 1.5),
-    repeats: int = 5,
-    methods: Sequence[str] | None = None,
-) -> dict[str, dict[str, float]]:
-    r"""Process time to reach a given error at time ``T``, for each method and for DOP853.
-
-    The rigid body on SO(3) from :math:`Q_0 = I`, :math:`M_0 = \hat m_0` is integrated to
-    ``T``; the error is the largest entry of :math:`|Q - Q_{ref}|` and :math:`|M - M_{ref}|`
-    against DOP853 at ``rtol = atol = 1e-13`` (:func:`symrb.integrate`).  For each method the
-    smallest number of steps found with error :math:`\le` ``target`` (from the error at a coarse
-    step and the order, then in 5% increments) is timed; DOP853 (through
-    :func:`symrb.integrate`) is timed at the largest ``rtol = atol`` in the sequence
-    :math:`10^{-k/4}` that reaches ``target``.  Times are medians of ``repeats`` interleaved
-    runs of :func:`time.process_time`, with BLAS limited to one thread when threadpoolctl is
-    installed.  For reports, never for tests (timings depend on the machine).
-
-    Parameters
-    ----------
-    T : float, optional
-        The final time.
-    target : float, optional
-        The error to reach.
-    lam : array_like, shape (3,), optional
-        The diagonal of :math:`\Lambda`.
-    m0 : array_like, shape (3,), optional
-        The initial body momentum as a vector (:func:`symrb.hat`).
-    repeats : int, optional
-        Timed runs of each method (interleaved), >= 1.
-    methods : sequence of str, optional
-        A subset of the method names (all by default; see the keys of the result).
-
-    Returns
-    -------
-    dict
-        For each method name (and ``"DOP853"``): ``steps`` (or the number of right-hand side
-        evaluations for DOP853), ``h`` (or ``rtol``), ``error``, ``seconds`` (median process
-        time) and ``ratio`` (seconds over DOP853's seconds).
-
-    Examples
-    --------
-    >>> from symrb.compose import benchmark_cost
-    >>> out = benchmark_cost(T=1.0, target=1e-6, repeats=1, methods=["RKMK4"])
-    >>> sorted(out), out["RKMK4"]["error"] <= 1e-6
-    (['DOP853', 'RKMK4'], True)
-    """
-    Tv = v.real_scalar(T, "T")
-    if not Tv > 0:
-        raise InputError(f"T must be a finite number > 0, got {T!r}")
-    tgt = v.real_scalar(target, "target")
-    if not tgt > 0:
-        raise InputError(f"target must be a finite number > 0, got {target!r}")
-    repeats = v.count(repeats, "repeats", 1)
-    table = _methods()
-    names = list(table) if methods is None else list(methods)
-    unknown = [m for m in names if m not in table]
-    if unknown:
-        raise InputError(f"methods must be among {list(table)}, got unknown {unknown}")
-    L = _lam(lam)
-    Q0, M0 = np.eye(3), hat(m0)
-
-    try:
-        from threadpoolctl import threadpool_limits
-
-        limit: Any = threadpool_limits(1)
-    except ImportError:  # pragma: no cover - optional
-        limit = contextlib.nullcontext()
-    with limit:
-        ref = integrate(
-            RigidBody, (0.0, Tv), {"Q": Q0, "M": M0}, lam=L, rtol=1e-13, atol=1e-13, t_eval=[Tv]
-        )
-        Qr, Mr = ref.y["Q"][-1], ref.y["M"][-1]
-
-        def error(Q: Array, M: Array) -> float:
-            return float(max(np.abs(Q - Qr).max(), np.abs(M - Mr).max()))
-
-        runs: dict[str, Callable[[], Any]] = {}
-        out: dict[str, dict[str, float]] = {}
-        for name in names:
-            order, fn = table[name]
-
-            def err_at(n: int, fn: Callable[..., DiscreteFlowSolution] = fn) -> float:
-                sol = fn(Q0, M0, L, Tv / n, n)
-                return error(sol.y["Q"][-1], sol.y["M"][-1]) if sol.success else np.inf
-
-            n = max(4, int(np.ceil(4 * Tv)))
-            e = err_at(n)
-            while not np.isfinite(e):
-                n *= 2
-                e = err_at(n)
-            n = max(1, int(np.ceil(n * (e / tgt) ** (1.0 / order) * 0.97)))
-            e = err_at(n)
-            while e > tgt:
-                n = int(np.ceil(n * 1.05))
-                e = err_at(n)
-            out[name] = {"steps": float(n), "h": Tv / n, "error": e}
-            runs[name] = functools.partial(fn, Q0, M0, L, Tv / n, n)
-
-        k = 16
-        while True:
-            tol = 10.0 ** (-k / 4)
-            sol = integrate(
-                RigidBody, (0.0, Tv), {"Q": Q0, "M": M0}, lam=L, rtol=tol, atol=tol, t_eval=[Tv]
-            )
-            e = error(sol.y["Q"][-1], sol.y["M"][-1])
-            if e <= tgt or k >= 52:
-                break
-            k += 1
-        out["DOP853"] = {"steps": float(sol.nfev), "h": tol, "error": e}
-        runs["DOP853"] = functools.partial(
-            integrate,
-            RigidBody,
-            (0.0, Tv),
-            {"Q": Q0, "M": M0},
-            lam=L,
-            rtol=tol,
-            atol=tol,
-            t_eval=[Tv],
-        )
-
-        times: dict[str, list[float]] = {name: [] for name in runs}
-        for _ in range(repeats):
-            for name, run in runs.items():
-                t0 = time.process_time()
-                run()
-                times[name].append(time.process_time() - t0)
-    base = float(np.median(times["DOP853"]))
-    for name, ts in times.items():
-        out[name]["seconds"] = float(np.median(ts))
-        out[name]["ratio"] = out[name]["seconds"] / base if base > 0 else np.inf
-    return out
