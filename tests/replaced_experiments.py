@@ -7,14 +7,18 @@ the public API of :mod:`symrb`, independently of :mod:`symrb.scenes`.
 
 from __future__ import annotations
 
-import contextlib
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from symrb_book._inputs import count as _count
+from symrb_book._inputs import finite_positive as _finite_positive
+from symrb_book._inputs import one_blas_thread as _one_blas_thread
+from symrb_book._inputs import positive as _positive
+from symrb_book._inputs import with_norm as _with_norm
 
 import symrb
 from symrb import _validate as v
@@ -43,44 +47,6 @@ def _window_last(values: NDArray[Any], windows: int) -> NDArray[Any]:
     """The last entry of each block of :func:`_window_max` (the time at which a window ends)."""
     a = np.asarray(values)
     return np.array([b[-1] for b in np.array_split(a, min(windows, a.shape[0]))])
-
-
-def _positive(x: object, name: str) -> float:
-    value = v.real_scalar(x, name)
-    if not value > 0:
-        raise InputError(f"{name} must be a finite number > 0, got {x!r}")
-    return value
-
-
-@contextlib.contextmanager
-def _one_blas_thread() -> Iterator[bool]:
-    """Hold BLAS to one thread inside the block; yields whether it could (threadpoolctl)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - threadpoolctl comes with the book extra
-        yield False
-        return
-    with threadpool_limits(limits=1, user_api="blas"):
-        yield True
-
-
-def _finite_positive(x: float, name: str) -> float:
-    value = float(x)
-    if not (np.isfinite(value) and value > 0):
-        raise InputError(f"{name} must be a positive finite number, got {x!r}")
-    return value
-
-
-def _count(x: int, name: str, minimum: int) -> int:
-    if isinstance(x, bool) or int(x) != x or int(x) < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {x!r}")
-    return int(x)
-
-
-def _with_norm(n: int, norm: float, seed: int | np.random.Generator) -> Array:
-    """A random skew (n, n) matrix scaled to the operator norm ``norm``."""
-    M = symrb.random_so(n, seed=seed)
-    return M * (norm / np.linalg.norm(M, 2))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -9,9 +9,8 @@ sizes where the page's run is long.
 
 from __future__ import annotations
 
-import contextlib
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +22,8 @@ import symrb
 from symrb import _validate as v
 from symrb._validate import Array
 from symrb.errors import InputError
+from symrb_book._inputs import one_blas_thread as _one_blas_thread
+from symrb_book._inputs import positive as _positive
 
 __all__ = [
     "TimeStepScaling",
@@ -40,25 +41,6 @@ __all__ = [
 ]
 
 _EPS = float(np.finfo(float).eps)
-
-
-def _positive(x: object, name: str) -> float:
-    value = v.real_scalar(x, name)
-    if not value > 0:
-        raise InputError(f"{name} must be a finite number > 0, got {x!r}")
-    return value
-
-
-@contextlib.contextmanager
-def _one_blas_thread() -> Iterator[bool]:
-    """Hold BLAS to one thread inside the block; yields whether it could (threadpoolctl)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - threadpoolctl comes with the book extra
-        yield False
-        return
-    with threadpool_limits(limits=1, user_api="blas"):
-        yield True
 
 
 # ---------------------------------------------------------------------------------------------

@@ -18,6 +18,9 @@ from numpy.typing import ArrayLike, NDArray
 
 import symrb
 from symrb.errors import InputError, OutOfDomainError
+from symrb_book._inputs import count as _count
+from symrb_book._inputs import finite_positive as _positive
+from symrb_book._inputs import with_norm as _with_norm
 
 Array = NDArray[np.float64]
 
@@ -33,25 +36,6 @@ __all__ = [
     "BoundaryAccuracy",
     "boundary_accuracy",
 ]
-
-
-def _positive(x: float, name: str) -> float:
-    value = float(x)
-    if not (np.isfinite(value) and value > 0):
-        raise InputError(f"{name} must be a positive finite number, got {x!r}")
-    return value
-
-
-def _count(x: int, name: str, minimum: int) -> int:
-    if isinstance(x, bool) or int(x) != x or int(x) < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {x!r}")
-    return int(x)
-
-
-def _with_norm(n: int, norm: float, seed: int | np.random.Generator) -> Array:
-    """A random skew (n, n) matrix scaled to the operator norm ``norm``."""
-    M = symrb.random_so(n, seed=seed)
-    return M * (norm / np.linalg.norm(M, 2))
 
 
 def _max_abs(a: Array) -> Array:
