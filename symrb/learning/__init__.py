@@ -11,6 +11,7 @@ data sets).  Every name is importable from :mod:`symrb.learning`.
 
 from __future__ import annotations
 
+from .._package import adopt_classes
 from ._common import SweepInfo
 from .resnet import (
     TrainResult,
@@ -62,9 +63,4 @@ __all__ = [
     "train_msa",
 ]
 
-# the public classes name this package as their home (in reprs, tracebacks and pickles)
-for _name in __all__:
-    _obj = globals()[_name]
-    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}."):
-        _obj.__module__ = __name__
-del _name, _obj
+adopt_classes(globals(), __all__, __name__)

@@ -33,6 +33,7 @@ lattice), :mod:`~symrb.orbits.closed_forms` (the closed forms of S15 on so(3)) a
 
 from __future__ import annotations
 
+from .._package import adopt_classes
 from .bvp import OrbitBVPResult, solve_orbit_bvp
 from .closed_forms import one_sample_second_term, two_sample_bound
 from .double_bracket import DoubleBracketInfo, double_bracket_flow, double_bracket_rhs, toda_flow
@@ -52,9 +53,4 @@ __all__ = [
     "solve_orbit_bvp",
 ]
 
-# the public classes name this package as their home (in reprs, tracebacks and pickles)
-for _name in __all__:
-    _obj = globals()[_name]
-    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}."):
-        _obj.__module__ = __name__
-del _name, _obj
+adopt_classes(globals(), __all__, __name__)

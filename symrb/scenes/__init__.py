@@ -70,6 +70,8 @@ toda                   (none)                          L, a, b, spectrum, off_ba
 
 from __future__ import annotations
 
+from .._package import adopt_classes
+
 try:
     import pydantic  # noqa: F401 - the schema's models; checked first for a clear message
 except ImportError as exc:  # pragma: no cover - exercised in the clean-venv wheel test
@@ -125,9 +127,4 @@ __all__ = [
     "SONetworkScene",
 ]
 
-# the public classes name this package as their home (in reprs, tracebacks and pickles)
-for _name in __all__:
-    _obj = globals()[_name]
-    if isinstance(_obj, type) and _obj.__module__.startswith(f"{__name__}."):
-        _obj.__module__ = __name__
-del _name, _obj
+adopt_classes(globals(), __all__, __name__)
