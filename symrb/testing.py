@@ -121,6 +121,7 @@ def seeds() -> st.SearchStrategy[np.random.Generator]:
     Returns
     -------
     SearchStrategy of numpy.random.Generator
+        Generators, one per drawn seed.
 
     Examples
     --------
@@ -146,6 +147,7 @@ def dimensions(min_n: int = 2, max_n: int = 64) -> st.SearchStrategy[int]:
     Returns
     -------
     SearchStrategy of int
+        The drawn sizes.
 
     Examples
     --------
@@ -176,6 +178,7 @@ def batch_shapes(max_dims: int = 2, max_side: int = 3) -> st.SearchStrategy[tupl
     Returns
     -------
     SearchStrategy of tuple of int
+        The drawn shapes.
 
     Examples
     --------
@@ -199,6 +202,7 @@ def dtypes() -> st.SearchStrategy[np.dtype]:
     Returns
     -------
     SearchStrategy of numpy.dtype
+        The drawn dtypes.
 
     Examples
     --------
@@ -256,6 +260,7 @@ def inertias(
     Returns
     -------
     SearchStrategy of ndarray
+        Diagonals of :math:`\Lambda`, shape (..., n).
 
     Examples
     --------
@@ -301,6 +306,7 @@ def hard_inertia(
     Returns
     -------
     ndarray, shape (n,)
+        The diagonal of :math:`\Lambda`.
 
     Raises
     ------
@@ -377,6 +383,7 @@ def attitudes(draw: st.DrawFn, n: int, near_half_turn: bool | None = None) -> np
     Returns
     -------
     SearchStrategy of ndarray
+        Attitudes, shape (n, n).
 
     Examples
     --------
@@ -477,6 +484,7 @@ def jd_cases(
     Returns
     -------
     SearchStrategy of HardCase
+        The drawn cases.
 
     Examples
     --------
@@ -568,6 +576,7 @@ def step_sizes(
     Returns
     -------
     SearchStrategy of (h, h_fold)
+        The step and the fold scale of ``M``.
 
     Examples
     --------
