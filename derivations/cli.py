@@ -27,7 +27,7 @@ import subprocess
 import sys
 import textwrap
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -42,6 +42,7 @@ from derivations.registry import (
     get_claim,
     kernel_report,
     verify_claim,
+    verify_each,
 )
 from derivations.text import (
     WIDTH,
@@ -158,19 +159,26 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 
 def _run(
-    claims: Sequence[Claim], fail_fast: bool, report: Callable[[str, bool], None]
-) -> Iterator[ClaimResult]:
-    """Verify ``claims`` in order, reporting each (``report(line, final)``); stop after the first
-    surprise with ``fail_fast``."""
+    claims: Sequence[Claim], fail_fast: bool, report: Callable[[str, bool], None], jobs: int = 1
+) -> list[ClaimResult]:
+    """Verify ``claims`` (in ``jobs`` processes), reporting each result as it comes
+    (``report(line, final)``); stop after the first surprise with ``fail_fast``.  The results
+    are returned in the order of ``claims``."""
     total = len(claims)
-    for i, c in enumerate(claims, 1):
-        report(f"[{i:>{len(str(total))}}/{total}] {c.id:<4} running ...", False)
-        start = time.perf_counter()
-        r = verify_claim(c, fail_fast=fail_fast)
-        report(progress_line(i, total, r, time.perf_counter() - start), True)
-        yield r
-        if fail_fast and not r.ok:
-            return
+    order = {c.id: i for i, c in enumerate(claims)}
+    if jobs == 1 and claims:
+        report(f"[{1:>{len(str(total))}}/{total}] {claims[0].id:<4} running ...", False)
+    results: list[ClaimResult] = []
+    last = time.perf_counter()
+    for r in verify_each(claims, jobs=jobs, fail_fast=fail_fast):
+        now = time.perf_counter()
+        results.append(r)
+        report(progress_line(len(results), total, r, now - last if jobs == 1 else r.seconds), True)
+        last = now
+        if jobs == 1 and len(results) < total and not (fail_fast and not r.ok):
+            nxt = claims[len(results)].id
+            report(f"[{len(results) + 1:>{len(str(total))}}/{total}] {nxt:<4} running ...", False)
+    return sorted(results, key=lambda r: order[r.id])
 
 
 def _claims(ids: Sequence[str], group: str | None) -> list[Claim]:
@@ -211,7 +219,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     except KeyError as exc:
         print(textwrap.fill(exc.args[0], width=WIDTH), file=sys.stderr)
         return 2
-    results = list(_run(claims, args.fail_fast, progress))
+    results = _run(claims, args.fail_fast, progress, jobs=args.jobs)
     complete = not args.ids and len(results) == len(all_claims())
     kernels = kernel_report()
     unchecked = []
@@ -312,7 +320,30 @@ def _add_verify(sub: Any) -> None:
     p.add_argument(
         "--fail-fast", action="store_true", help="stop at the first claim whose outcome differs"
     )
+    p.add_argument(
+        "-j", "--jobs", type=_jobs, default=_default_jobs(), metavar="N",
+        help=f"claims run in N worker processes (default here: {_default_jobs()}, the CPUs this "
+        "process may use; 1 runs them in this process, in order)",
+    )  # fmt: skip
     p.set_defaults(func=_cmd_verify)
+
+
+def _default_jobs() -> int:
+    """The CPUs this process may use (its affinity where the platform tells)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+def _jobs(text: str) -> int:
+    """``--jobs``: an integer >= 1 (argparse reports anything else as a usage error)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}")
+    return value
 
 
 def _add_derive(sub: Any) -> None:

@@ -38,11 +38,13 @@ from __future__ import annotations
 import enum
 import importlib
 import inspect
+import multiprocessing
 import pkgutil
 import re
 import textwrap
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -61,6 +63,7 @@ __all__ = [
     "get_claim",
     "import_claim_modules",
     "verify",
+    "verify_each",
     "verify_claim",
     "kernel_report",
     "OUTCOMES",
@@ -475,22 +478,73 @@ def _contradicts(expected: str, r: EvidenceResult) -> bool:
     return not r.passed
 
 
+def _verify_by_id(cid: str, fail_fast: bool) -> tuple[ClaimResult, list[tuple[str, str]]]:
+    """Run in a worker process: the result, and the kernels whose expressions the claim read."""
+    result = verify_claim(get_claim(cid), fail_fast=fail_fast)
+    read = [(k.target, k.name) for k in KERNELS if cid in k.checked_by]
+    return result, read
+
+
+def _pool_context() -> Any:
+    """Worker processes forked from this one where the platform can (no second import of the
+    claim modules), spawned elsewhere."""
+    methods = multiprocessing.get_all_start_methods()
+    return multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+
+
+def verify_each(
+    claims: Sequence[Claim], *, jobs: int = 1, fail_fast: bool = False
+) -> Iterator[ClaimResult]:
+    """Verify ``claims``, yielding each result when it is ready.
+
+    With ``jobs == 1`` the claims run here, in order.  With more, they run in that many worker
+    processes and the results come in the order they finish; which kernels each claim's evidence
+    read is carried back, so :func:`kernel_report` is the same as after a serial run.  With
+    ``fail_fast`` no further claim is started after the first result that differs from its
+    record (one that is already running still finishes).
+    """
+    if jobs < 1:
+        raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
+    if jobs == 1 or len(claims) <= 1:
+        for c in claims:
+            result = verify_claim(c, fail_fast=fail_fast)
+            yield result
+            if fail_fast and not result.ok:
+                return
+        return
+    by_key = {(k.target, k.name): k for k in KERNELS}
+    workers = min(jobs, len(claims))
+    with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
+        futures = [pool.submit(_verify_by_id, c.id, fail_fast) for c in claims]
+        try:
+            for future in as_completed(futures):
+                result, read = future.result()
+                for key in read:
+                    by_key[key].checked_by.add(result.id)
+                yield result
+                if fail_fast and not result.ok:
+                    return
+        finally:
+            for future in futures:
+                future.cancel()
+
+
 def verify(
     ids: Iterable[str] | None = None,
-    progress: Callable[[Claim], None] | None = None,
+    progress: Callable[[ClaimResult], None] | None = None,
     fail_fast: bool = False,
+    jobs: int = 1,
 ) -> list[ClaimResult]:
-    """Verify the claims with the given IDs (all when ``None``), in registry order."""
+    """Verify the claims with the given IDs (all when ``None``); the results in registry order.
+    ``progress`` is called with each result as it comes (see :func:`verify_each`)."""
     claims = all_claims() if ids is None else [get_claim(i) for i in ids]
+    order = {c.id: i for i, c in enumerate(claims)}
     out = []
-    for c in claims:
+    for result in verify_each(claims, jobs=jobs, fail_fast=fail_fast):
         if progress is not None:
-            progress(c)
-        result = verify_claim(c, fail_fast=fail_fast)
+            progress(result)
         out.append(result)
-        if fail_fast and not result.ok:
-            break
-    return out
+    return sorted(out, key=lambda r: order[r.id])
 
 
 def kernel_report() -> list[dict[str, Any]]:

@@ -338,7 +338,7 @@ def _table_row(out: str, cid: str) -> str:
 
 
 def test_verify_progress_and_table(capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, err = _call(capsys, "verify", "S1", "S11")
+    code, out, err = _call(capsys, "verify", "S1", "S11", "--jobs", "1")
     assert code == 0
     progress = err.splitlines()
     assert re.match(r"\[1/2\] S1 +holds +\(3 checks, .+\)$", progress[0]), progress
@@ -377,7 +377,7 @@ def test_verify_surprise_exits_1_and_names_it(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     ev = _break(monkeypatch, "S1", 0.5)
-    code, out, err = _call(capsys, "verify", "S1", "S11")
+    code, out, err = _call(capsys, "verify", "S1", "S11", "--jobs", "1")
     assert code == 1
     assert "SURPRISE: recorded holds" in err
     assert re.match(r"S1 +fails +NO ", _table_row(out, "S1"))
@@ -392,9 +392,26 @@ def test_verify_fail_fast_stops_at_the_first_surprise(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     _break(monkeypatch, "S1", 0.5)
-    code, out, err = _call(capsys, "verify", "S1", "S11", "--fail-fast", "--quiet")
+    code, out, err = _call(capsys, "verify", "S1", "S11", "--fail-fast", "--quiet", "--jobs", "1")
     assert code == 1 and err == ""
     assert "S11" not in out
+
+
+def test_verify_in_two_processes(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--jobs 2: a progress line per claim as each finishes, the table in the order asked, and a
+    broken check in a worker process still makes the run exit 1; --jobs 0 is a usage error."""
+    code, out, err = _call(capsys, "verify", "S11", "D2", "S1", "--jobs", "2")
+    assert code == 0
+    assert sorted(re.findall(r"\] (\S+) ", err)) == ["D2", "S1", "S11"]
+    rows = [line.split()[0] for line in out.splitlines() if re.match(r"[DS]\d+ +[a-z]", line)]
+    assert rows == ["S11", "D2", "S1"]  # the order asked for, as in a serial run
+    _break(monkeypatch, "S1", 0.5)
+    code, out, err = _call(capsys, "verify", "S1", "S11", "--jobs", "2")
+    assert code == 1 and re.match(r"S1 +fails +NO ", _table_row(out, "S1"))
+    code, out, err = _call(capsys, "verify", "S1", "--jobs", "0")
+    assert code == 2 and "must be an integer >= 1" in err
 
 
 def test_verify_table_fits_100_columns_with_every_kind_of_line() -> None:
@@ -446,9 +463,9 @@ def test_verify_group_runs_only_that_group(
 ) -> None:
     ran: list[list[str]] = []
 
-    def record(claims: Any, *args: Any) -> Any:
+    def record(claims: Any, *args: Any, **kwargs: Any) -> Any:
         ran.append([c.id for c in claims])
-        return iter([])
+        return []
 
     monkeypatch.setattr("derivations.cli._run", record)
     for argv, group in ((["--paper"], "paper"), (["--group", "method"], "method"), ([], None)):

@@ -8,6 +8,7 @@ import re
 import pytest
 import sympy as sp
 
+from derivations import registry
 from derivations.registry import (
     Claim,
     EvidenceResult,
@@ -18,6 +19,7 @@ from derivations.registry import (
     outcome_of,
     verify_claim,
 )
+from derivations.vocabulary import KERNELS
 
 CLAIMS = all_claims()
 
@@ -151,3 +153,31 @@ def test_report_escapes_markdown_but_not_math() -> None:
 
     assert plain("u*_k and ||M||_op") == r"u\*\_k and \|\|M\|\|\_op"
     assert plain("keep $x_k^*$ as is") == "keep $x_k^*$ as is"
+
+
+def test_parallel_verify_matches_the_serial_run() -> None:
+    """verify(jobs=2) gives the serial results (registry order, the same residuals) and carries
+    back which kernels each claim read, so the kernel report cannot tell the two apart."""
+    ids = ["S1", "D2", "S2", "D11"]
+    saved = {k: set(k.checked_by) for k in KERNELS}
+    try:
+        reads = []
+        results = []
+        for jobs in (2, 1):
+            for k in KERNELS:
+                k.checked_by.clear()
+            results.append(registry.verify(ids, jobs=jobs))
+            reads.append({(k.target, k.name): frozenset(k.checked_by) for k in KERNELS})
+    finally:
+        for k, before in saved.items():
+            k.checked_by.clear()
+            k.checked_by.update(before)
+    par, ser = results
+    assert [r.id for r in par] == [r.id for r in ser] == ids
+    assert [[e.residual for e in r.evidence] for r in par] == [
+        [e.residual for e in r.evidence] for r in ser
+    ]
+    assert reads[0] == reads[1]
+    assert any("S2" in claims for claims in reads[0].values())
+    with pytest.raises(ValueError, match="jobs must be"):
+        list(registry.verify_each(all_claims()[:2], jobs=0))
