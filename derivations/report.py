@@ -404,9 +404,12 @@ def _id_cell(r: Mapping[str, Any]) -> str:
 
 def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
     """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID,
-    title, where in the paper, outcome, checks by level, closest call, time."""
+    title, where in the paper (for a method check: the symrb function it backs), outcome, checks
+    by level, closest call, time."""
+    paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
+    where = "where in the paper" if paper else "what it backs in symrb"
     rows = [
-        "| ID | claim | where in the paper | outcome | checks "
+        f"| ID | claim | {where} | outcome | checks "
         "| closest call (residual ≤ tolerance) | time |",
         "|---|---|---|---|---|---|---|",
     ]
