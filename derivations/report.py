@@ -249,8 +249,11 @@ def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> st
 def claim_markdown(result: ClaimResult) -> str:
     """Statement, erratum (printed/corrected), note, outcome and evidence table of a claim."""
     claim = get_claim(result.id)
-    where = f"{prose(short_where(claim.where))}; LaTeX label" if claim.where else "LaTeX label"
-    parts = [f"**{claim.id}** ({where} `{claim.label}`): {breakable(claim.render('statement'))}"]
+    pieces = [prose(short_where(claim.where))] if claim.where else []
+    if claim.label:  # a method check of symrb's own has no label in the paper
+        pieces.append(f"LaTeX label `{claim.label}`")
+    head = f"**{claim.id}** ({'; '.join(pieces)})" if pieces else f"**{claim.id}**"
+    parts = [f"{head}: {breakable(claim.render('statement'))}"]
     if claim.printed:
         parts.append(f"*Printed in the paper:* {breakable(claim.render('printed'))}")
         parts.append(f"*Corrected:* {breakable(claim.render('corrected'))}")
@@ -409,8 +412,7 @@ def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
     paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
     where = "where in the paper" if paper else "what it backs in symrb"
     rows = [
-        f"| ID | claim | {where} | outcome | checks "
-        "| closest call (residual ≤ tolerance) | time |",
+        f"| ID | claim | {where} | outcome | checks | closest call (residual ≤ tolerance) | time |",
         "|---|---|---|---|---|---|---|",
     ]
     for r in results:

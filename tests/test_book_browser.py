@@ -80,7 +80,8 @@ HTML_TAG = re.compile(
 )
 # Markdown syntax left in visible text.
 MARKDOWN = {
-    "bold or emphasis markers **": re.compile(r"\*\*"),
+    # (the API page lists a var-keyword parameter as "**options (Any) - ...", which is no markup)
+    "bold or emphasis markers **": re.compile(r"\*\*(?!\w+ \()"),
     "bold or emphasis markers __": re.compile(r"(?<![A-Za-z0-9])__|__(?![A-Za-z0-9])"),
     "emphasis markers *...*": re.compile(
         r"(?<![\w*\\])\*[^\s*][^*\n]{0,80}?(?<![\s\\])\*(?![\w*])"
