@@ -125,7 +125,9 @@ SIMULATED = (SolveIVP, MV, Composition, RKMK4, Midpoint, Exact)
 PAPER = (Discrete, MVAlgorithm1, MVAlgorithm2)
 #: every value of ``method``: simulate's methods, then the paper's algorithms
 METHOD_NAMES = tuple(
-    str(name) for model in SIMULATED + PAPER for name in get_args(model.model_fields["method"].annotation)
+    str(name)
+    for model in SIMULATED + PAPER
+    for name in get_args(model.model_fields["method"].annotation)
 )
 
 

@@ -16,8 +16,8 @@ from ... import _validate as v
 from ..._generated import rigid_body as _rb
 from ..._validate import Array
 from ...algebra import _Jinv_weights
-from ...continuous import Flow, RigidBody
 from ...composition import composition_coefficients
+from ...continuous import Flow
 from ...engine import MVStepper
 from ...errors import InputError, NotConvergedError, OutOfDomainError
 from ...paper import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2, symmetric_flow
@@ -112,12 +112,36 @@ class RigidBodyMomentum(Flow):
 class RigidBodyScene(_ComparedBody):
     """The free rigid body (momentum only, or with the attitude: effect ``attitude``).
 
+    The ``[integrator]`` table is the keyword arguments of :func:`symrb.rigid_body.simulate`:
+    ``method`` (a key of :data:`symrb.rigid_body.METHODS`, default ``"DOP853"``) and the
+    keywords that method takes (``h``, ``order``, ``rtol``, ``atol``, its options), with their
+    names, defaults and meanings; the run is one call of ``simulate`` over ``(0, T)`` at the
+    observables' times.  Without the effect ``attitude``, a ``solve_ivp`` method (and ``"mv"``
+    at n != 3) propagates the momentum alone instead (:class:`RigidBodyMomentum`; ``"mv"``: its
+    step on M).  ``method = "discrete"``, ``"mv_algorithm1"`` and ``"mv_algorithm2"`` run the
+    paper's algorithms (:mod:`symrb.paper`; see :mod:`._rigid_body_methods`).
+
     Examples
     --------
-    >>> from symrb.scenes import RigidBodyScene
+    >>> from symrb.scenes import RigidBodyScene, load_scene, plan_scene
     >>> RigidBodyScene.EFFECTS, sorted(RigidBodyScene.OBSERVABLES)  # doctest: +NORMALIZE_WHITESPACE
     (('attitude',), ['M', 'M_gap', 'Omega', 'Q', 'Q_gap', 'casimirs', 'energy', 'lax_spectrum',
     'manakov', 'orthogonality'])
+    >>> scene = load_scene('''
+    ... system = "rigid_body"
+    ... effects = ["attitude"]
+    ... [integrator]
+    ... method = "composition"
+    ... h = 0.1
+    ... order = 6
+    ... [horizon]
+    ... T = 10.0
+    ... [observables]
+    ... energy = {every = 10}
+    ... ''')
+    >>> print(plan_scene(scene).route)  # doctest: +NORMALIZE_WHITESPACE
+    symrb.rigid_body.simulate(Q0, M0, lam, (0, T), method='composition', h=0.1, order=6,
+    kind=None, step='mv', save_every=...), which calls symrb.compose.composed_rigid_body_flow
     """
 
     EFFECTS = ("attitude",)
@@ -242,7 +266,7 @@ def _plan_mv(
 
 
 #: what ``simulate`` calls for each integrator model
-_IMPLEMENTATIONS = {
+_IMPLEMENTATIONS: dict[type, str] = {
     rbm.SolveIVP: "symrb.integrate(RigidBody, ...)", rbm.MV: "symrb.engine.mv_flow",
     rbm.Composition: "symrb.compose.composed_rigid_body_flow",
     rbm.RKMK4: "symrb.compose.rkmk4_rigid_body_flow",
@@ -278,9 +302,12 @@ def _plan_exact(sc: RigidBodyScene, notes: list[str]) -> SystemPlan:
         kernels=(),
         save={"t_eval": [float(t) for t in t_eval]},
         index=index,
-        cost={"flops": 200.0 * len(t_eval), "seconds": 1e-3 + per * len(t_eval),
-              "formula": f"{len(t_eval)} times x ~{per * 1e6:.0f} us (elliptic functions) "
-                         "+ 1 ms of setup"},  # fmt: skip
+        cost={
+            "flops": 200.0 * len(t_eval),
+            "seconds": 1e-3 + per * len(t_eval),
+            "formula": f"{len(t_eval)} times x ~{per * 1e6:.0f} us (elliptic functions) "
+            "+ 1 ms of setup",
+        },  # fmt: skip
         modules=_MODULES + _EXACT_MODULES,
     )
 
@@ -409,8 +436,9 @@ def _run_mv(sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array |
     """``simulate(method="mv")``; the momentum alone (n != 3, no attitude): its step on M."""
     if "Q" in plan.propagated:
         return _run_simulate(sc, plan, x, rotation)
+    integ: Any = sc.integrator
     steps, every = plan.save["steps"], plan.save["save_every"]
-    return _mv_momentum(x["M0"], x["lam"], sc.integrator.h, steps, every)
+    return _mv_momentum(x["M0"], x["lam"], integ.h, steps, every)
 
 
 def _run_simulate(
