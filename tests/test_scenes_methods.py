@@ -13,9 +13,10 @@ from scene_helpers import problem as _problem
 from scene_helpers import same as _same
 
 import symrb
+from symrb.composition import _KINDS
 from symrb.rigid_body import METHODS, simulate
 from symrb.scenes import parse_scene, plan_scene, run_scene, scene_inputs
-from symrb.scenes.systems._rigid_body_methods import METHOD_NAMES, PAPER
+from symrb.scenes.systems._rigid_body_methods import METHOD_NAMES, PAPER, Composition
 
 LAM3 = [0.7, 1.1, 1.6]
 T = 5.0
@@ -83,6 +84,9 @@ def test_the_table_names_every_method_of_simulate_and_the_papers() -> None:
     assert set(METHOD_NAMES) == set(METHODS) | paper
     assert {str(m.model_fields["method"].annotation.__args__[0]) for m in PAPER} == paper
     assert _scene({}).integrator.method == "DOP853"  # simulate's default
+    # the kinds of composition the table takes are composition_coefficients' own
+    (kinds, _) = Composition.model_fields["kind"].annotation.__args__
+    assert set(kinds.__args__) == {k for ks in _KINDS.values() for k in ks}
 
 
 TEXT = """\

@@ -5,9 +5,12 @@
 ``simulate``), and the other keys are the keywords that ``simulate`` and that method take, with
 their names, defaults and meanings: ``h``, ``order``, ``rtol``, ``atol`` and the method's
 options (``condition``, ``backend``, ``kind``, ``step``, ``check``).  The output times
-(``t_eval`` or ``save_every``) come from the observables, and ``t_span`` is ``(0, T)``.  Three
-more values of ``method`` run the paper's own algorithms of :mod:`symrb.paper` (they are not
-methods of ``simulate``): ``"discrete"``, ``"mv_algorithm1"`` and ``"mv_algorithm2"``.
+(``t_eval`` or ``save_every``) come from the observables, and ``t_span`` is ``(0, T)``; so
+``h`` belongs to the fixed-step methods only (for the ``solve_ivp`` methods and ``"exact"`` it
+would only set the output grid, which the observables set), and ``progress`` (a display, not
+a choice of the numerics) is not a key.  Three more values of ``method`` run the paper's own
+algorithms of :mod:`symrb.paper` (they are not methods of ``simulate``): ``"discrete"``,
+``"mv_algorithm1"`` and ``"mv_algorithm2"``.
 """
 
 from __future__ import annotations
