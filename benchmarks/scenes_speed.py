@@ -100,7 +100,7 @@ def _pin_blas() -> None:
 def _attitude_savings(pair_repeats: int) -> dict:
     """1. momentum only vs with attitude (DOP853 and the Moser-Veselov engine)."""
     out: dict = {}
-    cont = {"kind": "continuous", "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}
+    cont = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12}
     m_only, with_q = _rb([], cont), _rb(["attitude"], cont)
     a, b = _pair(lambda: scenes.run_scene(m_only, cache=False),
                  lambda: scenes.run_scene(with_q, cache=False), pair_repeats)  # fmt: skip
@@ -116,7 +116,7 @@ def _attitude_savings(pair_repeats: int) -> dict:
             "with_attitude": _nfev(with_q),
         },
     }
-    mv = {"kind": "mv", "h": 0.1}
+    mv = {"method": "mv", "h": 0.1}
     mv_m, mv_q = _rb([], mv), _rb(["attitude"], mv)
     a, b = _pair(lambda: scenes.run_scene(mv_m, cache=False),
                  lambda: scenes.run_scene(mv_q, cache=False), pair_repeats)  # fmt: skip
@@ -134,7 +134,7 @@ def _attitude_savings(pair_repeats: int) -> dict:
 
 def _scene_vs_hand_written(pair_repeats: int) -> dict:
     """2. the attitude scene against the public calls it makes, written by hand."""
-    cont = {"kind": "continuous", "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}
+    cont = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12}
     with_q = _rb(["attitude"], cont)
     x = scenes.scene_inputs(with_q)
     t_eval = np.linspace(0.0, 100.0, 101)
@@ -194,7 +194,7 @@ def _sweep_on_local_cluster(sweep_repeats: int) -> dict:
         {
             "system": "rigid_body",
             "parameters": {"n": 10},
-            "integrator": {"kind": "continuous", "rtol": 1e-10},
+            "integrator": {"method": "DOP853", "rtol": 1e-10},
             "horizon": {"T": 100.0},
             "observables": {"energy": {"points": 11}, "M": "end"},
         }

@@ -46,7 +46,7 @@ n = 4
 seed = 3
 
 [integrator]
-kind = "continuous"
+method = "DOP853"
 rtol = 1e-9
 
 [horizon]
@@ -64,7 +64,7 @@ def _rb(n=4, effects=(), integrator=None, T=5.0, observables=None, **params):
             "system": "rigid_body",
             "effects": list(effects),
             "parameters": {"n": n, "seed": 3, **params},
-            "integrator": integrator or {"kind": "continuous", "rtol": 1e-9},
+            "integrator": integrator or {"method": "DOP853", "rtol": 1e-9},
             "horizon": {"T": T},
             "observables": observables or {"energy": {"points": 6}},
         }
@@ -83,7 +83,7 @@ def test_base_scene_is_valid() -> None:
 @pytest.mark.parametrize(
     ("old", "new", "key", "line", "allowed"),
     [
-        ('kind = "continuous"', 'kind = "euler"', "integrator.kind", 10, ["continuous", "mv"]),
+        ('method = "DOP853"', 'method = "euler"', "integrator.method", 10, ["DOP853", "mv"]),
         ("n = 4", "n = 4\nspin = 2", "parameters.spin", 7, ["n", "lam", "seed", "M0"]),
         ('Q = "end"', 'omega = "end"', "observables.omega", 18, ["energy", "Q", "manakov"]),
         ('effects = ["attitude"]', 'effects = ["costates"]', "effects", 3, ["attitude"]),
@@ -95,8 +95,8 @@ def test_base_scene_is_valid() -> None:
 )
 def test_errors_name_key_line_and_allowed_values(old, new, key, line, allowed) -> None:
     if not key:
-        text = BASE.replace("rtol = 1e-9", 'method = "Euler"')
-        key, line, allowed = "integrator.method", 11, ["DOP853", "RK45", "Radau"]
+        text = BASE.replace("rtol = 1e-9", "h = 0.1")  # a keyword DOP853 does not take
+        key, line, allowed = "integrator.h", 11, ["method", "rtol", "atol"]
     else:
         assert old in BASE
         text = BASE.replace(old, new)
@@ -139,7 +139,7 @@ def test_a_model_built_in_python_gets_the_checks_across_keys() -> None:
     # effect, what MV-Algorithm 1 can record) run in parse_scene, for a model as for a table
     base = {"system": "rigid_body", "horizon": {"T": 2.0}}
     no_attitude = scenes.RigidBodyScene.model_validate(
-        {**base, "integrator": {"kind": "continuous"}, "observables": {"Q": "end"}}
+        {**base, "integrator": {"method": "DOP853"}, "observables": {"Q": "end"}}
     )
     with pytest.raises(SceneError, match=r"observables.Q: needs the effect 'attitude'"):
         plan_scene(no_attitude)
@@ -147,7 +147,7 @@ def test_a_model_built_in_python_gets_the_checks_across_keys() -> None:
         {
             **base,
             "effects": ["attitude"],
-            "integrator": {"kind": "mv_algorithm1", "h": 0.5},
+            "integrator": {"method": "mv_algorithm1", "h": 0.5},
             "observables": {"energy": "end"},
         }  # fmt: skip
     )
@@ -186,7 +186,7 @@ def test_momentum_only_skips_the_attitude() -> None:
 
 
 def test_mv_momentum_only_at_general_n_and_fused_at_n3() -> None:
-    mv = {"kind": "mv", "h": 0.05}
+    mv = {"method": "mv", "h": 0.05}
     assert plan_scene(_rb(n=5, integrator=mv)).propagated == ("M",)
     p3 = plan_scene(_rb(n=3, integrator=mv))
     assert p3.propagated == ("Q", "M") and any("fused" in n for n in p3.notes)
@@ -245,7 +245,7 @@ def test_save_times_are_the_union_of_the_requests() -> None:
 
 
 def test_fixed_step_saves_every_gcd() -> None:
-    mv = {"kind": "mv", "h": 0.1}
+    mv = {"method": "mv", "h": 0.1}
     sc = _rb(n=3, integrator=mv, observables={"energy": {"every": 4}, "M": {"times": [0.6]}})
     plan = plan_scene(sc)
     assert plan.save == {"steps": 50, "save_every": 2}
@@ -255,7 +255,7 @@ def test_fixed_step_saves_every_gcd() -> None:
     with pytest.raises(SceneError, match=r"observables.M.every"):
         plan_scene(_rb(observables={"M": {"every": 3}}))
     with pytest.raises(SceneError, match=r"horizon.T"):
-        plan_scene(_rb(n=3, integrator={"kind": "mv", "h": 0.3}))
+        plan_scene(_rb(n=3, integrator={"method": "mv", "h": 0.3}))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -295,7 +295,7 @@ def test_momentum_only_scene_equals_integrate() -> None:
 
 @pytest.mark.parametrize("n", [3, 5])
 def test_mv_scene_equals_mv_flow(n: int) -> None:
-    sc = _rb(n=n, integrator={"kind": "mv", "h": 0.05}, T=2.0,
+    sc = _rb(n=n, integrator={"method": "mv", "h": 0.05}, T=2.0,
              observables={"M": {"every": 8}, "energy": "end"})  # fmt: skip
     r = run_scene(sc, cache=False)
     x = scene_inputs(sc)
@@ -305,7 +305,7 @@ def test_mv_scene_equals_mv_flow(n: int) -> None:
 
 
 def test_discrete_scene_equals_discrete_rigid_body_flow() -> None:
-    sc = _rb(n=4, effects=["attitude"], integrator={"kind": "discrete", "h": 0.1}, T=1.0,
+    sc = _rb(n=4, effects=["attitude"], integrator={"method": "discrete", "h": 0.1}, T=1.0,
              observables={"Q": {"every": 5}, "orthogonality": "end"})  # fmt: skip
     r = run_scene(sc, cache=False)
     x = scene_inputs(sc)
@@ -388,7 +388,7 @@ def test_symmetric_body_start_and_gram_observables_equal_hand_written(start: str
 
 
 def test_inputs_are_not_mutated_and_scenes_are_frozen() -> None:
-    data = {"system": "rigid_body", "integrator": {"kind": "continuous"},
+    data = {"system": "rigid_body", "integrator": {"method": "DOP853"},
             "horizon": {"T": 1.0}, "observables": {"M": "end"}}  # fmt: skip
     before = json.dumps(data)
     sc = parse_scene(data)
@@ -434,7 +434,7 @@ def test_key_depends_on_the_code(monkeypatch) -> None:
     monkeypatch.setattr(scenes_store, "_code_digest", lambda mods: real(mods) + "changed")
     assert scenes.scene_key(sc) != key
     # and on the modules the plan uses: the engine's source enters an MV scene's key only
-    assert "engine" in plan_scene(_rb(n=3, integrator={"kind": "mv", "h": 0.1})).modules
+    assert "engine" in plan_scene(_rb(n=3, integrator={"method": "mv", "h": 0.1})).modules
     assert "engine" not in plan_scene(sc).modules
 
 
@@ -497,9 +497,9 @@ def test_cli_run_explain_and_errors(tmp_path) -> None:
     assert "loaded from the cache" in again.stdout
     assert (tmp_path / "out" / "arrays.npz").is_file()
     bad = tmp_path / "bad.toml"
-    bad.write_text(BASE.replace('kind = "continuous"', 'kind = "rk4"'))
+    bad.write_text(BASE.replace('method = "DOP853"', 'method = "rk4"'))
     err = _cli("run", str(bad), env=env)
-    assert err.returncode == 2 and "integrator.kind (line 10)" in err.stderr
+    assert err.returncode == 2 and "integrator.method (line 10)" in err.stderr
     sw = _cli("sweep", str(path), "--grid", "parameters.seed=1,2", "--out",
               str(tmp_path / "sw"), "--no-progress", env=env)  # fmt: skip
     assert sw.returncode == 0, sw.stderr
@@ -527,7 +527,7 @@ def cluster_client():
 
 def _grid_scene() -> dict:
     return {"system": "rigid_body", "parameters": {"n": 6},
-            "integrator": {"kind": "continuous", "rtol": 1e-10}, "horizon": {"T": 20.0},
+            "integrator": {"method": "DOP853", "rtol": 1e-10}, "horizon": {"T": 20.0},
             "observables": {"energy": {"points": 5}, "M": "end"}}  # fmt: skip
 
 
@@ -656,7 +656,7 @@ def test_gap_equals_two_hand_written_runs() -> None:
         {"system": "symmetric_rigid_body", "parameters": {"n": 4, "seed": 3, "Q0": "random"},
          "integrator": {"kind": "continuous", "rtol": 1e-7, "atol": 1e-9},
          "compare": {"system": "rigid_body",
-                     "integrator": {"kind": "continuous", "rtol": 1e-11, "atol": 1e-13}},
+                     "integrator": {"method": "DOP853", "rtol": 1e-11, "atol": 1e-13}},
          "horizon": {"T": 4.0},
          "observables": {"M_gap": {"points": 21, "windows": 5, "reduce": "max"},
                          "Q_gap": {"times": [1.0, 4.0]}}}
@@ -682,7 +682,7 @@ def test_gap_equals_two_hand_written_runs() -> None:
 
 
 def test_mv_algorithm2_scene_equals_mv_algorithm2() -> None:
-    sc = _rb(n=3, effects=["attitude"], integrator={"kind": "mv_algorithm2", "h": 0.5}, T=20.0,
+    sc = _rb(n=3, effects=["attitude"], integrator={"method": "mv_algorithm2", "h": 0.5}, T=20.0,
              observables={"M": {"every": 5}, "orthogonality": {"every": 1, "windows": 4,
                                                                "reduce": "max_abs"}})  # fmt: skip
     r = run_scene(sc, cache=False)
@@ -696,19 +696,19 @@ def test_mv_algorithm2_scene_equals_mv_algorithm2() -> None:
     assert "mv_algorithm2" in r.plan.route
 
 
-def test_sweep_over_the_integrator_kind() -> None:
-    # "mv" fills in its default order; a grid point of another kind must not inherit that key
-    sc = _rb(n=3, effects=["attitude"], integrator={"kind": "mv", "h": 0.5}, T=10.0,
+def test_sweep_over_the_integrator_method() -> None:
+    # "mv" fills in its default order; a grid point of another method must not inherit that key
+    sc = _rb(n=3, effects=["attitude"], integrator={"method": "mv", "h": 0.5}, T=10.0,
              observables={"energy": {"every": 4}})  # fmt: skip
-    out = sweep(sc, {"integrator.kind": ["mv", "mv_algorithm2"]}, cache=False, progress=False)
-    assert list(out.table["integrator.kind"]) == ["mv", "mv_algorithm2"]
+    out = sweep(sc, {"integrator.method": ["mv", "mv_algorithm2"]}, cache=False, progress=False)
+    assert list(out.table["integrator.method"]) == ["mv", "mv_algorithm2"]
     x = scene_inputs(sc)
     ref = symrb.mv_algorithm2(x["Q0"], 0.5 * x["M0"], x["lam"], 20, save_every=4)
     _same(out.results[1]["energy"], symrb.kinetic_energy(ref.y.M / 0.5, x["lam"]))
     assert "mv_algorithm2" in out.results[1].plan.route and "mv_flow" in out.results[0].plan.route
     with pytest.raises(SceneError, match="integrator.order"):  # set by the user: named
-        sweep(_rb(n=3, integrator={"kind": "mv", "h": 0.5, "order": 4}),
-              {"integrator.kind": ["mv_algorithm2"]}, cache=False, progress=False)  # fmt: skip
+        sweep(_rb(n=3, integrator={"method": "mv", "h": 0.5, "order": 4}),
+              {"integrator.method": ["mv_algorithm2"]}, cache=False, progress=False)  # fmt: skip
 
 
 REDUCED = BASE.replace(
@@ -740,19 +740,19 @@ def test_reduction_and_compare_requests_the_run_cannot_meet() -> None:
     with pytest.raises(SceneError, match=r"observables.M_gap.*\[compare\]"):
         parse_scene(_rb().model_dump() | {"observables": {"M_gap": "end"}})
     with pytest.raises(SceneError, match=r"compare.*_gap"):
-        parse_scene(_rb().model_dump() | {"compare": {"integrator": {"kind": "continuous"}}})
-    mv = {"kind": "mv", "h": 0.1}
+        parse_scene(_rb().model_dump() | {"compare": {"integrator": {"method": "DOP853"}}})
+    mv = {"method": "mv", "h": 0.1}
 
     def gap_scene(integrator, compare):
         return {"system": "rigid_body", "parameters": {"n": 3}, "integrator": integrator,
                 "horizon": {"T": 1.0}, "observables": {"M_gap": "end"}, "compare": compare}  # fmt: skip
 
     # adaptive against fixed steps at the end: allowed (the refusals left: test_scenes_bodies.py)
-    assert plan_scene(gap_scene({"kind": "continuous"}, {"integrator": mv})).compare
+    assert plan_scene(gap_scene({"method": "DOP853"}, {"integrator": mv})).compare
     with pytest.raises(SceneError, match=r"compare.integrator.h"):
-        plan_scene(gap_scene({"kind": "mv", "h": 0.5}, {"integrator": mv}))
+        plan_scene(gap_scene({"method": "mv", "h": 0.5}, {"integrator": mv}))
     with pytest.raises(SceneError, match=r"compare.integrator.kind"):
         plan_scene(gap_scene(mv, {"system": "symmetric_rigid_body", "integrator": mv}))
-    assert plan_scene(gap_scene(mv, {"integrator": {"kind": "discrete", "h": 0.1}})).compare
+    assert plan_scene(gap_scene(mv, {"integrator": {"method": "discrete", "h": 0.1}})).compare
     with pytest.raises(SceneError, match=r"windowed reduction needs a series"):
         _rb(observables={"energy": {"end": True, "windows": 2, "reduce": "max"}})

@@ -54,10 +54,10 @@ def _agreement(integrator, compare, observables, T=40.0, **params):
     })  # fmt: skip
 
 
-SYM = {"kind": "discrete", "h": 1.0}
-MV2_PAPER = {"kind": "mv_algorithm2", "h": 1.0, "start": "Q1_M1"}
-MV2 = {"kind": "mv_algorithm2", "h": 1.0}
-MV1 = {"kind": "mv_algorithm1", "h": 1.0}
+SYM = {"method": "discrete", "h": 1.0}
+MV2_PAPER = {"method": "mv_algorithm2", "h": 1.0, "start": "Q1_M1"}
+MV2 = {"method": "mv_algorithm2", "h": 1.0}
+MV1 = {"method": "mv_algorithm1", "h": 1.0}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -133,13 +133,13 @@ def test_mv_algorithm1_scene_equals_hand_written_calls() -> None:
 
 
 @pytest.mark.parametrize("integrator", [
-    {"kind": "discrete", "h": 0.5},
-    {"kind": "mv", "h": 0.5},
-    {"kind": "mv_algorithm2", "h": 0.5},
-    {"kind": "mv_algorithm2", "h": 0.5, "start": "Q1_M1"},
-    {"kind": "mv_algorithm1", "h": 0.5},
-    {"kind": "continuous", "rtol": 1e-12, "atol": 1e-14},
-], ids=lambda i: i["kind"] + i.get("start", ""))  # fmt: skip
+    {"method": "discrete", "h": 0.5},
+    {"method": "mv", "h": 0.5},
+    {"method": "mv_algorithm2", "h": 0.5},
+    {"method": "mv_algorithm2", "h": 0.5, "start": "Q1_M1"},
+    {"method": "mv_algorithm1", "h": 0.5},
+    {"method": "DOP853", "rtol": 1e-12, "atol": 1e-14},
+], ids=lambda i: i["method"] + i.get("start", ""))  # fmt: skip
 def test_a_run_in_a_rotated_frame_is_rotated_back(integrator) -> None:
     # the equations are invariant under Q -> R Q: each integrator against itself in the frame of
     # R differs by its rounding (or its tolerance); a run started unrotated but rotated back
@@ -148,7 +148,7 @@ def test_a_run_in_a_rotated_frame_is_rotated_back(integrator) -> None:
     sc = _agreement(integrator, {"integrator": integrator, "rotation": 4},
                     {"Q_gap": {"points": 11}}, T=10.0, momentum=1.0)  # fmt: skip
     gap = run_scene(sc, cache=False)["Q_gap"]
-    tol = 1e-9 if integrator["kind"] == "continuous" else 1e-12
+    tol = 1e-9 if integrator["method"] == "DOP853" else 1e-12
     assert 0.0 < gap.max() < tol, gap.max()
 
 
@@ -158,7 +158,9 @@ def test_a_run_in_a_rotated_frame_is_rotated_back(integrator) -> None:
 ])  # fmt: skip
 def test_mv_algorithm2_from_the_first_step_every_k_steps(observables) -> None:
     N, h = 30, 0.5
-    sc = _agreement({"kind": "mv_algorithm2", "h": h, "start": "Q1_M1"}, None, observables, T=N * h)
+    sc = _agreement(
+        {"method": "mv_algorithm2", "h": h, "start": "Q1_M1"}, None, observables, T=N * h
+    )
     r = run_scene(sc, cache=False)
     x = scene_inputs(sc)
     # Q_1 of the symmetric first step; M_1 = h (Q0^T P0 - P0^T Q0), P0 = Q0 M0 / 2 (D12)
@@ -199,7 +201,7 @@ def test_the_agreement_scenes_give_the_experiments_windows() -> None:
             if isinstance(when, dict) and "windows" in when:
                 when["windows"] = w
         r = run_scene(data, cache=False)
-        got[base.integrator.kind] = r
+        got[base.integrator.method] = r
     a, b = got["discrete"], got["mv_algorithm1"]
     _same(a.times["Q_gap"], run.window_k * 1.0)  # times k h, h = 1
     _same(b.times["Q_gap"], run.window_k * 1.0)
@@ -267,7 +269,7 @@ def _mixed(main, other, observables, T=2.0):
 
 
 def test_adaptive_and_fixed_step_runs_compare_at_common_times() -> None:
-    fixed, adaptive = {"kind": "discrete", "h": 0.25}, {"kind": "continuous", "rtol": 1e-11}
+    fixed, adaptive = {"method": "discrete", "h": 0.25}, {"method": "DOP853", "rtol": 1e-11}
     obs = {"Q_gap": {"times": [0.5, 1.0, 2.0]}, "M_gap": {"points": 5}}
     t_eval = [0.0, 0.5, 1.0, 1.5, 2.0]
     for main, other in [(fixed, adaptive), (adaptive, fixed)]:
@@ -398,7 +400,7 @@ effects = ["attitude"]
 [parameters]
 n = 3
 [integrator]
-kind = "discrete"
+method = "discrete"
 h = 0.5
 [horizon]
 T = 5.0
@@ -411,27 +413,27 @@ Q_gap = {every = 2}
     ("extra", "key", "line", "allowed"),
     [
         # every k steps has no counterpart in an adaptive run (both ways round)
-        ("[compare]\nintegrator = {kind = 'continuous'}\n", "observables.Q_gap.every", 11,
+        ("[compare]\nintegrator = {method = 'DOP853'}\n", "observables.Q_gap.every", 11,
          ["end", "times", "points"]),
-        ("[[compare]]\nintegrator = {kind = 'discrete', h = 0.5}\n[[compare]]\n"
-         "integrator = {kind = 'continuous'}\n", "observables.Q_gap.every", 11,
+        ("[[compare]]\nintegrator = {method = 'discrete', h = 0.5}\n[[compare]]\n"
+         "integrator = {method = 'DOP853'}\n", "observables.Q_gap.every", 11,
          ["end", "times", "points"]),
-        ("[compare]\nintegrator = {kind = 'discrete', h = 0.25}\n", "compare.integrator.h", 13,
+        ("[compare]\nintegrator = {method = 'discrete', h = 0.25}\n", "compare.integrator.h", 13,
          [0.5]),
-        ("[compare]\nintegrator = {kind = 'continuous'}\nshift = 1\n", "compare.shift", 14, [0]),
-        ("[compare]\nintegrator = {kind = 'discrete', h = 0.5}\nshift = 3\n", "compare.shift",
+        ("[compare]\nintegrator = {method = 'DOP853'}\nshift = 1\n", "compare.shift", 14, [0]),
+        ("[compare]\nintegrator = {method = 'discrete', h = 0.5}\nshift = 3\n", "compare.shift",
          14, [2, 4, 6]),
-        ("[compare]\nintegrator = {kind = 'discrete', h = 0.5}\nshift = 10\n", "compare.shift",
+        ("[compare]\nintegrator = {method = 'discrete', h = 0.5}\nshift = 10\n", "compare.shift",
          14, None),
-        ("[[compare]]\nintegrator = {kind = 'discrete', h = 0.5}\n[[compare]]\n"
-         "integrator = {kind = 'mv', h = 0.5}\nrotation = [[1.0, 0.0], [0.0, 1.0]]\n",
+        ("[[compare]]\nintegrator = {method = 'discrete', h = 0.5}\n[[compare]]\n"
+         "integrator = {method = 'mv', h = 0.5}\nrotation = [[1.0, 0.0], [0.0, 1.0]]\n",
          "compare.1.rotation", 16, None),
-        ("[compare]\nintegrator = {kind = 'discrete', h = 0.5}\n"
+        ("[compare]\nintegrator = {method = 'discrete', h = 0.5}\n"
          "rotation = [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]\n", "compare.rotation",
          14, None),
-        ("[compare]\nintegrator = {kind = 'mv_algorithm2', h = 0.5, start = 'Q2_M2'}\n",
+        ("[compare]\nintegrator = {method = 'mv_algorithm2', h = 0.5, start = 'Q2_M2'}\n",
          "compare.integrator.start", 13, ["Q0_M0", "Q1_M1"]),
-        ("[compare]\nintegrator = {kind = 'mv_algorithm1', h = 0.5}\nlable = 'x'\n",
+        ("[compare]\nintegrator = {method = 'mv_algorithm1', h = 0.5}\nlable = 'x'\n",
          "compare.lable", 14, ["system", "integrator", "rotation", "shift", "label"]),
     ],
 )  # fmt: skip
@@ -444,22 +446,24 @@ def test_second_run_requests_name_key_line_and_allowed(extra, key, line, allowed
 
 def test_shift_needs_steps_and_mv_algorithm1_needs_no_momentum() -> None:
     shifted = BASE.replace("Q_gap = {every = 2}", "Q_gap = {times = [1.0, 2.0]}")
-    (p,) = _problems(shifted + "[compare]\nintegrator = {kind = 'discrete', h = 0.5}\nshift = 2\n")
+    (p,) = _problems(
+        shifted + "[compare]\nintegrator = {method = 'discrete', h = 0.5}\nshift = 2\n"
+    )
     assert (p["key"], p["line"], p["allowed"]) == ("observables.Q_gap", 11, ["end", "every"])
-    mv1 = BASE.replace('kind = "discrete"', 'kind = "mv_algorithm1"')
+    mv1 = BASE.replace('method = "discrete"', 'method = "mv_algorithm1"')
     (p,) = _problems(mv1.replace("Q_gap = {every = 2}", "energy = 'end'\nQ = 'end'"))
     assert (p["key"], p["line"]) == ("observables.energy", 11)
     assert p["allowed"] == ["Q", "orthogonality", "Q_gap"]
     both = BASE.replace("Q_gap = {every = 2}", "Q_gap = 'end'\nM_gap = 'end'")
-    (p,) = _problems(both + "[compare]\nintegrator = {kind = 'mv_algorithm1', h = 0.5}\n")
+    (p,) = _problems(both + "[compare]\nintegrator = {method = 'mv_algorithm1', h = 0.5}\n")
     assert (p["key"], p["line"], p["allowed"]) == ("observables.M_gap", 12, ["Q_gap"])
     # a second run at times that are not steps of its own h: keyed as the scene's gap
-    sc = _mixed({"kind": "continuous"}, {"kind": "discrete", "h": 0.3},
+    sc = _mixed({"method": "DOP853"}, {"method": "discrete", "h": 0.3},
                 {"Q_gap": {"times": [0.5]}}, T=0.6)  # fmt: skip
     (p,) = _problems(parse_scene(sc))
     assert p["key"] == "observables.Q_gap.times" and "multiples of h" in p["message"]
     # a model built in Python, not through parse_scene, is checked by the planner
-    built = parse_scene(_mixed({"kind": "discrete", "h": 0.5}, {"kind": "discrete", "h": 0.5},
+    built = parse_scene(_mixed({"method": "discrete", "h": 0.5}, {"method": "discrete", "h": 0.5},
                                {"Q_gap": "end"}))  # fmt: skip
     bad = built.model_copy(update={"compare": built.compare.model_copy(update={"shift": 4})})
     (p,) = _problems(bad)
@@ -500,7 +504,7 @@ def test_op_norm_scales_a_given_or_drawn_momentum() -> None:
     for M0 in (M, None):
         params = {"n": 3, "lam": LAM3, "M0": M0, "op_norm": 1.5}
         sc = parse_scene({"system": "rigid_body", "parameters": params,
-                          "integrator": {"kind": "continuous"}, "horizon": {"T": 1.0},
+                          "integrator": {"method": "DOP853"}, "horizon": {"T": 1.0},
                           "observables": {"M": "end"}})  # fmt: skip
         x = scene_inputs(sc)
         raw = np.array(M) if M0 else symrb.random_so(3, seed=np.random.default_rng(0))

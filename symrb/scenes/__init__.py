@@ -13,7 +13,7 @@ models; an error names the key, its line in the file and the allowed values
 ... [parameters]
 ... n = 10
 ... [integrator]
-... kind = "continuous"
+... method = "DOP853"
 ... [horizon]
 ... T = 100.0
 ... [observables]

@@ -90,9 +90,10 @@ def _model_at(model: Any, loc: Sequence[Any]) -> Any:
     cur: Any = model
     members: list[Any] = []  # the models of a union, until the next part names a kind
     for part in loc:
+        if _FAMILY.match(str(part)) or str(part) in ("[compare]", "[[compare]]"):
+            continue  # the tag of a union of unions (a family of integrators, one or more runs)
         if members:
-            cur = next((m for m in members if "kind" in m.model_fields and str(part) in
-                        typing.get_args(m.model_fields["kind"].annotation)), None)  # fmt: skip
+            cur = next((m for m in members if str(part) in _tags(m)), None)
             members = []
             continue
         if not (isinstance(cur, type) and issubclass(cur, BaseModel)):
@@ -121,8 +122,23 @@ def _models_in(ann: Any) -> list[type[BaseModel]]:
                               if isinstance(c, type) and issubclass(c, BaseModel)))  # fmt: skip
 
 
+#: the tag of a member of an integrator union of unions (see ``symrb.scenes.systems._compare``)
+_FAMILY = re.compile(r"^\[(method|kind)\]$")
+
+
+def _tags(model: type[BaseModel]) -> tuple[str, ...]:
+    """The values of an integrator model's discriminator: its ``kind`` (the literal), or else its
+    ``method`` (the rigid body's integrators, whose ``kind`` is an option of a composition)."""
+    for name in ("kind", "method"):
+        field = model.model_fields.get(name)
+        if field is not None and typing.get_origin(field.annotation) is typing.Literal:
+            return tuple(str(a) for a in typing.get_args(field.annotation))
+    return ()
+
+
 def _kind_tags() -> set[str]:
-    """The ``kind`` of every integrator of the registered systems (and of their second runs)."""
+    """The ``kind`` (or ``method``) of every integrator of the registered systems (and of their
+    second runs)."""
     tags: set[str] = set()
     todo: list[type[BaseModel]] = list(_SCENES)
     seen: set[type[BaseModel]] = set()
@@ -131,8 +147,7 @@ def _kind_tags() -> set[str]:
         if model in seen:
             continue
         seen.add(model)
-        if "kind" in model.model_fields:
-            tags.update(str(a) for a in typing.get_args(model.model_fields["kind"].annotation))
+        tags.update(_tags(model))
         for field in model.model_fields.values():
             todo.extend(_models_in(field.annotation))
     return tags
@@ -142,7 +157,7 @@ def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
     # the members of a union (a reduction or a list of them; a seed or a matrix; one [compare]
     # table or an array of them) are not keys
     out = [str(x) for x in loc if not re.match(r"^(literal|tuple)\[", str(x))
-           and str(x) not in ("int", "[compare]", "[[compare]]")]  # fmt: skip
+           and str(x) not in ("int", "[compare]", "[[compare]]") and not _FAMILY.match(str(x))]  # fmt: skip
     if out and system is not None and out[0] == system:
         out = out[1:]
     kinds = _kind_tags()
@@ -229,7 +244,7 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
     ...                      "horizon": {"T": 5.0}, "observables": {"pairing": {"points": 6}}})
     >>> type(scene).__name__, scene.integrator.rtol
     ('DoubleBracketScene', 1e-11)
-    >>> parse_scene({"system": "rigid_body", "integrator": {"kind": "continuous"},
+    >>> parse_scene({"system": "rigid_body", "integrator": {"method": "DOP853"},
     ...              "horizon": {"T": 1.0}, "observables": {"Q": "end"}})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...

@@ -74,7 +74,7 @@ class Plan:
     >>> scene = parse_scene({
     ...     "system": "rigid_body",
     ...     "parameters": {"n": 3, "lam": [0.7, 1.1, 1.6], "M0": [0.5, 1.0, 1.5]},
-    ...     "integrator": {"kind": "continuous", "rtol": 1e-8},
+    ...     "integrator": {"method": "DOP853", "rtol": 1e-8},
     ...     "horizon": {"T": 1.0},
     ...     "observables": {"energy": "end"},
     ... })
@@ -309,7 +309,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     --------
     >>> from symrb.scenes import parse_scene, plan_scene
     >>> base = {"system": "rigid_body", "parameters": {"n": 10},
-    ...         "integrator": {"kind": "mv", "h": 0.05}, "horizon": {"T": 100.0}}
+    ...         "integrator": {"method": "mv", "h": 0.05}, "horizon": {"T": 100.0}}
     >>> plan = plan_scene({**base, "observables": {"energy": {"every": 100}, "M": "end"}})
     >>> plan.propagated, plan.save
     (('M',), {'steps': 2000, 'save_every': 100})

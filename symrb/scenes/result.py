@@ -38,7 +38,7 @@ class SceneResult:
     Examples
     --------
     >>> from symrb.scenes import parse_scene, run_scene
-    >>> scene = parse_scene({"system": "rigid_body", "integrator": {"kind": "continuous"},
+    >>> scene = parse_scene({"system": "rigid_body", "integrator": {"method": "DOP853"},
     ...                      "horizon": {"T": 10.0}, "observables": {"energy": {"points": 3}}})
     >>> r = run_scene(scene, cache=False)
     >>> r.times["energy"], r["energy"].shape

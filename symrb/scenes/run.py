@@ -39,7 +39,7 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
     --------
     >>> from symrb.scenes import parse_scene, scene_inputs
     >>> scene = parse_scene({"system": "rigid_body", "parameters": {"n": 4, "seed": 1},
-    ...                      "integrator": {"kind": "continuous"}, "horizon": {"T": 1.0},
+    ...                      "integrator": {"method": "DOP853"}, "horizon": {"T": 1.0},
     ...                      "observables": {"M": "end"}})
     >>> x = scene_inputs(scene)
     >>> x["lam"].shape, x["M0"].shape

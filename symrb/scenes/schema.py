@@ -47,12 +47,14 @@ class SceneError(InputError):
     Examples
     --------
     >>> from symrb.scenes import SceneError, load_scene
-    >>> text = 'system = "rigid_body"\\n[integrator]\\nkind = "euler"\\n[horizon]\\nT = 1.0\\n'
+    >>> text = 'system = "rigid_body"\\n[integrator]\\nmethod = "euler"\\n[horizon]\\nT = 1.0\\n'
     >>> try:
     ...     load_scene(text + '[observables]\\nM = "end"\\n')
     ... except SceneError as exc:
     ...     print(exc.problems[0]["key"], exc.problems[0]["line"], exc.problems[0]["allowed"])
-    integrator.kind 3 ['continuous', 'mv', 'mv_algorithm2', 'mv_algorithm1', 'discrete']
+    ... # doctest: +NORMALIZE_WHITESPACE
+    integrator.method 3 ['DOP853', 'RK45', 'RK23', 'Radau', 'BDF', 'LSODA', 'mv', 'composition',
+    'rkmk4', 'midpoint', 'exact', 'discrete', 'mv_algorithm2', 'mv_algorithm1']
     """
 
     def __init__(self, problems: list[dict[str, Any]], source: str = "scene") -> None:

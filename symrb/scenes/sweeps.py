@@ -61,7 +61,7 @@ def expand_grid(
     Examples
     --------
     >>> from symrb.scenes import expand_grid
-    >>> base = {"system": "rigid_body", "integrator": {"kind": "continuous"},
+    >>> base = {"system": "rigid_body", "integrator": {"method": "DOP853"},
     ...         "horizon": {"T": 1.0}, "observables": {"energy": "end"}}
     >>> pts = expand_grid(base, ["parameters.seed=0,1", "integrator.rtol=1e-6,1e-8"])
     >>> len(pts), pts[1][0]
@@ -193,7 +193,7 @@ def sweep(
     Examples
     --------
     >>> from symrb.scenes import sweep
-    >>> base = {"system": "rigid_body", "integrator": {"kind": "continuous"},
+    >>> base = {"system": "rigid_body", "integrator": {"method": "DOP853"},
     ...         "horizon": {"T": 5.0}, "observables": {"energy": {"points": 3}}}
     >>> out = sweep(base, {"parameters.momentum": [0.5, 1.0]}, cache=False)
     >>> list(out.table["parameters.momentum"]), len(out.results)

@@ -1,5 +1,6 @@
 """What the three bodies share (``rigid_body``, ``symmetric_rigid_body``, ``mclachlan_scovel``):
-their integrators, their parameters, their initial data, their observables and
+the integrators of the symmetric body and of McLachlan-Scovel (``kind``; the rigid body's are in
+:mod:`._rigid_body_methods`), their parameters, their initial data, their observables and
 :class:`_BodyScene`, the base of their scene models (the states of a run, then the observables
 evaluated on them)."""
 
@@ -38,50 +39,11 @@ class Continuous(_Model):
     atol: float = Field(default=1e-12, ge=0)
 
 
-class MV(_Model):
-    """The Moser-Veselov engine ``symrb.engine.mv_flow`` at step ``h``; ``order`` 4-10 (n = 3) the
-    preprocessed method."""
-
-    kind: Literal["mv"]
-    h: float = Field(gt=0)
-    order: Literal[2, 4, 6, 8, 10] = 2
-
-
 class Discrete(_Model):
     """The symmetric representation of Section 2 (``symrb.discrete_rigid_body_flow`` or
     ``symrb.symmetric_flow``) at step ``h``."""
 
     kind: Literal["discrete"]
-    h: float = Field(gt=0)
-
-
-class MVAlgorithm2(_Model):
-    r"""The paper's MV-Algorithm 2 (``symrb.mv_algorithm2``) at step ``h``; its discrete momenta
-    divided by ``h`` are recorded as ``M``.
-
-    ``start = "Q0_M0"`` (the default) starts it from :math:`(Q_0, hM_0)`, read as the pair
-    :math:`(Q_0, M_0)`, and records :math:`M_k/h` at :math:`t_k`.  ``start = "Q1_M1"`` follows the
-    paper's indices, :math:`M_{k+1} \approx hM(t_k)` (the momentum of the step that leaves
-    :math:`Q_k`): the first step is the symmetric algorithm's,
-    ``symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1)``, which gives :math:`Q_1` and
-    :math:`M_1 = h(Q_0^TP_0 - P_0^TQ_0)` (claim D12), and MV-Algorithm 2 runs from
-    :math:`(Q_1, M_1)`; it records :math:`Q_k` and :math:`M_{k+1}/h` at :math:`t_k`.  Against
-    the symmetric algorithm, ``"Q0_M0"`` is one index off."""
-
-    kind: Literal["mv_algorithm2"]
-    h: float = Field(gt=0)
-    start: Literal["Q0_M0", "Q1_M1"] = "Q0_M0"
-
-
-class MVAlgorithm1(_Model):
-    r"""The paper's MV-Algorithm 1 (``symrb.mv_algorithm1``) at step ``h``, on configurations
-    only: :math:`Q_1` is the first step of the symmetric algorithm,
-    ``symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1)`` (the step with
-    :math:`M_1 = h(Q_0^TP_0 - P_0^TQ_0)`, claim D12), then
-    :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})`.  It records :math:`Q_k` at :math:`t_k`
-    (observables ``Q``, ``orthogonality``, ``Q_gap``; the effect ``attitude``)."""
-
-    kind: Literal["mv_algorithm1"]
     h: float = Field(gt=0)
 
 

@@ -18,13 +18,31 @@ from ...errors import InputError
 from ..parse import parse_scene
 from ..plan import Plan, SystemPlan, plan_scene
 from ..schema import Matrix, SceneError, When, _Model
-from ._body import MV, Continuous, Discrete, MVAlgorithm1, MVAlgorithm2, _BodyScene
+from . import _rigid_body_methods as rbm
+from ._body import Continuous, Discrete, _BodyScene
+
+
+def _integrator_family(value: Any) -> str:
+    """``[kind]`` for an integrator of the symmetric rigid body (a table with ``kind``),
+    ``[method]`` for one of the rigid body (``simulate``'s keywords)."""
+    if isinstance(value, Mapping):
+        return "[kind]" if "kind" in value else "[method]"
+    return "[kind]" if isinstance(value, Continuous | Discrete) else "[method]"
+
+
+#: the integrator of a second run: the rigid body's (``method``) or the symmetric body's (``kind``)
+CompareIntegrator = Annotated[
+    Annotated[rbm.RigidBodyIntegrator, Tag("[method]")]
+    | Annotated[Annotated[Continuous | Discrete, Field(discriminator="kind")], Tag("[kind]")],
+    Discriminator(_integrator_family),
+]
 
 
 class Compare(_Model):
     r"""A second run on the same parameters (the same initial data), for the ``*_gap``
-    observables: ``integrator`` (required) and ``system`` (default: the scene's own; the rigid
-    body and the symmetric rigid body describe the same motion).
+    observables: ``integrator`` (required; a rigid body's takes ``method`` and ``simulate``'s
+    keywords, a symmetric rigid body's ``kind``) and ``system`` (default: the scene's own; the
+    rigid body and the symmetric rigid body describe the same motion).
 
     ``rotation`` (a seed of ``symrb.random_SO(n, seed=rotation)``, or a rotation matrix R) runs
     the second run in a rotated frame: its initial state (every attitude and costate in it:
@@ -40,9 +58,7 @@ class Compare(_Model):
     one column per run, in their order (the records that every run can be compared with)."""
 
     system: Literal["rigid_body", "symmetric_rigid_body"] | None = None
-    integrator: Annotated[
-        Continuous | MV | MVAlgorithm2 | MVAlgorithm1 | Discrete, Field(discriminator="kind")
-    ]
+    integrator: CompareIntegrator
     rotation: int | Matrix | None = None
     shift: int = Field(default=0, ge=0)
     label: str = ""
@@ -90,27 +106,28 @@ def _route_problems(sc: Any, lines: Mapping[tuple[str, ...], int]) -> list[dict[
         line = next((lines[key[:i]] for i in range(len(key), 0, -1) if key[:i] in lines), None)
         out.append({"key": ".".join(key), "line": line, "message": message, "allowed": allowed})
 
-    if isinstance(getattr(sc, "integrator", None), MVAlgorithm1):
+    if isinstance(getattr(sc, "integrator", None), rbm.MVAlgorithm1):
         for name in sc.observables:
             if name not in _Q_ONLY:
                 add(("observables", name), "MV-Algorithm 1 steps configurations only "
                     "(Q_k, Q_{k+1}) -> (Q_{k+1}, Q_{k+2}); it has no momentum", list(_Q_ONLY))  # fmt: skip
     cmps = _compares(sc)
     gaps = {name: when for name, when in sc.observables.items() if name.endswith("_gap")}
-    fixed = not isinstance(getattr(sc, "integrator", None), Continuous)
+    mine = rbm.step(sc.integrator)
+    fixed = mine is not None
     for i, cmp in enumerate(cmps):
         at = ("compare",) if not isinstance(sc.compare, tuple) else ("compare", str(i))
-        theirs = cmp.integrator
-        if isinstance(theirs, MVAlgorithm1):
+        theirs, h2 = cmp.integrator, rbm.step(cmp.integrator)
+        if isinstance(theirs, rbm.MVAlgorithm1):
             for name in gaps:
                 if name != "Q_gap":
                     add(("observables", name), "the second run (MV-Algorithm 1) steps "
                         "configurations only; it has no momentum", ["Q_gap"])  # fmt: skip
-        if fixed and not isinstance(theirs, Continuous) and theirs.h != sc.integrator.h:
+        if mine is not None and h2 is not None and h2 != mine:
             add(at + ("integrator", "h"), f"the second run must step as the first, h = "
-                f"{sc.integrator.h:g}, got {theirs.h:g}", [sc.integrator.h])  # fmt: skip
-        if fixed != (not isinstance(theirs, Continuous)):
-            h = sc.integrator.h if isinstance(theirs, Continuous) else theirs.h
+                f"{mine:g}, got {h2:g}", [mine])  # fmt: skip
+        if fixed != (h2 is not None):
+            h = mine if h2 is None else h2
             for name, when in gaps.items():
                 if when.every is not None:
                     add(("observables", name, "every"),
@@ -119,7 +136,7 @@ def _route_problems(sc: Any, lines: Mapping[tuple[str, ...], int]) -> list[dict[
                         f"gap at the end, at times or at points that are multiples of h = {h:g}",
                         ["end", "times", "points"])  # fmt: skip
         if cmp.shift:
-            if not fixed or isinstance(theirs, Continuous):
+            if not fixed or h2 is None:
                 add(at + ("shift",), "a shift counts steps: both runs need a fixed step", [0])
                 continue
             T, h = float(sc.horizon.T), sc.integrator.h
@@ -208,13 +225,13 @@ def _rotation(sc: Any, cmp: Compare) -> Array | None:
 
 def _rotated_route(sc: Any, cmp: Compare, c2: Plan) -> str:
     """The route of a second run in a rotated frame: from the rotated state, then rotated back."""
-    if (cmp.system or sc.system) == "rigid_body" and isinstance(cmp.integrator, Discrete):
+    if (cmp.system or sc.system) == "rigid_body" and isinstance(cmp.integrator, rbm.Discrete):
         return (f"symrb.symmetric_flow(R Q0, R P0, h={cmp.integrator.h:g}) with "
                 "P0 = Q0 M0 / 2 (the symmetric algorithm's state, rotated), then "
                 "R^T Q")  # fmt: skip
     ci = cmp.integrator
     state = ("(R Q0, R P0)" if (cmp.system or sc.system) != "rigid_body"
-             else "(R Q0, R Q1)" if isinstance(ci, MVAlgorithm1)
+             else "(R Q0, R Q1)" if isinstance(ci, rbm.MVAlgorithm1)
              else "(R Q1, M1)" if getattr(ci, "start", "") == "Q1_M1"
              else "(R Q0, M0)")  # fmt: skip
     back = "R^T Q" if "P0" not in state else "R^T Q, R^T P"

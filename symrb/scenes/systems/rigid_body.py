@@ -1,25 +1,27 @@
 """The free rigid body as a scene (``system = "rigid_body"``): the momentum alone
-(:class:`RigidBodyMomentum`) or with the attitude, by ``symrb.integrate``, the Moser-Veselov
-engine, the paper's MV-Algorithms 1 and 2 or the symmetric representation; each integrator
-planned and run by a function of its own."""
+(:class:`RigidBodyMomentum`) or with the attitude, by any method of
+:func:`symrb.rigid_body.simulate` (the ``[integrator]`` table is its keyword arguments, see
+:mod:`._rigid_body_methods`) or by the paper's algorithms (the symmetric representation,
+MV-Algorithms 1 and 2); each integrator planned and run by a function of its own."""
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import Annotated, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
-from pydantic import Field
 
 from ... import _validate as v
 from ..._generated import rigid_body as _rb
 from ..._validate import Array
 from ...algebra import _Jinv_weights
-from ...continuous import Flow, RigidBody
-from ...engine import MVStepper, mv_flow
-from ...errors import NotConvergedError, OutOfDomainError
+from ...composition import composition_coefficients
+from ...continuous import Flow
+from ...engine import MVStepper
+from ...errors import InputError, NotConvergedError, OutOfDomainError
 from ...paper import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2, symmetric_flow
+from ...rigid_body import simulate
 from ..plan import (
     Plan,
     SystemPlan,
@@ -31,15 +33,11 @@ from ..plan import (
     diagnostic_kernels,
 )
 from ..schema import TimeHorizon, When, _problem, register_system
+from . import _rigid_body_methods as rbm
 from ._body import (
     _RB_MODULES,
     _SYMMETRIC_MAP_MODULES,
-    MV,
     BodyParameters,
-    Continuous,
-    Discrete,
-    MVAlgorithm1,
-    MVAlgorithm2,
     _integrate,
     _rot,
     _rotate_back,
@@ -47,7 +45,11 @@ from ._body import (
 )
 from ._compare import _Q_ONLY, Compares, _ComparedBody
 
-_MODULES = _RB_MODULES + ("scenes.systems._compare", "scenes.systems.rigid_body")
+_MODULES = _RB_MODULES + (
+    "scenes.systems._compare",
+    "scenes.systems._rigid_body_methods",
+    "scenes.systems.rigid_body",
+)
 #: the modules of the Moser-Veselov engine, and of the paper's MV-Algorithms
 _MV_MODULES = (
     "engine",
@@ -57,6 +59,10 @@ _MV_MODULES = (
     "_compiled",
     "_generated.discrete_rigid_body",
 )
+#: the modules behind the compositions, RKMK4, the midpoint rule and the exact solution
+_COMPOSE_MODULES = ("compose", "composition", "base_steps", "engine", "solvers", "_stepping",
+                    "_compiled", "_progress", "_generated.discrete_rigid_body")  # fmt: skip
+_EXACT_MODULES = ("exact",)
 _MV_ALGORITHM_MODULES = (
     "paper",
     "_stepping",
@@ -106,12 +112,36 @@ class RigidBodyMomentum(Flow):
 class RigidBodyScene(_ComparedBody):
     """The free rigid body (momentum only, or with the attitude: effect ``attitude``).
 
+    The ``[integrator]`` table is the keyword arguments of :func:`symrb.rigid_body.simulate`:
+    ``method`` (a key of :data:`symrb.rigid_body.METHODS`, default ``"DOP853"``) and the
+    keywords that method takes (``h``, ``order``, ``rtol``, ``atol``, its options), with their
+    names, defaults and meanings; the run is one call of ``simulate`` over ``(0, T)`` at the
+    observables' times.  Without the effect ``attitude``, a ``solve_ivp`` method (and ``"mv"``
+    at n != 3) propagates the momentum alone instead (:class:`RigidBodyMomentum`; ``"mv"``: its
+    step on M).  ``method = "discrete"``, ``"mv_algorithm1"`` and ``"mv_algorithm2"`` run the
+    paper's algorithms (:mod:`symrb.paper`; see :mod:`._rigid_body_methods`).
+
     Examples
     --------
-    >>> from symrb.scenes import RigidBodyScene
+    >>> from symrb.scenes import RigidBodyScene, load_scene, plan_scene
     >>> RigidBodyScene.EFFECTS, sorted(RigidBodyScene.OBSERVABLES)  # doctest: +NORMALIZE_WHITESPACE
     (('attitude',), ['M', 'M_gap', 'Omega', 'Q', 'Q_gap', 'casimirs', 'energy', 'lax_spectrum',
     'manakov', 'orthogonality'])
+    >>> scene = load_scene('''
+    ... system = "rigid_body"
+    ... effects = ["attitude"]
+    ... [integrator]
+    ... method = "composition"
+    ... h = 0.1
+    ... order = 6
+    ... [horizon]
+    ... T = 10.0
+    ... [observables]
+    ... energy = {every = 10}
+    ... ''')
+    >>> print(plan_scene(scene).route)  # doctest: +NORMALIZE_WHITESPACE
+    symrb.rigid_body.simulate(Q0, M0, lam, (0, T), method='composition', h=0.1, order=6,
+    kind=None, step='mv', save_every=...), which calls symrb.compose.composed_rigid_body_flow
     """
 
     EFFECTS = ("attitude",)
@@ -123,9 +153,7 @@ class RigidBodyScene(_ComparedBody):
     }  # fmt: skip
     system: Literal["rigid_body"]
     parameters: BodyParameters = BodyParameters()
-    integrator: Annotated[
-        Continuous | MV | MVAlgorithm2 | MVAlgorithm1 | Discrete, Field(discriminator="kind")
-    ]
+    integrator: rbm.RigidBodyIntegrator
     horizon: TimeHorizon
     compare: Compares | None = None
     observables: dict[
@@ -153,11 +181,11 @@ class RigidBodyScene(_ComparedBody):
             skipped.append(("attitude Q", "effect 'attitude' not named: the momentum equation "
                             "M' = [M, Omega] does not involve Q"))  # fmt: skip
         integ = self.integrator
-        if isinstance(integ, Continuous):
-            part = _plan_continuous(self, notes)
+        h = rbm.step(integ)
+        if h is None:
+            part = _ADAPTIVE_PLANS[type(integ)](self, notes)
         else:
-            fixed = _fixed_step_save(self, integ.h)
-            part = _FIXED_STEP_PLANS[type(integ)](self, skipped, notes, fixed)
+            part = _FIXED_STEP_PLANS[type(integ)](self, skipped, notes, _fixed_step_save(self, h))
         return dataclasses.replace(
             part, kernels=part.kernels + diagnostic_kernels(self.observables)
         )
@@ -186,9 +214,13 @@ def _plan_continuous(sc: RigidBodyScene, notes: list[str]) -> SystemPlan:
             "solve_ivp's error control sees only M here, so its steps (and M, to the "
             "tolerance) differ from a run that also carries Q"
         )
+    if attitude:
+        route = _simulate_route(integ, "t_eval")
+    else:
+        route = (f"symrb.integrate({flow}, method={integ.method!r}, rtol={integ.rtol:g}, "
+                 f"atol={integ.atol:g})")  # fmt: skip
     return SystemPlan(
-        route=f"symrb.integrate({flow}, method={integ.method!r}, rtol={integ.rtol:g}, "
-        f"atol={integ.atol:g})",
+        route=route,
         propagated=("Q", "M") if attitude else ("M",),
         kernels=("rigid_body.rigid_body_rhs",),
         save={"t_eval": [float(t) for t in t_eval]},
@@ -211,7 +243,7 @@ def _plan_mv(
                        f"got n = {n}", [2])  # fmt: skip
     kernels: tuple[str, ...]
     if attitude or n == 3:
-        route = f"symrb.engine.mv_flow(h={integ.h:g}, order={integ.order})"
+        route = _simulate_route(integ, "save_every")
         propagated: tuple[str, ...] = ("Q", "M")
         if not attitude:
             skipped.pop()
@@ -219,7 +251,8 @@ def _plan_mv(
                          "m together (fused), so Q is stepped but not recorded")  # fmt: skip
         kernels = ("discrete_rigid_body.mv3_cayley_step",) if n == 3 else ()
     else:
-        route = (f"symrb.engine.MVStepper(lam).step with an empty attitude, h={integ.h:g}: "
+        route = (f"symrb.engine.MVStepper(lam).step (the step of simulate(method='mv')) with an "
+                 f"empty attitude, h={integ.h:g}: "
                  "M_{k+1} = U^T M_k U needs only U")  # fmt: skip
         propagated = ("M",)
         kernels = ()
@@ -230,6 +263,80 @@ def _plan_mv(
     how = " a step (n = 3: one fused kernel call; else ~4 solver sweeps of two n^3 products)"
     cost = _fixed_step_cost(steps, flops, per, how)
     return _fixed_step_plan(fixed, route, propagated, kernels, cost, _MODULES + _MV_MODULES)
+
+
+#: what ``simulate`` calls for each integrator model
+_IMPLEMENTATIONS: dict[type, str] = {
+    rbm.SolveIVP: "symrb.integrate(RigidBody, ...)", rbm.MV: "symrb.engine.mv_flow",
+    rbm.Composition: "symrb.compose.composed_rigid_body_flow",
+    rbm.RKMK4: "symrb.compose.rkmk4_rigid_body_flow",
+    rbm.Midpoint: "symrb.compose.midpoint_rigid_body_flow",
+    rbm.Exact: "symrb.exact.rigid_body_exact",
+}  # fmt: skip
+
+
+def _simulate_route(integ: Any, save: str) -> str:
+    """``symrb.rigid_body.simulate(...)`` with the integrator table's keywords, and what it
+    calls."""
+    kw = ", ".join(f"{k}={val!r}" for k, val in rbm.simulate_keywords(integ).items())
+    return (f"symrb.rigid_body.simulate(Q0, M0, lam, (0, T), {kw}, {save}=...), which calls "
+            f"{_IMPLEMENTATIONS[type(integ)]}")  # fmt: skip
+
+
+def _needs_n3(sc: RigidBodyScene, what: str) -> None:
+    if sc.parameters.n != 3:
+        raise _problem("integrator.method", f"{what} needs n = 3, got n = {sc.parameters.n}",
+                       [m for m in rbm.METHOD_NAMES if m != "exact"])  # fmt: skip
+
+
+def _plan_exact(sc: RigidBodyScene, notes: list[str]) -> SystemPlan:
+    """The exact solution at the observables' times (n = 3)."""
+    _needs_n3(sc, "the exact solution (Jacobi elliptic functions)")
+    if "attitude" not in sc.effects:
+        notes.append("the exact solution evaluates Q with M: Q is computed, though not recorded")
+    t_eval, index = _continuous_save(sc)
+    per = 20e-6
+    return SystemPlan(
+        route=_simulate_route(sc.integrator, "t_eval"),
+        propagated=("Q", "M"),
+        kernels=(),
+        save={"t_eval": [float(t) for t in t_eval]},
+        index=index,
+        cost={
+            "flops": 200.0 * len(t_eval),
+            "seconds": 1e-3 + per * len(t_eval),
+            "formula": f"{len(t_eval)} times x ~{per * 1e6:.0f} us (elliptic functions) "
+            "+ 1 ms of setup",
+        },  # fmt: skip
+        modules=_MODULES + _EXACT_MODULES,
+    )
+
+
+def _plan_composed(
+    sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
+) -> SystemPlan:
+    """A composition, RKMK4 or the midpoint rule: ``simulate`` at the step ``h``."""
+    integ: Any = sc.integrator
+    n = sc.parameters.n
+    if "attitude" not in sc.effects:
+        skipped.pop()
+        notes.append(f"simulate(method={integ.method!r}) steps Q with M: Q is propagated, "
+                     "though not recorded")  # fmt: skip
+    if isinstance(integ, rbm.Composition):
+        try:
+            stages = len(composition_coefficients(integ.order, integ.kind))
+        except InputError as exc:
+            raise _problem("integrator.kind", str(exc), None) from None
+        base = 3e-6 if integ.step == "mv" and n == 3 else 8 * 2.0 * n**3 / 1.5e9 + 40e-6
+        how = f" ({stages} stages of the {integ.step} step)"
+    else:
+        stages = 4 if isinstance(integ, rbm.RKMK4) else 1
+        base = 10e-6 + 4 * 2.0 * n**3 / 1.5e9
+        how = f" ({integ.method})"
+    per = stages * base
+    cost = _fixed_step_cost(fixed[0], stages * 16.0 * n**3, per, how)
+    return _fixed_step_plan(fixed, _simulate_route(integ, "save_every"), ("Q", "M"), (), cost,
+                            _MODULES + _COMPOSE_MODULES)  # fmt: skip
 
 
 def _plan_mv_algorithm(
@@ -243,7 +350,7 @@ def _plan_mv_algorithm(
     first = ("symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1) for Q_1 and M_1 = "
              "h (Q0^T P0 - P0^T Q0) (the first step, D12), then ")  # fmt: skip
     kernels: tuple[str, ...]
-    if isinstance(integ, MVAlgorithm1):
+    if isinstance(integ, rbm.MVAlgorithm1):
         route = (first + f"symrb.mv_algorithm1(Q0, Q1, lam, steps - 1) with "
                  f"h={integ.h:g} (the paper's MV-Algorithm 1)")  # fmt: skip
         propagated: tuple[str, ...] = ("Q",)
@@ -269,7 +376,7 @@ def _plan_mv_algorithm(
         skipped.pop()
         notes.append("MV-Algorithm 2 steps Q_{k+1} = Q_k Omega_{k+1}^T itself, so Q "
                      "is propagated, though not recorded")  # fmt: skip
-    if not isinstance(integ, MVAlgorithm2) or integ.start == "Q1_M1":
+    if not isinstance(integ, rbm.MVAlgorithm2) or integ.start == "Q1_M1":
         modules += ("_generated.symmetric_rigid_body",)
         kernels += ("symmetric_rigid_body.symmetric_momentum",)
     per = 40e-6 + 16.0 * n**3 / 1.5e9
@@ -299,8 +406,14 @@ def _plan_discrete(
 _PlanFixed = Callable[[RigidBodyScene, list[tuple[str, str]], list[str], _Fixed], SystemPlan]
 #: the plan of each fixed-step integrator
 _FIXED_STEP_PLANS: dict[type, _PlanFixed] = {
-    MV: _plan_mv, MVAlgorithm1: _plan_mv_algorithm, MVAlgorithm2: _plan_mv_algorithm,
-    Discrete: _plan_discrete,
+    rbm.MV: _plan_mv, rbm.Composition: _plan_composed, rbm.RKMK4: _plan_composed,
+    rbm.Midpoint: _plan_composed, rbm.MVAlgorithm1: _plan_mv_algorithm,
+    rbm.MVAlgorithm2: _plan_mv_algorithm, rbm.Discrete: _plan_discrete,
+}  # fmt: skip
+_PlanAdaptive = Callable[[RigidBodyScene, list[str]], SystemPlan]
+#: the plan of each integrator without steps of its own
+_ADAPTIVE_PLANS: dict[type, _PlanAdaptive] = {
+    rbm.SolveIVP: _plan_continuous, rbm.Exact: _plan_exact,
 }  # fmt: skip
 
 
@@ -313,22 +426,33 @@ _Run = tuple[Array, dict[str, Array], str]
 def _run_continuous(
     sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None
 ) -> _Run:
+    """With the attitude: ``simulate``; the momentum alone: ``integrate(RigidBodyMomentum)``."""
     if "Q" in plan.propagated:
-        y0 = {"Q": _rot(rotation, x["Q0"]), "M": x["M0"]}
-        return _integrate(sc, plan, RigidBody, y0, x["lam"], rotation)
+        return _run_simulate(sc, plan, x, rotation)
     return _integrate(sc, plan, RigidBodyMomentum, {"M": x["M0"]}, x["lam"], rotation)
 
 
 def _run_mv(sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None) -> _Run:
+    """``simulate(method="mv")``; the momentum alone (n != 3, no attitude): its step on M."""
+    if "Q" in plan.propagated:
+        return _run_simulate(sc, plan, x, rotation)
     integ: Any = sc.integrator
     steps, every = plan.save["steps"], plan.save["save_every"]
-    if "Q" in plan.propagated:
-        dsol = mv_flow(_rot(rotation, x["Q0"]), x["M0"], x["lam"], integ.h, steps,
-                       save_every=every, order=integ.order)  # fmt: skip
-        keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
-        states = _rotate_back({k: dsol.y[k] for k in keep}, rotation)
-        return dsol.t, states, "" if dsol.success else dsol.message
     return _mv_momentum(x["M0"], x["lam"], integ.h, steps, every)
+
+
+def _run_simulate(
+    sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None
+) -> _Run:
+    """One call of ``simulate`` with the integrator table's keywords, over (0, T), at the
+    output times of the plan (``t_eval``, or ``save_every`` of a fixed step)."""
+    save = ({"t_eval": plan.save["t_eval"]} if "t_eval" in plan.save
+            else {"save_every": plan.save["save_every"]})  # fmt: skip
+    sol = simulate(_rot(rotation, x["Q0"]), x["M0"], x["lam"], (0.0, float(sc.horizon.T)),
+                   **rbm.simulate_keywords(sc.integrator), **save)  # fmt: skip
+    keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
+    states = _rotate_back({k: getattr(sol, k) for k in keep}, rotation)
+    return sol.t, states, "" if sol.success else sol.message
 
 
 def _run_mv_algorithm2(
@@ -375,7 +499,7 @@ def _mv_from_first_step(sc: Any, plan: Plan, x: dict[str, Any], rotation: Array 
         empty = np.zeros((0,) + x["Q0"].shape)
         return np.zeros(0), {"Q": empty, "M": empty}, first.message
     Q1, M1 = first.y.Q[1], h * first.y.M[0]
-    if isinstance(integ, MVAlgorithm1):
+    if isinstance(integ, rbm.MVAlgorithm1):
         dsol = mv_algorithm1(
             _rot(rotation, x["Q0"]), _rot(rotation, Q1), lam, steps - 1, save_every=every
         )
@@ -430,6 +554,8 @@ def _mv_momentum(
 _RunFn = Callable[[RigidBodyScene, Plan, dict[str, Any], Array | None], _Run]
 #: the run of each integrator
 _RUNS: dict[type, _RunFn] = {
-    Continuous: _run_continuous, MV: _run_mv, MVAlgorithm1: _mv_from_first_step,
-    MVAlgorithm2: _run_mv_algorithm2, Discrete: _run_discrete,
+    rbm.SolveIVP: _run_continuous, rbm.MV: _run_mv, rbm.Composition: _run_simulate,
+    rbm.RKMK4: _run_simulate, rbm.Midpoint: _run_simulate, rbm.Exact: _run_simulate,
+    rbm.MVAlgorithm1: _mv_from_first_step, rbm.MVAlgorithm2: _run_mv_algorithm2,
+    rbm.Discrete: _run_discrete,
 }  # fmt: skip
