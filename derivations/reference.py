@@ -18,6 +18,7 @@ implementation instead of agreeing with it:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from fractions import Fraction
 from typing import Any
 
@@ -424,3 +425,34 @@ def rigid_body_taylor(
         Q = [[Series.const(int(i == j), N) + dQ[i][j].integral() for j in range(3)]
              for i in range(3)]  # fmt: skip
     return m, Q
+
+
+def rigid_body_mp(
+    inertia: Array, Q0: Array, m0: Array, dps: int = 20
+) -> Callable[[float], tuple[Array, Array]]:
+    r"""The free rigid body :math:`\dot Q = Q\hat\omega`, :math:`\dot m = m\times\omega`,
+    :math:`\omega_i = m_i/I_i` from :math:`(Q_0, m_0)`, by mpmath's Taylor-series solver
+    (``mpmath.odefun``) in ``dps`` digits: a function of :math:`t \ge 0` returning
+    :math:`(Q(t), m(t))` as float arrays (the series are kept, so many times cost little)."""
+    import mpmath
+
+    with mpmath.workdps(dps):
+        inv = [1 / mpmath.mpf(float(x)) for x in inertia]
+
+        def field(_t: Any, y: list[Any]) -> list[Any]:
+            m = y[9:]
+            w = [m[i] * inv[i] for i in range(3)]
+            W = [[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]]
+            Qd = [sum(y[3 * i + k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
+            md = [m[1] * w[2] - m[2] * w[1], m[2] * w[0] - m[0] * w[2], m[0] * w[1] - m[1] * w[0]]
+            return Qd + md
+
+        y0 = [mpmath.mpf(float(x)) for x in np.concatenate([np.ravel(Q0), m0])]
+        solution = mpmath.odefun(field, 0, y0)
+
+    def at(t: float) -> tuple[Array, Array]:
+        with mpmath.workdps(dps):
+            y = np.array([float(x) for x in solution(t)])
+        return y[:9].reshape(3, 3), y[9:]
+
+    return at

@@ -103,28 +103,6 @@ def m5_exact_against_flow() -> float:
     return float(max(eQ, eM))
 
 
-def _mp_rigid_body(inertia: np.ndarray, Q0: np.ndarray, m0: np.ndarray, T: float, dps: int):
-    """Q(T), m(T) of Qdot = Q hat(omega), mdot = m x omega, omega_i = m_i / I_i by mpmath's
-    Taylor-series solver (mpmath.odefun) in ``dps`` digits."""
-    import mpmath
-
-    with mpmath.workdps(dps):
-        inv = [1 / mpmath.mpf(float(x)) for x in inertia]
-
-        def field(_t, y):
-            m = y[9:]
-            w = [m[i] * inv[i] for i in range(3)]
-            W = [[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]]
-            Qd = [sum(y[3 * i + k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
-            md = [m[1] * w[2] - m[2] * w[1], m[2] * w[0] - m[0] * w[2], m[0] * w[1] - m[1] * w[0]]
-            return Qd + md
-
-        y0 = [mpmath.mpf(float(x)) for x in np.concatenate([np.ravel(Q0), m0])]
-        yT = mpmath.odefun(field, 0, y0)(T)
-        out = np.array([float(x) for x in yT])
-    return out[:9].reshape(3, 3), out[9:]
-
-
 @M5.check(Level.MPMATH, tol=1e-13)
 def m5_exact_against_mpmath_ode() -> float:
     """symrb.exact.rigid_body_exact at t = 4 against a 20-digit Taylor integration of the rigid
@@ -139,7 +117,7 @@ def m5_exact_against_mpmath_ode() -> float:
         lam_a, m0_a = np.array(lam), np.array(m0)
         inertia = lam_a.sum() - lam_a
         Q0 = ref.random_rotation(3, rng)
-        QT, mT = _mp_rigid_body(inertia, Q0, m0_a, 4.0, 20)
+        QT, mT = ref.rigid_body_mp(inertia, Q0, m0_a, 20)(4.0)
         sol = rigid_body_exact(Q0, ref.hat(m0_a), lam_a, [4.0])
         eQ = np.abs(sol.y.Q[0] - QT).max()
         eM = np.abs(ref.vee(sol.y.M[0]) - mT).max() / np.linalg.norm(m0_a)
