@@ -143,31 +143,26 @@ def maximiser(H: sp.Expr, Ux: sp.Matrix, lam: Sequence[sp.Expr]) -> tuple[sp.Mat
     return Ux.xreplace(sol[0]), sp.Integer(bad)
 
 
+def _setting(form: str) -> tuple[list[sp.Symbol], dict[str, sp.Matrix], sp.Expr]:
+    """n = 3 with general Q, P, skew U and symbolic Lambda: lam, the matrices by name and the
+    displayed Hamiltonian ``H_<form>`` (form ``printed`` or ``corrected``) evaluated there."""
+    lam = lam_symbols(3)
+    env = {"Q": general_matrix("q", 3), "P": general_matrix("p", 3), "U": skew_matrix("u", 3)}
+    return lam, env, sp.expand(explicit(unfold(S5.formulas[f"H_{form}"].rhs), env, lam))
+
+
 def stationary_control(form: str) -> tuple[sp.Matrix, sp.Matrix, sp.Integer]:
-    """For the displayed Hamiltonian ``H_<form>`` (form ``printed`` or ``corrected``; n = 3,
-    general Q, P, symbolic Lambda): its stationary point in U, the displayed optimal control
-    J^-1(Q^T P - P^T Q), and the number of ways the stationary point fails to be a maximum."""
-    lam, Qx, Px, Ux = (
-        lam_symbols(3),
-        general_matrix("q", 3),
-        general_matrix("p", 3),
-        skew_matrix("u", 3),
-    )
-    env = {"Q": Qx, "P": Px, "U": Ux}
-    Hx = sp.expand(explicit(unfold(S5.formulas[f"H_{form}"].rhs), env, lam))
-    Ustar, not_max = maximiser(Hx, Ux, lam)
+    """For the displayed Hamiltonian ``H_<form>`` (see :func:`_setting`): its stationary point in
+    U, the displayed optimal control J^-1(Q^T P - P^T Q), and the number of ways the stationary
+    point fails to be a maximum."""
+    lam, env, Hx = _setting(form)
+    Ustar, not_max = maximiser(Hx, env["U"], lam)
     return Ustar, explicit(OPTIMAL_U.rhs, env, lam), not_max
 
 
 def _s5_extremals(form: str) -> sp.Integer:
-    lam, Qx, Px, Ux = (
-        lam_symbols(3),
-        general_matrix("q", 3),
-        general_matrix("p", 3),
-        skew_matrix("u", 3),
-    )
-    env = {"Q": Qx, "P": Px, "U": Ux}
-    Hx = sp.expand(explicit(unfold(S5.formulas[f"H_{form}"].rhs), env, lam))
+    lam, env, Hx = _setting(form)
+    Qx, Px, Ux = env["Q"], env["P"], env["U"]
     Ustar, shown, not_max = stationary_control(form)
     total = not_max + count_nonzero(Ustar - shown)
     # the emitted field is the displayed (Qdot, Pdot) = (QU, PU) at the maximiser ...
