@@ -89,7 +89,9 @@ def _times(
     if te.ndim != 1 or te.size == 0 or np.any(np.diff(te) <= 0):
         raise InputError(f"t_eval must be a non-empty increasing 1-D array, got {t_eval!r}")
     if te[0] < t0 or te[-1] > t1:
-        raise InputError(f"t_eval must lie in t_span ({t0!r}, {t1!r}), got {te[0]!r}..{te[-1]!r}")
+        raise InputError(
+            f"t_eval must lie in t_span ({t0!r}, {t1!r}), got {float(te[0])!r}..{float(te[-1])!r}"
+        )
     if on_grid and h is not None:
         k = np.rint((te - t0) / h)
         off = np.abs(t0 + k * h - te) > _GRID_TOL * h
