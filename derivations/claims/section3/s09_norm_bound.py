@@ -16,7 +16,7 @@ from derivations.claims.section3._display import OpNorm
 from derivations.claims.section3._symmetric import M, P, Q
 from derivations.claims.section3.s06_symmetric_to_rigid_body import SYMMETRIC_MOMENTUM
 from derivations.registry import Level, claim
-from derivations.symbolic import Words, eq
+from derivations.symbolic import Words, eq, explicit, skew_matrix
 from derivations.vocabulary import matrix, n
 
 S9 = claim(
@@ -26,7 +26,8 @@ S9 = claim(
     "$\\mathrm{SO}(n)$",
     statement="If $Q, P\\in SO(n)$ and [[M]], then [[bound]], and the bound is attained. With "
     "$A$ the orthogonal matrix $Q^TP$, [[identity]]. For $P\\in\\mathfrak{gl}(n)$ there is no "
-    "bound: [[gl]] solves the equation for every skew $M$.",
+    "bound: [[gl]] solves the equation for every skew $M$. The set $C$ contains the pairs with "
+    "$Q^TP$ skew and orthogonal; such pairs exist only for even $n$.",
     expected="holds",
     section="3.3",
     where="Section 3.3 (Local equivalence of classical rigid body and symmetric rigid body "
@@ -36,7 +37,9 @@ S9 = claim(
     "$\\mathrm{SO}(n)$ (or $\\mathrm{O}(n)$). For a costate $P$ in $\\mathfrak{gl}(n)$, as in S5, "
     "there is no bound. With $A = Q^T P$ orthogonal the identity gives $\\|Mx\\|^2 = 4\\|x\\|^2 - "
     "\\|(A + A^T)x\\|^2$, so $\\|M\\|_{\\mathrm{op}} = 2$ exactly when $A + A^T$ is singular ($A$ "
-    "has eigenvalues $\\pm i$).",
+    "has eigenvalues $\\pm i$). The paper's remark that $C$ contains pairs with $Q^TP$ skew and "
+    "orthogonal is vacuous for odd $n$: a skew matrix of odd size has determinant 0, so none is "
+    "orthogonal; for even $n$ the rotation by $\\pi/2$ in orthogonal planes is one.",
 )
 S9_M = S9.formula("M", eq(M, SYMMETRIC_MOMENTUM.outputs["M"]))
 BOUND = S9.formula("bound", sp.Le(OpNorm(M), 2))
@@ -101,3 +104,20 @@ def s9_bound_attained() -> float:
             np.linalg.norm(symrb.symmetric.symmetric_momentum(Qk, Qk @ A), 2) - float(BOUND.rhs)
         )
     return float(np.max(np.abs(errs)))
+
+
+@S9.check(Level.EXACT_RATIONAL)
+def s9_skew_orthogonal_pairs() -> sp.Integer:
+    """The remark after the definition of C: for n = 2, 4, 6 the block rotation A by pi/2 in
+    orthogonal planes is skew, orthogonal, in SO(n), and at the pair (Q, P) = (I, A) the emitted
+    momentum M has every eigenvalue of M^T M equal to the displayed bound squared (so the pair is
+    in C); for n = 3, 5 the determinant of a general symbolic skew matrix is 0 (no skew
+    matrix is orthogonal: the remark is vacuous).  The number of these that fail."""
+    bad = 0
+    for k in (2, 4, 6):
+        A = sp.diag(*[sp.Matrix([[0, -1], [1, 0]])] * (k // 2))
+        Mk = explicit(SYMMETRIC_MOMENTUM["M"], {"Q": sp.eye(k), "P": A})  # the emitted M
+        bad += int(A.T != -A) + int(A.T * A != sp.eye(k)) + int(A.det() != 1)
+        bad += int(set((Mk.T * Mk).eigenvals()) != {BOUND.rhs**2})
+    bad += sum(int(sp.expand(skew_matrix("a", k).det()) != 0) for k in (3, 5))
+    return sp.Integer(bad)
