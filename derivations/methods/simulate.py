@@ -61,12 +61,16 @@ def _error(sol: object, times: np.ndarray) -> float:
 
 
 def _fixed_step_cases() -> list[tuple[str, int, dict[str, str]]]:
-    """(method, order, options) for every fixed-step method, order and composition kind/step."""
+    """(method, order, options) for every fixed-step method, order, mv backend ("numba" where
+    numba is installed, as with the test and book extras) and composition kind and step."""
     from symrb.composition import _KINDS
     from symrb.engine import PREPROCESSED_ORDERS
 
     cases: list[tuple[str, int, dict[str, str]]] = [("mv", p, {}) for p in PREPROCESSED_ORDERS]
-    cases += [("mv", 2, {"backend": b}) for b in ("newton", "fixed-point", "numpy")]
+    from symrb import _compiled
+
+    backends = ["auto", "newton", "fixed-point", "numpy"] + ["numba"] * _compiled.AVAILABLE
+    cases += [("mv", 2, {"backend": b}) for b in backends]
     for order, kinds in _KINDS.items():
         for kind in kinds:
             cases.append(("composition", order, {"kind": kind}))
@@ -94,13 +98,13 @@ def m7_fixed_step_orders() -> float:
     composition kind of orders 2-8 with the MV and the midpoint base step, RKMK4, midpoint): the
     order observed from the errors at T = 1 with steps h and h/2 against the 20-digit reference;
     max |observed order - nominal order| (an order or a base step not passed on, or the momentum
-    scale mixed up, moves it by 2 or more); inf when two kinds of one order give the same result
-    (a kind not passed on)."""
+    scale mixed up, moves it by 2 or more); inf when two compositions of one order (another kind or
+    base step) give the same result (a kind or a step not passed on)."""
     from symrb.rigid_body import simulate
 
     Q0, _ = _reference()
     worst = 0.0
-    finals: dict[tuple[str, int, str], list[np.ndarray]] = {}
+    finals: dict[int, list[np.ndarray]] = {}
     for method, order, options in _fixed_step_cases():
         nominal = _FIXED_ORDER.get(method, order)
         h = _h_for(nominal, options)
@@ -113,8 +117,8 @@ def m7_fixed_step_orders() -> float:
         observed = math.log2(errors[0] / errors[1])
         worst = max(worst, abs(observed - nominal))
         if method == "composition":
-            finals.setdefault((method, order, options.get("step", "mv")), []).append(sol.M[-1])
-    for group in finals.values():  # kinds of one order share it: an ignored kind shows here
+            finals.setdefault(order, []).append(sol.M[-1])
+    for group in finals.values():  # kinds and steps of one order share it: one ignored shows here
         if any(np.array_equal(a, b) for i, a in enumerate(group) for b in group[i + 1 :]):
             return math.inf
     return worst
@@ -122,17 +126,20 @@ def m7_fixed_step_orders() -> float:
 
 @M7.check(Level.MPMATH, tol=1e-7)
 def m7_solve_ivp_and_exact() -> float:
-    """Every solve_ivp method of simulate at rtol = 1e-10, atol = 1e-12 and the exact solution,
-    at T = 1 against the 20-digit reference: max error; and the tolerances are passed on (RK45
+    """Every solve_ivp method of simulate at rtol = 1e-10, atol = 1e-12 (DOP853 also with the
+    option condition = True) and the exact solution (with its option check on and off), at
+    T = 1 against the 20-digit reference: max error; and the tolerances are passed on (RK45
     at rtol = 1e-4 is at least 100 times less accurate than at 1e-10, else the check fails)."""
     from symrb.rigid_body import simulate
     from symrb.rigid_body.ivp import NAMES
 
     Q0, _ = _reference()
     worst = 0.0
-    for method in (*NAMES, "exact"):
-        tol = {} if method == "exact" else {"rtol": 1e-10, "atol": 1e-12}
-        sol = simulate(Q0, ref.hat(_M0), _LAM, (0.0, _T), method=method, t_eval=[_T], **tol)
+    runs = [(m, {"rtol": 1e-10, "atol": 1e-12}) for m in NAMES]
+    runs += [("DOP853", {"rtol": 1e-10, "atol": 1e-12, "condition": True})]
+    runs += [("exact", {}), ("exact", {"check": False})]
+    for method, kw in runs:
+        sol = simulate(Q0, ref.hat(_M0), _LAM, (0.0, _T), method=method, t_eval=[_T], **kw)
         worst = max(worst, _error(sol, np.array([_T])))
     loose = simulate(Q0, ref.hat(_M0), _LAM, (0.0, _T), method="RK45", t_eval=[_T],
                      rtol=1e-4, atol=1e-6)  # fmt: skip
@@ -154,8 +161,8 @@ _SAMPLED = (
 @M7.check(Level.MPMATH, tol=1.0)
 def m7_times_kept() -> float:
     """t_eval and save_every: for mv (h = 0.01, error about 1e-5), DOP853 (rtol = 1e-10) and
-    exact, the returned times are the ones asked for (t_eval = 0.3, 0.5, 1.0; save_every = 25:
-    0, 0.25, ..., 1) and the states there agree with the 20-digit reference to the method's
+    exact, from t0 = 0 and from t0 = 2, the returned times are the ones asked for (t_eval =
+    t0 + 0.3, 0.5, 1.0; save_every = 25: t0 + 0, 0.25, ..., 1) and the states there agree with the 20-digit reference to the method's
     accuracy (1e-4, 1e-8, 1e-12; a state one step of 0.01 off is 1e-2 away): max error / that
     accuracy (inf when a time differs)."""
     from symrb.rigid_body import simulate
@@ -167,9 +174,12 @@ def m7_times_kept() -> float:
     ]
     worst = 0.0
     for method, extra, accuracy in _SAMPLED:
-        for ask, times in asks:
-            sol = simulate(Q0, ref.hat(_M0), _LAM, (0.0, _T), method=method, **{**extra, **ask})
-            if sol.t.shape != times.shape or np.abs(sol.t - times).max() > 1e-12:
-                return math.inf
-            worst = max(worst, _error(sol, times) / accuracy)
+        for t0 in (0.0, 2.0):  # the flow is autonomous: from t0 the state at t is the one at t - t0
+            for ask, times in asks:
+                shifted = {k: (np.asarray(x) + t0 if k == "t_eval" else x) for k, x in ask.items()}
+                sol = simulate(Q0, ref.hat(_M0), _LAM, (t0, t0 + _T), method=method,
+                               **{**extra, **shifted})  # fmt: skip
+                if sol.t.shape != times.shape or np.abs(sol.t - t0 - times).max() > 1e-12:
+                    return math.inf
+                worst = max(worst, _error(sol, times) / accuracy)
     return worst
