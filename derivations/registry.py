@@ -54,6 +54,8 @@ from derivations.vocabulary import CURRENT_CLAIM, KERNELS, Kernel
 __all__ = [
     "Level",
     "Evidence",
+    "Sentence",
+    "SENTENCE_KINDS",
     "Claim",
     "claim",
     "EvidenceResult",
@@ -104,6 +106,33 @@ class Evidence:
     name: str = ""
 
 
+#: What a sentence of the paper does: ``"math"`` states mathematics (a definition, a formula, an
+#: assertion) and needs evidence; ``"prose"`` states none (motivation, a citation, a pointer to
+#: the proof) and says so in ``reason``.
+SENTENCE_KINDS = ("math", "prose")
+
+
+@dataclass(frozen=True)
+class Sentence:
+    """One sentence of a claim's statement in the paper and the evidence that covers it.
+
+    ``text`` is the sentence as printed (LaTeX, the paper's macros expanded); ``evidence`` the
+    names of the evidence functions of the claim that check it.  A ``"math"`` sentence without
+    evidence is *uncovered* (shown as such in the book and counted); a ``"prose"`` sentence gives
+    in ``reason`` why there is nothing to check.
+    """
+
+    text: str
+    evidence: tuple[str, ...] = ()
+    kind: str = "math"
+    reason: str = ""
+
+    @property
+    def covered(self) -> bool:
+        """True for prose, and for a math sentence with at least one piece of evidence."""
+        return self.kind == "prose" or bool(self.evidence)
+
+
 def _describe(func: Callable[..., Any], description: str | None) -> str:
     if description is not None:
         return " ".join(description.split())
@@ -137,6 +166,7 @@ class Claim:
     where: str = ""
     evidence: list[Evidence] = field(default_factory=list)
     formulas: dict[str, Any] = field(default_factory=dict)
+    sentences: list[Sentence] = field(default_factory=list)
     module: str = ""
 
     def __post_init__(self) -> None:
@@ -191,6 +221,38 @@ class Claim:
             raise ValueError(f"claim {self.id}: formula {key!r} registered twice")
         self.formulas[key] = expr
         return expr
+
+    def sentence(
+        self,
+        text: str,
+        *evidence: Callable[[], Any],
+        kind: str = "math",
+        reason: str = "",
+    ) -> Sentence:
+        """Map one sentence of the paper's statement to the evidence functions that check it.
+
+        Call it once per sentence, in the paper's order, after the evidence is declared::
+
+            D7.sentence("The multiplier $\\Sigma$ is $N \\times N$.", d7_multiplier_n_by_n)
+            D7.sentence("We now prove the theorem.", kind="prose", reason="points to the proof")
+
+        Each function must be registered evidence of this claim; a prose sentence gives a
+        ``reason`` and no evidence.
+        """
+        if kind not in SENTENCE_KINDS:
+            raise ValueError(f"claim {self.id}: kind must be one of {SENTENCE_KINDS}, got {kind!r}")
+        known = {ev.func: ev.name for ev in self.evidence}
+        names = []
+        for func in evidence:
+            if func not in known:
+                name = getattr(func, "__qualname__", repr(func))
+                raise ValueError(f"claim {self.id}: {name} is not evidence of this claim")
+            names.append(known[func])
+        if kind == "prose" and (names or not reason.strip()):
+            raise ValueError(f"claim {self.id}: a prose sentence gives a reason and no evidence")
+        item = Sentence(" ".join(text.split()), tuple(names), kind, " ".join(reason.split()))
+        self.sentences.append(item)
+        return item
 
     # -- rendering --------------------------------------------------------------------------
 

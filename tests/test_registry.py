@@ -181,3 +181,22 @@ def test_parallel_verify_matches_the_serial_run() -> None:
     assert any("S2" in claims for claims in reads[0].values())
     with pytest.raises(ValueError, match="jobs must be"):
         list(registry.verify_each(all_claims()[:2], jobs=0))
+
+
+def test_sentences_name_the_claims_own_evidence() -> None:
+    c = _with(_claim(), 0.0)
+    (ev,) = c.evidence
+    s = c.sentence("The  sentence $x = 1$.", ev.func)
+    assert s.evidence == (ev.name,) and s.covered and s.text == "The sentence $x = 1$."
+    assert not c.sentence("An unchecked sentence.").covered
+    assert c.sentence("See [12].", kind="prose", reason="a citation").covered
+    other = _with(_claim(), 0.0)
+    with pytest.raises(ValueError, match="not evidence of this claim"):
+        c.sentence("x", other.evidence[0].func)
+    with pytest.raises(ValueError, match="kind must be one of"):
+        c.sentence("x", kind="remark")
+    with pytest.raises(ValueError, match="reason and no evidence"):
+        c.sentence("x", kind="prose")
+    with pytest.raises(ValueError, match="reason and no evidence"):
+        c.sentence("x", ev.func, kind="prose", reason="r")
+    assert len(c.sentences) == 3
