@@ -9,7 +9,10 @@ Reached as ``symrb <command>`` or ``python -m derivations <command>``:
 * ``verify [IDS] [--group paper|method]`` runs the evidence, prints a progress line per claim on
   stderr and a table on stdout (one block per group), and fails when a computed outcome differs
   from the recorded one;
-* ``derive [--check]`` writes (or only compares) ``symrb/_generated``.
+* ``derive [--check]`` writes (or only compares) ``symrb/_generated``;
+* ``coverage`` runs every claim's evidence and lists which public numerical functions of symrb
+  and which of their option values it reached (:mod:`derivations.coverage`); exit 1 when
+  anything is unreached.  ``verify --output`` stores the same report in its JSON.
 
 Exit status: 0 everything as recorded; 1 a surprise (a computed outcome differs from the record,
 a kernel not evaluated by the claims it names, a stale generated file); 2 usage or environment
@@ -32,7 +35,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from derivations import report
+from derivations import coverage, report
 from derivations.printer import emit_all
 from derivations.registry import (
     GROUP_TITLES,
@@ -219,7 +222,8 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     except KeyError as exc:
         print(textwrap.fill(exc.args[0], width=WIDTH), file=sys.stderr)
         return 2
-    results = _run(claims, args.fail_fast, progress, jobs=args.jobs)
+    with coverage.recording() as recorder:
+        results = _run(claims, args.fail_fast, progress, jobs=args.jobs)
     complete = not args.ids and len(results) == len(all_claims())
     kernels = kernel_report()
     unchecked = []
@@ -229,6 +233,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         "source_hash": report.source_hash(),
         "claims": [r.to_dict() for r in results],
         "kernels": kernels,
+        "coverage": coverage.report(recorder),
     }
     if args.output:
         Path(args.output).parent.mkdir(parents=True, exist_ok=True)
@@ -241,6 +246,24 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         print("\n".join(verify_table(results, unchecked, args.prog)))
     ok = all(r.ok for r in results) and not unchecked
     return 0 if ok else 1
+
+
+# ---------------------------------------------------------------------------------------------
+# coverage
+
+
+def _cmd_coverage(args: argparse.Namespace) -> int:
+    progress = _reporter(args.quiet)
+    with coverage.recording() as recorder:
+        results = _run(all_claims(), False, progress, jobs=args.jobs)
+    cov = coverage.report(recorder)
+    if args.json:
+        print(json.dumps(cov, indent=1))
+    elif args.unreached:
+        print("\n".join([*coverage.unreached(cov), coverage.summary_line(cov)]))
+    else:
+        print("\n".join(coverage.table(cov)))
+    return 0 if all(r.ok for r in results) and not coverage.unreached(cov) else 1
 
 
 # ---------------------------------------------------------------------------------------------
@@ -359,6 +382,24 @@ def _add_derive(sub: Any) -> None:
     p.set_defaults(func=_cmd_derive)
 
 
+def _add_coverage(sub: Any) -> None:
+    p = sub.add_parser(
+        "coverage", formatter_class=_FMT, epilog=EXIT_STATUS,
+        help="which public functions and option values of symrb the evidence reaches",
+        description="Run every claim's evidence with a recorder on and list each public\n"
+        "numerical function of symrb and each value of its options with the evidence that\n"
+        "reached it, or UNREACHED (exit 1 when anything is unreached).",
+    )  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--unreached", action="store_true", help="list only what is unreached")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p.add_argument(
+        "-j", "--jobs", type=_jobs, default=1, metavar="N",
+        help="claims run in N worker processes (default 1: in this process, in order)",
+    )  # fmt: skip
+    p.set_defaults(func=_cmd_coverage)
+
+
 def build_parser(prog: str = "symrb") -> argparse.ArgumentParser:
     """The argument parser of the four commands (plain-text help with the exit status)."""
     parser = argparse.ArgumentParser(
@@ -382,7 +423,7 @@ def build_parser(prog: str = "symrb") -> argparse.ArgumentParser:
     parser.add_argument("-V", "--version", action="version", version=f"symrb {version()}")
     parser.set_defaults(prog=prog)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", title="commands")
-    for add in (_add_claims, _add_show, _add_verify, _add_derive):
+    for add in (_add_claims, _add_show, _add_verify, _add_derive, _add_coverage):
         add(sub)
     return parser
 

@@ -35,6 +35,7 @@ Claims live in the modules of the packages :data:`PACKAGES`; the registry discov
 
 from __future__ import annotations
 
+import contextvars
 import enum
 import importlib
 import inspect
@@ -68,6 +69,8 @@ __all__ = [
     "verify_each",
     "verify_claim",
     "kernel_report",
+    "CURRENT_EVIDENCE",
+    "RECORDER",
     "OUTCOMES",
     "GROUPS",
     "GROUP_TITLES",
@@ -460,9 +463,21 @@ def get_claim(cid: str) -> Claim:
 # ---------------------------------------------------------------------------------------------
 # running evidence
 
+#: ``"ID name"`` of the evidence running (None outside evidence): what the coverage recorder of
+#: :mod:`derivations.coverage` notes against each call it sees.
+CURRENT_EVIDENCE: contextvars.ContextVar[str | None] = contextvars.ContextVar(
+    "CURRENT_EVIDENCE", default=None
+)
+
+#: The coverage recorder while one records (:func:`derivations.coverage.recording`), else None;
+#: worker processes forked by :func:`verify_each` hand back what they recorded (``take()``) and
+#: this process adds it (``merge(hits)``).
+RECORDER: Any = None
+
 
 def _run_evidence(claim_id: str, ev: Evidence) -> EvidenceResult:
     token = CURRENT_CLAIM.set(claim_id)
+    evidence_token = CURRENT_EVIDENCE.set(f"{claim_id} {ev.name}")
     start = time.perf_counter()
     error = None
     try:
@@ -476,6 +491,7 @@ def _run_evidence(claim_id: str, ev: Evidence) -> EvidenceResult:
         residual = float("inf")
     finally:
         CURRENT_CLAIM.reset(token)
+        CURRENT_EVIDENCE.reset(evidence_token)
     return EvidenceResult(
         level=Level(ev.level).value,
         description=ev.description,
@@ -540,11 +556,14 @@ def _contradicts(expected: str, r: EvidenceResult) -> bool:
     return not r.passed
 
 
-def _verify_by_id(cid: str, fail_fast: bool) -> tuple[ClaimResult, list[tuple[str, str]]]:
-    """Run in a worker process: the result, and the kernels whose expressions the claim read."""
+def _verify_by_id(cid: str, fail_fast: bool) -> tuple[ClaimResult, list[tuple[str, str]], Any]:
+    """Run in a worker process: the result, the kernels whose expressions the claim read and
+    what the coverage recorder (inherited from the parent, if any) noted for it."""
+    if RECORDER is not None:
+        RECORDER.take()  # drop what the parent had recorded before the fork
     result = verify_claim(get_claim(cid), fail_fast=fail_fast)
     read = [(k.target, k.name) for k in KERNELS if cid in k.checked_by]
-    return result, read
+    return result, read, RECORDER.take() if RECORDER is not None else None
 
 
 def _pool_context() -> Any:
@@ -580,9 +599,11 @@ def verify_each(
         futures = [pool.submit(_verify_by_id, c.id, fail_fast) for c in claims]
         try:
             for future in as_completed(futures):
-                result, read = future.result()
+                result, read, hits = future.result()
                 for key in read:
                     by_key[key].checked_by.add(result.id)
+                if hits and RECORDER is not None:
+                    RECORDER.merge(hits)
                 yield result
                 if fail_fast and not result.ok:
                     return

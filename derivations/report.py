@@ -282,11 +282,15 @@ def verify_json_path() -> Path:
 
 @functools.cache
 def _run_all() -> dict[str, Any]:
-    results = verify()
+    from derivations import coverage
+
+    with coverage.recording() as recorder:
+        results = verify()
     return {
         "source_hash": source_hash(),
         "claims": [r.to_dict() for r in results],
         "kernels": kernel_report(),
+        "coverage": coverage.report(recorder),
     }
 
 
