@@ -24,7 +24,7 @@ M10 = claim(
     "M10",
     label="",
     title="The orbit integrators and their options",
-    statement="`double_bracket_flow` integrates $\\dot x = [x, [x, N]]$ and its report bounds "
+    statement="`double_bracket_flow` integrates the double bracket flow and its report bounds "
     "its error as documented; `toda_flow` integrates Flaschka's Toda lattice; "
     "`solve_orbit_bvp` solves the state-costate problem with either endpoint condition "
     "(corrected or printed) and reports the condition number of the linearised problem.",
