@@ -292,10 +292,8 @@ def _wrap(func: Any, target: Target, recorder: Recorder, skip_self: bool) -> Any
 def recording() -> Iterator[Recorder]:
     """Record, while the block runs, which targets and option values the evidence reaches
     (in this process and in worker processes forked from it by :func:`registry.verify_each`)."""
-    import symrb
-
-    for name in symrb._SUBMODULES:  # every binding exists before the namespaces are searched
-        importlib.import_module(f"symrb.{name}")
+    for name in MODULES:  # every binding exists before the namespaces are searched
+        importlib.import_module(name)
     recorder = Recorder()
     undo: list[tuple[Any, str, Any]] = []
     modules = _our_modules()

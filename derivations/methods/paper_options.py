@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from derivations import reference as ref
-from derivations.methods.rigid_body_options import _kappa
+from derivations.methods.rigid_body_options import _kappa, _max
 from derivations.registry import Level, claim
 
 M9 = claim(
@@ -71,8 +71,8 @@ def m9_halve_against_30_digits() -> float:
     for k, j in enumerate(sym.halvings, start=1):
         Qs, Ps = mpd.symmetric(Q, P, _H / 2**j, 2 ** int(j))
         Q, P = Qs[-1], Ps[-1]
-        worst = max(worst, mpd.distance(Q, sym.y.Q[k]), mpd.distance(P, sym.y.P[k]))
-        worst = max(worst, mpd.distance(Q, rb.y.Q[k]))
+        worst = _max(worst, mpd.distance(Q, sym.y.Q[k]), mpd.distance(P, sym.y.P[k]))
+        worst = _max(worst, mpd.distance(Q, rb.y.Q[k]))
     if not np.array_equal(rb.halvings, sym.halvings):
         return math.inf
     return worst
@@ -107,5 +107,5 @@ def m9_diagnostics_condition() -> float:
             return math.inf
         for got, U in zip(reported, Us, strict=True):
             kappa = _kappa(U, _LAM)
-            worst = max(worst, max(0.0, 0.8 - got / kappa), max(0.0, got / kappa - 1))
+            worst = _max(worst, 0.0, 0.8 - got / kappa, got / kappa - 1)
     return worst

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from derivations.methods.rigid_body_options import _max
 from derivations.registry import Level, claim
 
 M11 = claim(
@@ -116,7 +117,7 @@ def m11_train_and_predict() -> float:
         got = symrb.train(x0, y, K, b, steps=4, lr=0.05, activation=act, residual=res)
         Kr, br = _unpack(u)
         for a, w in ((got.K, Kr), (got.beta, br), (got.losses, np.array(losses))):
-            worst = max(worst, float(np.abs(a - w).max() / np.abs(w).max()))
+            worst = _max(worst, float(np.abs(a - w).max() / np.abs(w).max()))
         want = np.argmax(_forward(x0, K, b, act, res)[-1][:, -2:], axis=-1)
         got_classes = symrb.learning.resnet_predict(x0, K, b, 2, activation=act, residual=res)
         if not np.array_equal(got_classes, want):
@@ -169,7 +170,7 @@ def m11_train_msa() -> float:
                                        inner_lr=0.05, activation=act, residual=res)  # fmt: skip
         Kr, br, lr_ = _msa_reference(x0, y, K, b, act, res, 3, 0.5, 2, 0.05)
         for a, w in ((got.K, Kr), (got.beta, br), (got.losses, lr_)):
-            worst = max(worst, float(np.abs(a - w).max() / np.abs(w).max()))
+            worst = _max(worst, float(np.abs(a - w).max() / np.abs(w).max()))
     return worst
 
 
@@ -199,9 +200,9 @@ def m11_sweep_reports() -> float:
                                                             return_info=True)  # fmt: skip
         grad = _complex_grad(_loss_of(x0, y, act, res), _pack(K, b))
         gK_ref, gb_ref = _unpack(grad)
-        worst = max(worst, abs(info.condition / kappa - 1), abs(info2.condition / kappa - 1))
-        worst = max(worst, float(np.abs(p[-1] + (xs[-1] - y)).max()))
-        worst = max(worst, float(np.abs(gK - gK_ref).max() / np.abs(gK_ref).max()))
-        worst = max(worst, float(np.abs(gb - gb_ref).max() / np.abs(gb_ref).max()))
-        worst = max(worst, abs(loss / _loss(x0, y, K, b, act, res) - 1))
+        worst = _max(worst, abs(info.condition / kappa - 1), abs(info2.condition / kappa - 1))
+        worst = _max(worst, float(np.abs(p[-1] + (xs[-1] - y)).max()))
+        worst = _max(worst, float(np.abs(gK - gK_ref).max() / np.abs(gK_ref).max()))
+        worst = _max(worst, float(np.abs(gb - gb_ref).max() / np.abs(gb_ref).max()))
+        worst = _max(worst, abs(loss / _loss(x0, y, K, b, act, res) - 1))
     return worst

@@ -106,7 +106,7 @@ def m12_sweeps_and_gradient() -> float:
         M = sum(q.T @ p - p.T @ q for q, p in zip(Qs[k], Ps[k], strict=True))
         want = np.linalg.norm(_ALPHA * (U[k] @ L - L @ U[k].T) - M)
         gaps.append(abs(r[k] / want - 1))
-    return float(max(gaps))
+    return float(np.max(gaps))
 
 
 def _retract(U: np.ndarray, A: np.ndarray, retraction: str) -> np.ndarray:
@@ -180,7 +180,7 @@ def m12_trainers() -> float:
             V[k] = Yt.T @ D @ X.T
             gaps.append(abs(np.trace(A @ V[k]) / _procrustes_value(A) - 1))
     gaps += [np.abs(got.U - V).max(), abs(got.losses[-1] / _loss(Q0, V, T) - 1)]
-    return float(max(gaps))
+    return float(np.max(gaps))
 
 
 def _shooting_map(Q0: np.ndarray, T: np.ndarray, layers: int) -> Any:
@@ -232,4 +232,4 @@ def m12_shooting() -> float:
     step = 1e-5
     J = np.stack([(F(m + step * e) - F(m - step * e)) / (2 * step) for e in np.eye(3)], axis=1)
     gaps.append(abs(got.condition * np.linalg.svd(J, compute_uv=False).min() - 1))
-    return float(max(gaps))
+    return float(np.max(gaps))
