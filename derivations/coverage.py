@@ -60,6 +60,7 @@ __all__ = [
     "report",
     "summary_line",
     "unreached",
+    "validated",
 ]
 
 #: The modules whose ``__all__`` holds the public numerical functions (first listing wins the
@@ -353,6 +354,16 @@ def report(recorder: Recorder) -> dict[str, Any]:
             "values_reached": sum(bool(o["evidence"]) for o in values),
         },
     }
+
+
+def validated(cov: dict[str, Any]) -> dict[str, Any]:
+    """``cov`` (a stored report) after checking that it lists exactly the functions and option
+    values of the universe now; ``AssertionError`` when it is stale."""
+    want = [(t.name, [(o.name, v) for o in t.options for v in o.values]) for t in universe()]
+    got = [(f["function"], [(o["option"], o["value"]) for o in f["options"]])
+           for f in cov["functions"]]  # fmt: skip
+    assert got == want, "the coverage report does not list the functions and options of now"
+    return cov
 
 
 def unreached(cov: dict[str, Any]) -> list[str]:
