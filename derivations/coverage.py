@@ -302,7 +302,7 @@ def recording() -> Iterator[Recorder]:
         if inspect.isclass(target.obj):
             init = target.obj.__init__
             undo.append((target.obj, "__init__", init))
-            target.obj.__init__ = _wrap(init, target, recorder, skip_self=True)
+            setattr(target.obj, "__init__", _wrap(init, target, recorder, skip_self=True))  # noqa: B010
             continue
         wrapper = _wrap(target.obj, target, recorder, skip_self=False)
         for module in modules:
@@ -331,7 +331,7 @@ def recording() -> Iterator[Recorder]:
 def report(recorder: Recorder) -> dict[str, Any]:
     """The coverage report: for every target its evidence and, for every option value, the
     evidence that reached it (an empty list: unreached), and the counts."""
-    functions = []
+    functions: list[dict[str, Any]] = []
     for t in universe():
         options = [
             {

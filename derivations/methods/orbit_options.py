@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -184,7 +185,11 @@ def m10_orbit_bvp_costates_and_condition() -> float:
     iu = np.triu_indices(3, 1)
     f = _orbit_field(N)
     gaps = []
-    for costate, sign in (("corrected", -1.0), ("printed", 1.0)):
+    cases: tuple[tuple[Literal["corrected", "printed"], float], ...] = (
+        ("corrected", -1.0),
+        ("printed", 1.0),
+    )
+    for costate, sign in cases:
         res = symrb.orbits.solve_orbit_bvp(x0, N, _T, costate=costate, nodes=11,
                                            condition=costate == "printed")  # fmt: skip
         if not res.success:

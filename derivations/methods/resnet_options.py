@@ -145,7 +145,8 @@ def _msa_reference(x0: np.ndarray, y: np.ndarray, K: np.ndarray, b: np.ndarray, 
         for k in range(_N):
 
             def h(w: np.ndarray, x: Any = xs[k], x1: Any = xs[k + 1], p1: Any = ps[k + 1]) -> Any:
-                f = _layer(x, *(v[0] for v in _unpack(w)), act, res)
+                Kk, bk = _unpack(w)
+                f = _layer(x, Kk[0], bk[0], act, res)
                 return np.sum(p1 * f) - rho / 2 * np.sum((x1 - f) ** 2)
 
             u = _pack(K[k : k + 1], b[k : k + 1])

@@ -224,7 +224,7 @@ def m12_shooting() -> float:
     iu = np.triu_indices(3, 1)
     plain = sl.train_so_shooting(Q0, T, _LAM, _ALPHA, 3)
     got = sl.train_so_shooting(Q0, T, _LAM, _ALPHA, 3, M0=plain.M0, condition=True)
-    if got.condition is None or plain.condition is not None:
+    if got.condition is None or plain.condition is not None or got.M0 is None or plain.M0 is None:
         return math.inf
     m = got.M0[iu]
     gaps = [np.abs(F(plain.M0[iu])).max(), np.abs(plain.U - controls(plain.M0)).max()]
