@@ -51,6 +51,7 @@ __all__ = [
     "claims_lines",
     "statement_lines",
     "evidence_lines",
+    "sentence_lines",
     "seconds_text",
     "verdict",
     "verify_table",
@@ -362,6 +363,30 @@ def evidence_lines(result: ClaimResult, source: str, width: int) -> list[str]:
         head = f"  {k:>2}. [{e.form}] {e.level}, {seconds_text(e.seconds)}: {verdict(e)}"
         out += textwrap.wrap(head, width=width, subsequent_indent="      ")
         out.append(paragraph(text_of(e.description), indent="      ", width=width))
+    return out
+
+
+def sentence_lines(claim: Claim, width: int) -> list[str]:
+    """The sentences of the claim's statement in the paper for ``show``, each with its status
+    (covered, UNCOVERED, prose) and the evidence that checks it (or, for prose, why there is
+    nothing to check); nothing when the claim maps no sentences."""
+    if not claim.sentences:
+        return []
+    math = [s for s in claim.sentences if s.kind == "math"]
+    covered = sum(bool(s.evidence) for s in math)
+    out = ["", "The paper's sentences"]
+    head = f"{covered} of {len(math)} stating mathematics covered by evidence"
+    if covered < len(math):
+        head += f", {len(math) - covered} UNCOVERED"
+    out.append(paragraph(f"{head}; {len(claim.sentences) - len(math)} prose.", width=width))
+    for k, s in enumerate(claim.sentences, 1):
+        status = s.kind if s.kind == "prose" else ("covered" if s.evidence else "UNCOVERED")
+        out.append(paragraph(f"{k:>2}. [{status}] {text_of(s.text)}", indent="  ", width=width))
+        if s.kind == "prose":
+            out.append(paragraph(f"why: {text_of(s.reason)}", indent="      ", width=width))
+        elif s.evidence:
+            names = ", ".join(s.evidence)
+            out.append(paragraph(f"checked by: {names}", indent="      ", width=width))
     return out
 
 
