@@ -379,14 +379,19 @@ def sentence_lines(claim: Claim, width: int) -> list[str]:
     if covered < len(math):
         head += f", {len(math) - covered} UNCOVERED"
     out.append(paragraph(f"{head}; {len(claim.sentences) - len(math)} prose.", width=width))
+    number = {ev.name: k for k, ev in enumerate(claim.evidence, 1)}
     for k, s in enumerate(claim.sentences, 1):
         status = s.kind if s.kind == "prose" else ("covered" if s.evidence else "UNCOVERED")
-        out.append(paragraph(f"{k:>2}. [{status}] {text_of(s.text)}", indent="  ", width=width))
+        out.append(f"  {k:>2}. [{status}]")
+        out.append(paragraph(text_of(s.text), indent="      ", width=width))
         if s.kind == "prose":
-            out.append(paragraph(f"why: {text_of(s.reason)}", indent="      ", width=width))
+            why = f"Why nothing is checked: {text_of(s.reason)}"
+            out.append(paragraph(why, indent="      ", width=width))
         elif s.evidence:
-            names = ", ".join(s.evidence)
-            out.append(paragraph(f"checked by: {names}", indent="      ", width=width))
+            names = ", ".join(f"{number[n]} ({n})" for n in s.evidence)
+            out.append(paragraph(f"Checked by evidence {names}.", indent="      ", width=width))
+        else:
+            out.append("      No evidence checks this sentence yet.")
     return out
 
 
