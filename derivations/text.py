@@ -71,7 +71,9 @@ _SPACED = {
     "mapsto": "↦", "times": "×", "subset": "⊂", "quad": "  ", "qquad": "   ",
 }  # fmt: skip
 #: Macros pylatexenc does not know, with their arguments.
-_ARGUMENTS = {"operatorname": "{", "substack": "{", "tfrac": "{{", "dfrac": "{{"}
+_ARGUMENTS = {
+    "operatorname": "{", "substack": "{", "tfrac": "{{", "dfrac": "{{", "overline": "{",
+}  # fmt: skip
 _WALKER = _walker_context().filter_context()
 _WALKER.add_context_category(
     "symrb",
@@ -87,6 +89,7 @@ _TEXT.add_context_category(
         MacroTextSpec("substack", "%(1)s"),
         MacroTextSpec("tfrac", "%(1)s/%(2)s"),
         MacroTextSpec("dfrac", "%(1)s/%(2)s"),
+        MacroTextSpec("overline", "%(1)s\N{COMBINING OVERLINE}"),
         *(MacroTextSpec(name, f" {sym} ") for name, sym in _SPACED.items()),
     ],
     prepend=True,

@@ -404,3 +404,132 @@ def d7_symrb_flow_is_extremal() -> float:
             d -= _numeric(COST.function, {"U_k": xi @ Us[k]}, lam)
             worst.append(abs(d))
     return float(np.max(worst))
+
+
+# the paper's sentences (the definition, the theorem, the remark after it and the proof)
+
+D7.sentence(
+    r"We now derive the discrete symmetric rigid body equations by considering discrete optimal "
+    r"control on the special orthogonal group.",
+    kind="prose",
+    reason="announces the definition and theorem",
+)
+D7.sentence(
+    r"Let $\Lambda$ be a positive definite diagonal matrix.",
+    d7_ukdef_branch_n3,
+    d7_symrb_flow_is_extremal,
+)
+D7.sentence(
+    r"Let $\overline{Q}_0, \overline{Q}_N\in \operatorname{SO}(n)$ be given and fixed.",
+    d7_symrb_flow_is_extremal,
+)
+D7.sentence(
+    r"Let $\hat{V}(U_0, \ldots, U_{N-1}):=\sum_{k=0}^{N-1} \operatorname{trace}(\Lambda U_{k}), "
+    r"\quad U_k \in \operatorname{SO}(n).$",
+    d7_mv_functional_corrected,
+    d7_symrb_flow_is_extremal,
+)
+D7.sentence(
+    r"Define the optimal control problem $\mathop{\rm min}_{U_k\in\operatorname{SO}(n)}"
+    r"\hat{V}(U_0,\ldots, U_{N-1})= \mathop{\rm min}_{U_k\in\operatorname{SO}(n)} "
+    r"\sum_{k=0}^{N-1}\operatorname{trace}(\Lambda U_{k})$ subject to dynamics and initial and "
+    r"final data $Q_{r+1}=Q_kU_{r}, \qquad Q_0=\overline{Q}_0, \qquad Q_N =\overline{Q}_N$ for "
+    r"$Q_r, U_r\in \operatorname{SO}(n)$, $r=0,1, \ldots, N-1$.",
+    d7_mv_functional_corrected,
+    d7_mv_functional_printed,
+    d7_symrb_flow_is_extremal,
+)
+D7.sentence(
+    r"Theorem. A solution of the optimal control problem in Definition (mvoptprobm) satisfies "
+    r"the optimal evolution equations $Q_{k+1} = Q_kU_{k}\,, \qquad P_{k+1} = P_kU_{k}\,, \qquad "
+    r"k=0, \ldots, N-1,$ where $P_k\in \operatorname{SO}(n)$ is the discrete covector in the "
+    r"discrete maximum principle and $U_{k} \in \operatorname{SO}(n)$ is defined by "
+    r"$U_{k}\Lambda - \Lambda U^T_{k}=Q_k^TP_k-P_k^TQ_k\,.$",
+    d7_costate_gradients,
+    d7_final_and_flip,
+    d7_symrb_flow_is_extremal,
+    d7_costate_in_SO_is_a_choice,
+    d7_costate_in_SO_printed,
+    d7_ukdef_branch_n2,
+    d7_ukdef_unique_n2,
+    d7_ukdef_branch_n3,
+    d7_ukdef_unique_n3,
+)
+D7.sentence(
+    r"Equation (Ukdef) can be solved for $U_k$ under certain circumstances, as discussed in "
+    r"[MoVe1991] and [CaLe2001]; we discuss this issue further below.",
+    d7_ukdef_branch_n2,
+    d7_ukdef_branch_n3,
+)
+D7.sentence(
+    r"Proof. Applying Proposition (gendiscprop), we get "
+    r"$H(P_{k+1},Q_k,U_{k})=\operatorname{trace}(P_{k+1}^TQ_kU_{k}) "
+    r"-\operatorname{trace}(\Lambda U_{k}) =\operatorname{trace}\left((P^T_{k+1}Q_k-\Lambda)"
+    r"U_{k}\right)\,.$",
+    d7_costate_gradients,
+    d7_symequation,
+)
+D7.sentence(
+    r"Note that $\hat{V}(U_0, \ldots, U_{N-1})= \sum_{k=0}^{N-1}\operatorname{trace}(\Lambda "
+    r"U_{k})= \sum_{k=0}^{N-1}\operatorname{trace}(U^T_{k} \Lambda)=\sum_{k=0}^{N-1}"
+    r"\operatorname{trace}(Q_k\Lambda Q_{k+1}^T)$ is the Moser-Veselov functional [MoVe1991] "
+    r"and that this functional is linear in the controls.",
+    d7_mv_functional_corrected,
+    d7_mv_functional_printed,
+)
+D7.sentence(
+    r"We need to find the critical points of $H(P_{k+1},Q_k,U_{k})$ where $U_k^TU_k=I$ since "
+    r"$U_k\in \operatorname{SO}(n)$.",
+    d7_critical_points,
+)
+D7.sentence(
+    r"Thus, we need to minimize a functional of the form $\operatorname{trace}(AU)$, $A$ fixed, "
+    r"subject to $U^TU=I$.",
+    d7_critical_points,
+)
+D7.sentence(
+    r"Set $\tilde{V}(U):=\operatorname{trace}(AU)+\tfrac{1}{2} \operatorname{trace}\left(\Sigma "
+    r"(U^TU-I)\right)\,,$ where $U \in \operatorname{SO}(n)$ and $\Sigma=\Sigma^T$ is a "
+    r"$N \times N$ matrix of Lagrange multipliers.",
+    d7_multiplier_derivative,
+    d7_multiplier_n_by_n,
+    d7_multiplier_N_by_N,
+)
+D7.sentence(
+    r"Then $\delta\tilde{V}(U) \cdot \delta U= \operatorname{trace}(A\delta U+\Sigma U^T\delta "
+    r"U)=0$ implies $A+\Sigma U^T=0$ where $U^TU=I$.",
+    d7_multiplier_derivative,
+    d7_critical_points,
+)
+D7.sentence(r"Hence $\Sigma=-AU$.", d7_critical_points)
+D7.sentence(
+    r"But since $\Sigma=\Sigma^T$ the extrema of our optimization problem are obtained when "
+    r"$AU=U^TA^T$.",
+    d7_critical_points,
+)
+D7.sentence(
+    r"Applying this observation to our case (see (discham)), we have $\nabla_{U_k}H = 0$ when "
+    r"$\left(P_{k+1}^TQ_k-\Lambda\right)U_{k} =U^T_{k}\left(Q_k^TP_{k+1}-\Lambda\right)\,,$ that "
+    r"is, $U^T_{k}\Lambda-\Lambda U_{k}= U^T_{k}Q^T_kP_{k+1}-P^T_{k+1}Q_kU_{k}$ or, "
+    r"equivalently, $U_{k}\Lambda-\Lambda U^T_{k}=-Q^T_kP_{k+1}U^T_{k}+ U_{k}P^T_{k+1}Q_k\,.$",
+    d7_symequation,
+    d7_critical_points,
+)
+D7.sentence(
+    r"Also, by (eq8.3), $P_k=\nabla_{Q_k}H=\left(U_{k}P^T_{k+1}\right)^T=P_{k+1}U^T_{k}\,, "
+    r"\qquad Q_{k+1} = \nabla_{P_{k+1}}H = Q_kU_k\,.$",
+    d7_costate_gradients,
+)
+D7.sentence(r"Hence we obtain equations (discrbopteqns).", d7_costate_gradients)
+D7.sentence(
+    r"Combining (discrbopteqns) with (symequation) we get "
+    r"$U_{k}\Lambda-\Lambda U^T_{k}=P_k^TQ_k-Q_k^TP_k$",
+    d7_final_and_flip,
+)
+D7.sentence(
+    r"Now replace $P_k$ by $-P_k$ and $P_{k+1}$ by $-P_{k+1}$; thus (discrbopteqns) remains "
+    r"unchanged but (equ_final_th_2.7) is transformed to (Ukdef) which yields the stated result.",
+    d7_final_and_flip,
+    d7_flip_determinant,
+    d7_flip_determinant_printed,
+)
