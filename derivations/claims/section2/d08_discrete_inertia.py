@@ -199,6 +199,17 @@ def d8_symrb_flows_against_50_digits() -> float:
     return float(np.max([e.max() for e in errs]))
 
 
+@D8.check(Level.SYMBOLIC_GENERAL_N)
+def d8_values_are_skew_every_n() -> sp.Expr:
+    """The emitted J_D(U) is skew for every U (J_D(U) + J_D(U)^T expands to 0, U not even
+    orthogonal), and the displayed J maps a skew Omega to a skew Omega Lambda + Lambda Omega
+    (noncommutative symbols, Lambda symmetric, every n)."""
+    w = Words(symmetric=["Lambda"], skew=["Omega"])
+    jd = w.of(JD["JD"])
+    j = w.of(DJD.rhs)
+    return w.is_zero(jd + w.T(jd)) + w.is_zero(j + w.T(j))
+
+
 # the paper's sentences
 
 D8.sentence(
@@ -215,6 +226,7 @@ D8.sentence(
     r"$J_D : \operatorname{SO}(n) \rightarrow \mathfrak{so}(n)$ (the discrete version of the "
     r"moment of inertia operator $J$) is defined by $J_D U := U \Lambda - \Lambda U^T$.",
     d8_jd_skew,
+    d8_values_are_skew_every_n,
     d8_symrb_JD_pointwise,
 )
 D8.sentence(
@@ -223,7 +235,7 @@ D8.sentence(
     r"$J:\mathfrak{so}(n)\ni \Omega \mapsto \Omega \Lambda + \Lambda \Omega \in \mathfrak{so}(n)$, "
     r"the classical moment of inertia operator on $\mathfrak{so}(n)$.",
     d8_derivative_is_J,
-    d8_jd_skew,
+    d8_values_are_skew_every_n,
 )
 D8.sentence(
     r"Since $J$ is invertible, $J_D$ is a diffeomorphism from a neighborhood of the identity in "
