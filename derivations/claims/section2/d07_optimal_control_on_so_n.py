@@ -8,8 +8,9 @@ proof (discrbeq, discham, symequation, equ_final_th_2.7).
 Recorded outcome: holds after correction.  The necessary conditions and the sign change hold as
 printed for every :math:`n` (noncommutative symbols); the dynamics carry a frozen index, the
 multiplier is :math:`n\times n`, the costate in :math:`SO(n)` is a choice, the sign change
-multiplies the determinant by :math:`(-1)^n`, and :math:`U_k` is the solution on the branch
-through the identity.
+multiplies the determinant by :math:`(-1)^n`, and the discrete rigid body (:math:`U_k` on the
+branch through the identity, which symrb follows) is the global maximiser of the cost, while the
+global minimiser has every :math:`U_k` on another branch (:mod:`._so_extremals`).
 
 Emitted (``symrb/_generated/discrete_rigid_body.py``): ``jd``, the left side :math:`J_D(U)` of
 the equation for :math:`U_k`.  Evidence independent of symrb: symbolic and exact computations and
@@ -78,19 +79,30 @@ D7 = claim(
     printed="The dynamics of the problem read [[dynamics_printed]]; the multiplier $\\Sigma$ is an $N\\times N$ "
     "matrix; $P_k$ in $SO(n)$ is the discrete covector of the maximum principle (the theorem's "
     "$P_k$ is minus the covector of the proof, so both would be in $SO(n)$: [[flip_printed]]); "
-    "$U_k$ in $SO(n)$ is defined by the theorem's equation for $U_k$ (one solution).",
+    "$U_k$ in $SO(n)$ is defined by the theorem's equation for $U_k$ (one solution), and the "
+    "discrete rigid body so defined solves the minimisation problem.",
     corrected="The dynamics are [[dynamics]]; $\\Sigma$ is $n\\times n$ (the size of $U^TU-I$); the "
     "costate is a covector of $\\mathfrak{gl}(n)$, fixed only up to adding $Q_k$ times a symmetric "
     "matrix, so $SO(n)$ is a choice (an invariant set): [[P0_gl]] and [[P0_SO]] give the same "
     "extremal; the sign change gives [[flip_det]], so for odd $n$ at most one of $P_k$ and "
     "$-P_k$ is in $SO(n)$; the equation for $U_k$ has several solutions in $SO(n)$ (two for $n=2$, four for "
-    "$n=3$ and small momenta) and $U_k$ is the one on the branch through the identity (all "
-    "eigenvalues of $U_k\\Lambda$ in the open right half-plane), unique, and existing only up "
-    "to a fold (D10).",
+    "$n=3$ and small momenta), and the theorem's equations hold at every extremal, the minimiser "
+    "and the maximiser alike.  The discrete rigid body, the solution on the branch through the "
+    "identity (all eigenvalues of $U_k\\Lambda$ in the open right half-plane; unique, and existing "
+    "only up to a fold, D10) that symrb's flows follow, is the global maximiser of the cost (the "
+    "minimiser of minus the cost) in every case computed ($n=3$; $N$ from 2 to 4; $Q_0^TQ_N$ a "
+    "turn by less than $\\pi$, and half-turns for $N=3$); the global minimiser has for every "
+    "$U_k$ an eigenvalue of $U_k\\Lambda$ in the open left half-plane, each $U_k$ on the continuation "
+    "of the half-turn about the axis of the smallest $\\lambda_i$ for $Q_N$ near $Q_0$.",
     note="The dynamics carry a frozen index, the multiplier $\\Sigma$ is said to be $N \\times "
-    "N$, and the theorem leaves the choice of $P_k$ and of the branch of $U_k$ unstated. "
+    "N$, the theorem leaves the choice of $P_k$ and of the solution $U_k$ unstated, and the "
+    "discrete rigid body it leads to (the solution on the branch through the identity) is the "
+    "maximiser of the cost, not its minimiser. "
     "Corrected: $Q_{r+1} = Q_r U_r$, $\\Sigma$ is $n \\times n$, $P_k \\in \\mathrm{SO}(n)$ is a "
-    "choice of costate, and $U_k$ is the solution on the branch through the identity. The "
+    "choice of costate, and the discrete rigid body (every $U_k$ on the branch through the "
+    "identity) is the global maximiser of $\\sum_k \\operatorname{tr}(\\Lambda U_k)$ (the "
+    "minimiser of minus it) for $Q_N$ near $Q_0$, while the global minimiser is the extremal "
+    "with every $U_k$ off that branch. The "
     "necessary conditions (the stationarity equation of the proof, the costate equation, the "
     "equation for $U_k$ before the sign change, and the sign change itself) hold as printed, for "
     "every $n$. With the frozen index the proof's identity $\\sum_k \\operatorname{tr}(\\Lambda "
@@ -101,7 +113,19 @@ D7 = claim(
     "choice of representative that exists when $\\|M\\|_{\\mathrm{op}} < 2$ (S9, S10) and is kept "
     "by the equations; $P \\mapsto -P$ changes $\\det P$ by $(-1)^n$; and the equation for $U_k$ "
     "does not define $U_k$ without naming the branch: for $n = 3$ near $M = 0$ it has four "
-    "solutions in $\\mathrm{SO}(3)$, $I$ and the half-turns about the principal axes continued.",
+    "solutions in $\\mathrm{SO}(3)$, $I$ and the half-turns about the principal axes continued. "
+    "Both global optima satisfy the theorem's equations, so the equations alone cannot tell them "
+    "apart; the branch does.  Computed for $n = 3$, $\\Lambda = \\mathrm{diag}(0.7, 1.1, 1.6)$ "
+    "and $N = 2, 3, 4$ (multi-start BFGS over $\\mathrm{SO}(3)^{N-1}$, polished to an "
+    "extremal; for $N = 2$ 16 axes at turns from 2 to 3.13 and 6 other targets, for $N = 3$ 36 targets (10 "
+    "half-turns), for $N = 4$ 6 targets): "
+    "the maximiser has every eigenvalue of $U_k\\Lambda$ in the right half-plane whenever "
+    "$Q_0^T Q_N$ is a turn by less than $\\pi$ (for $N = 2$ the least real part tends to 0, the "
+    "fold, as the turn tends to $\\pi$, and at a half-turn the maximisers form a continuum, most "
+    "of them off the branch); the minimiser has for every $U_k$ an eigenvalue of $U_k\\Lambda$ in "
+    "the left half-plane (at $Q_N = Q_0$ "
+    "and even $N$ every $U_k$ is the half-turn about the axis of $\\lambda_1$), and symrb's "
+    "flow started from its $Q_0$ and $M_0$ leaves it.",
     expected="holds after correction",
     section="2.1",
     where="Section 2.1 (The discrete symmetric rigid body), the first definition (minimise "
