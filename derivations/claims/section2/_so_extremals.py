@@ -121,3 +121,28 @@ def _continued_to(U: np.ndarray, lam: np.ndarray, steps: int = 100) -> str:
     if np.abs(V - np.diag(signs)).max() > 1e-8:  # pragma: no cover - Newton lost the branch
         return "?"
     return "I" if (signs > 0).all() else f"R{int(np.argmax(signs)) + 1}"
+
+
+#: Rotation vectors of Q_0^T Q_N for the book's table: no turn, 1.41 and 2.68 rad.
+TABLE_TARGETS = ((0.0, 0.0, 0.0), (1.0, -0.6, 0.8), (0.3, 2.2, -1.5))
+
+
+def optima_rows(
+    lam: np.ndarray, steps: tuple[int, ...] = (2, 3, 4), targets: tuple = TABLE_TARGETS
+) -> list[dict]:
+    """For each N in ``steps`` and rotation vector in ``targets`` (of Q_0^T Q_N): the global
+    minimum and maximum of sum_k tr(Lambda U_k), the branch each U_k continues to
+    (:func:`_continued_to`), the least real part of the eigenvalues of U_k Lambda over k, and
+    the largest stationarity residual of the two optima."""
+    rows = []
+    for N in steps:
+        for v in targets:
+            row: dict = {"N": N, "turn": float(np.linalg.norm(v))}
+            for name, sign in (("min", 1), ("max", -1)):
+                Us = _global_optimum(lam, _rot(np.array(v)), N, sign)
+                row[name] = _value(Us, lam)
+                row[name + "_branch"] = [_continued_to(U, lam) for U in Us]
+                row[name + "_margin"] = min(_margin(U, lam) for U in Us)
+                row[name + "_stationarity"] = float(np.abs(_stationarity(Us, lam)).max())
+            rows.append(row)
+    return rows
