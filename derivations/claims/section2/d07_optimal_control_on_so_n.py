@@ -465,11 +465,13 @@ def _optimum(sign: int) -> tuple[np.ndarray, float, float]:
 
 
 def _is_discrete_rigid_body(sign: int) -> float:
-    """Largest of: the optimum's Ukdef residual, its distance from symrb's flow, and how far the
-    least real part of the eigenvalues of U_k Lambda is below 0 (off the branch through I)."""
+    """Largest of: the optimum's Ukdef residual, its distance from symrb's flow, how far the
+    least real part of the eigenvalues of U_k Lambda is below 0 (off the branch through I), and
+    the number of U_k that do not continue to I along J_D(V) = tM_k, t from 1 to 0."""
     Us, theorem, gap = _optimum(sign)
     below = max(0.0, -min(_margin(u, _LAM3) for u in Us))
-    return max(theorem, gap, below)
+    elsewhere = sum(_continued_to(u, _LAM3) != "I" for u in Us)
+    return max(theorem, gap, below, float(elsewhere))
 
 
 @D7.check(Level.FLOAT64, tol=1e-12, form="corrected")
@@ -477,8 +479,10 @@ def d7_maximiser_is_discrete_rigid_body() -> float:
     """The global maximiser of the displayed cost (best of 12 BFGS runs over rotation vectors,
     polished to an extremal; n = 3, N = 3, Q_0^T Q_N a turn by 1.41 rad) solves the theorem's
     equations with its costate, every U_k Lambda has its eigenvalues in the open right half-plane,
-    and symrb.symmetric_flow started from its Q_0 and M_0 = J_D(U_0) reproduces its Q_k: the
-    largest of the Ukdef residual, max|Q_k - Q_k(symrb)| and the negative part of min Re eig."""
+    each U_k continues to I along J_D(V) = tM_k (t from 1 to 0), and symrb.symmetric_flow
+    started from its Q_0 and M_0 = J_D(U_0) reproduces its Q_k: the largest of the Ukdef
+    residual, max|Q_k - Q_k(symrb)|, the negative part of min Re eig and the number of U_k that
+    continue elsewhere."""
     return _is_discrete_rigid_body(-1)
 
 
