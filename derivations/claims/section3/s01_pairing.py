@@ -70,3 +70,28 @@ def s1_symrb_hat_and_pairing() -> float:
     e1 = np.abs(np.einsum("...ij,...j->...i", symrb.hat(u), v) - np.cross(u, v)).max()
     e2 = np.abs(symrb.pairing(symrb.hat(u), symrb.hat(v)) - np.einsum("...i,...i", u, v)).max()
     return float(max(e1, e2) / np.abs(u).max() / np.abs(v).max())
+
+
+# the paper's sentences
+S1.sentence(
+    r"We use the following pairing (multiple of the Killing form) on $\mathfrak{so}(n)$, the Lie "
+    r"algebra of $n \times n$ real skew matrices regarded as the Lie algebra of the "
+    r"$n$-dimensional proper rotation group $\operatorname{SO}(n)$: $$\left\langle \xi, \eta "
+    r"\right\rangle = - \frac{1}{2} \operatorname{trace} (\xi \eta).$$",
+    s1_pairing_is_dot,
+    s1_symrb_hat_and_pairing,
+)
+S1.sentence(
+    r"The factor of $1/2$ in (killing.eqn) is to make this inner product agree with the usual "
+    r"inner product on $\mathbb{R}^3$ when it is identified with $\mathfrak{so}(3)$ in the "
+    r"following standard way: associate the $3 \times 3$ skew matrix $\hat{u}$ to the vector $u$ "
+    r"by $\hat{u} \cdot v = u \times v$, where $u \times v$ is the usual cross product in "
+    r"$\mathbb{R}^3$.",
+    s1_pairing_is_dot,
+    s1_hat_is_cross,
+    s1_symrb_hat_and_pairing,
+)
+S1.sentence(
+    r"We use this inner product to identify the dual of the Lie algebra, namely "
+    r"$\mathfrak{so}(n)^\ast$, with the Lie algebra $\mathfrak{so}(n)$.",
+)

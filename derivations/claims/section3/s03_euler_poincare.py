@@ -116,3 +116,19 @@ def s3_symrb_kinetic_energy() -> float:
         want = 0.5 * ref.pairing(Omega, ref.J(Omega, lam))
         worst = max(worst, float(np.abs(symrb.kinetic_energy(Ms, lam) - want).max() / want.max()))
     return worst
+
+
+# the paper's sentences
+S3.sentence(
+    r"The equations $\dot{M} = [M, \Omega]$ are readily checked to be the Euler-Poincar\'e "
+    r"equations on $\mathfrak{so}(n)$ for the Lagrangian $l(\Omega) = \frac{1}{2} \left\langle "
+    r"\Omega, J(\Omega) \right\rangle$.",
+    s3_variational_derivative,
+    s3_coadjoint,
+    s3_kinetic_energy_kernel,
+    s3_symrb_kinetic_energy,
+)
+S3.sentence(
+    r"This corresponds to the Lagrangian on $T \operatorname{SO}(n)$ given by $$L(g, \dot{g}) = "
+    r"\frac{1}{2} \left\langle g^{-1} \dot{g}, J(g^{-1} \dot{g}) \right\rangle\,.$$",
+)

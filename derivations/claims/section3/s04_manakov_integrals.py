@@ -375,3 +375,44 @@ def s4_discrete_flow_conserves_the_integrals() -> float:
     sol = symrb.engine.mv_flow(ref.random_rotation(5, rng), M0, lam, 0.05, 1000, save_every=20)
     F = symrb.rigid_body.manakov_integrals(sol.y.M, lam)
     return float((np.abs(F - F[0]).max(axis=0) / np.abs(F[0])).max())
+
+
+# the paper's sentences
+S4.sentence(
+    r"We note that the dynamic rigid body equations on $\operatorname{SO}(n)$ and indeed on any "
+    r"semisimple Lie group are integrable ([MiFo1976]).",
+    s4_integrals_conserved,
+    s4_integrals_in_involution,
+    s4_number_of_independent_integrals,
+)
+S4.sentence(
+    r"A key observation in this regard, due to Manakov, was that one could write the generalized "
+    r"rigid body equations as Lax equations with parameter: $$\frac{d}{dt}(M+\lambda \Lambda^2)= "
+    r"[M+\lambda \Lambda^2,\Omega+\lambda \Lambda],$$ where $M=J(\Omega)=\Lambda\Omega +\Omega "
+    r"\Lambda$, as in \S2.",
+    s4_lax_pair_general_n,
+)
+S4.sentence(
+    r"The nontrivial coefficients of $\lambda$ in the traces of the powers of $M+\lambda "
+    r"\Lambda^2$ then yield the right number of independent integrals in involution to prove "
+    r"integrability of the flow on a generic adjoint orbit of $\operatorname{SO}(n)$ (identified "
+    r"with the corresponding coadjoint orbit).",
+    s4_integrals_conserved,
+    s4_integrals_conserved_exact,
+    s4_integrals_in_involution,
+    s4_coefficients_by_expansion,
+    s4_symrb_integrals_pointwise,
+    s4_conserved_on_reference_flow,
+    s4_number_of_independent_integrals,
+)
+S4.sentence(
+    r"Useful references are [Bogayavlenski1994] and [FeKo1995].)",
+    kind="prose",
+    reason="a citation",
+)
+S4.sentence(
+    r"[MoVe1991] show that there is a corresponding formulation of the discrete rigid body "
+    r"equations with parameter.",
+    s4_discrete_lax_pair,
+    s4_discrete_flow_conserves_the_integrals,
+)

@@ -155,3 +155,48 @@ def s7_flow_against_elliptic() -> float:
         rtol=1e-12, atol=1e-12, t_eval=t,
     )  # fmt: skip
     return float(np.abs(ref.vee(sol.y.M) - m).max() / np.linalg.norm(m[0]))
+
+
+# the paper's sentences
+S7.sentence(
+    r"While in general there are no constraints on the costate vector $P\in\mathfrak{gl}(n)$ one "
+    r"can consider the restriction of the extremal flows to invariant submanifolds.",
+    kind="prose",
+    reason="introduces the restrictions that follow; each invariant set is checked in its own "
+    "sentence",
+)
+S7.sentence(
+    r"This limits possible extremal trajectories that can be recovered.",
+    kind="prose",
+    reason="a comment on the restrictions; it asserts nothing checkable",
+)
+S7.sentence(
+    r"For example this system restricts to a system on $\operatorname{SO}(n)\times "
+    r"\operatorname{SO}(n)$.",
+)
+S7.sentence(
+    r"One can make other assumptions on the costate vector.",
+    kind="prose",
+    reason="announces the next example",
+)
+S7.sentence(
+    r"For example, suppose we assume a costate vector $B$ such that $Q^TB$ is skew.",
+    s7_printed_extremals,
+    s7_corrected_extremals,
+    s7_skew_set_invariant,
+)
+S7.sentence(
+    r"Then it is easy to check that that the extremal evolution equations become $$\dot Q = "
+    r"QJ^{-1}(Q^TB); \qquad \dot B = BJ^{-1}(Q^TB)\,,$$ and that these equations restrict to an "
+    r"invariant submanifold defined by the condition that $Q^TB$ is skew symmetric.",
+    s7_printed_extremals,
+    s7_corrected_extremals,
+    s7_remark_maps_symmetric_flow,
+    s7_skew_set_invariant,
+    s7_flow_against_elliptic,
+)
+S7.sentence(
+    r"These are the McLachlan-Scovel equations ([McSc1995]).",
+    kind="prose",
+    reason="names the equations and cites their source",
+)

@@ -121,3 +121,76 @@ def s9_skew_orthogonal_pairs() -> sp.Integer:
         bad += int(set((Mk.T * Mk).eigenvals()) != {BOUND.rhs**2})
     bad += sum(int(sp.expand(skew_matrix("a", k).det()) != 0) for k in (3, 5))
     return sp.Integer(bad)
+
+
+# the paper's sentences
+S9.sentence(
+    r"Above we saw that solutions of the symmetric rigid body equations can be mapped to solutions "
+    r"of the rigid body system.",
+    kind="prose",
+    reason="recalls S6, checked there",
+)
+S9.sentence(
+    r"As in [BlCrMaRa2002] we can consider the converse question.",
+    kind="prose",
+    reason="announces the question, with a citation",
+)
+S9.sentence(
+    r"Thus, suppose we have a solution $(Q, M)$ of the standard left invariant rigid body "
+    r"equations.",
+    kind="prose",
+    reason="sets up the question; the rigid body equations are S2",
+)
+S9.sentence(
+    r"We seek to solve for $P$ in the expression $$M=Q^TP-P^TQ.$$",
+    s9_no_bound_on_gl,
+)
+S9.sentence(
+    r"For the following discussion, it will be convenient to make use of the operator norm on "
+    r"matrices.",
+    kind="prose",
+    reason="announces the tool used next",
+)
+S9.sentence(
+    r"Recall that this norm is given by $\| A \|_{\mathrm{op}} = \sup \left\{ \| A x \| \mid \| x "
+    r"\| = 1 \right\}$, where the norms on the right hand side are the usual Euclidean space "
+    r"norms.",
+    s9_identity_general_n,
+)
+S9.sentence(
+    r"Since elements of $\operatorname{SO}(n)$ have operator norms bounded by $1$ and since the "
+    r"operator norm satisfies $\| A B \|_{\mathrm{op}} \leq \| A \|_{\mathrm{op}} \| B "
+    r"\|_{\mathrm{op}}$, we see that if $M$ satisfies $M=Q^TP-P^TQ$, then $\| M \|_{\mathrm{op}} "
+    r"\leq 2$.",
+    s9_identity_general_n,
+    s9_sampled_bound,
+    s9_bound_attained,
+)
+S9.sentence(
+    r"Therefore, $\| M \|_{\mathrm{op}} \leq 2$ is a necessary condition for solvability of "
+    r"(M_Q_P.eqn) for $P$.",
+    s9_identity_general_n,
+    s9_sampled_bound,
+    s9_no_bound_on_gl,
+)
+S9.sentence(
+    r"Let $C$ denote the set of $(Q,P)$ that map to $M$'s with operator norm equal to 2 and let "
+    r"$S$ denote the set of $(Q,P)$ that map to $M$'s with operator norm strictly less than 2.",
+    s9_bound_attained,
+    s9_skew_orthogonal_pairs,
+)
+S9.sentence(
+    r"Also denote by $S_M$ the set of points $(Q,M) \in T^*\operatorname{SO}(n)$ with $\| M "
+    r"\|_{\mathrm{op}} < 2$.",
+)
+S9.sentence(
+    r"For the left invariant system we trivialize $T^*\operatorname{SO}(n) \cong "
+    r"\operatorname{SO}(n) \times \mathfrak{so}(n)^\ast$ by means of left translation to the "
+    r"identity and we identify $\mathfrak{so}(n)^\ast$ with $\mathfrak{so}(n)$ using the Killing "
+    r"metric (killing.eqn).",
+)
+S9.sentence(
+    r"Note that $C$ contains pairs $(Q,P)$ with the property that $Q^TP$ is both skew and "
+    r"orthogonal.",
+    s9_skew_orthogonal_pairs,
+)

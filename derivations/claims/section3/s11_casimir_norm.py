@@ -48,3 +48,33 @@ def s11_spatial_momentum_general_n() -> sp.Integer:
     }
     spatial = w.of(SPATIAL.lhs.args[0].xreplace({M: Mk}))
     return w.is_zero(ddt(w, spatial, rates) - w.of(SPATIAL.rhs))
+
+
+# the paper's sentences
+S11.sentence(
+    r"The sets $C$ and $S$ are invariant under the double rigid body equations.",
+    s11_spatial_momentum_general_n,
+)
+S11.sentence(
+    r"Notice that the operator norm is invariant under conjugation; that is, for $Q \in "
+    r"\operatorname{SO}(n)$ and $M \in \mathfrak{so}(n)$, we have $\| Q M Q^{-1} \|_{\mathrm{op}} "
+    r"= \| M \|_{\mathrm{op}}$.",
+)
+S11.sentence(
+    r"This is readily checked from the definition of the operator norm.",
+    kind="prose",
+    reason="points to the proof of the previous sentence",
+)
+S11.sentence(
+    r"Recall that under the identification of the dual $\mathfrak{so}(n)^\ast$ with the space "
+    r"$\mathfrak{so}(n)$, the coadjoint action agrees with conjugation.",
+)
+S11.sentence(
+    r"Thus, the map $f: \mathfrak{so}(n) \rightarrow \mathbb{R}$; $M \mapsto \| M \|_{\mathrm{op}}$ "
+    r"is a Casimir function and so is invariant under the dynamics.",
+    s11_spatial_momentum_general_n,
+)
+S11.sentence(
+    r"In particular, its level sets are invariant and so the sets $S$ and $C$ are invariant.",
+    s11_spatial_momentum_general_n,
+)

@@ -180,3 +180,45 @@ def s12_symrb_pointwise() -> float:
         ):
             errs.append(np.abs(got - want).max() / np.abs(want).max())
     return float(np.max(errs))
+
+
+# the paper's sentences
+S12.sentence(
+    r"Recall that the classical rigid body equations are Hamiltonian on $T^*\operatorname{SO}(n)$ "
+    r"with respect to the canonical symplectic structure on the cotangent bundle of "
+    r"$\operatorname{SO}(n)$.",
+)
+S12.sentence(
+    r"The following result gives the corresponding theorem for the symmetric case.",
+    kind="prose",
+    reason="announces the proposition",
+)
+S12.sentence(
+    r"The proof is given in [BlCrMaRa2002]",
+    kind="prose",
+    reason="a citation",
+)
+S12.sentence(
+    r"Consider the Hamiltonian system on the symplectic vector space $\mathfrak{gl}(n) \times "
+    r"\mathfrak{gl}(n)$ with the symplectic structure $$\Omega_{\mathfrak{gl}(n)} (\xi_1, \eta_1, "
+    r"\xi_2, \eta_2 ) = \frac{1}{2} \operatorname{trace} ( \eta_2^T \xi_1 - \eta_1^T \xi_2 )$$ "
+    r"where $(\xi_i,\eta_i)\,,i=1,2$ are elements of $\mathfrak{gl}(n) \times \mathfrak{gl}(n)$ "
+    r"and Hamiltonian $$H ( \xi, \eta ) = - \frac{1}{8} \operatorname{trace} \left[ \left( "
+    r"J^{-1}(\xi^T \eta -\eta^T \xi ) \right) \left( \xi^T\eta - \eta^T \xi \right) \right] .$$",
+    s12_hamilton_equations,
+    s12_symrb_pointwise,
+)
+S12.sentence(
+    r"The corresponding Hamiltonian system leaves $\operatorname{SO}(n) \times "
+    r"\operatorname{SO}(n)$ invariant and induces on it, the flow of the symmetric representation "
+    r"of the rigid body system.",
+    s12_hamilton_equations,
+    s12_SO_invariant_general_n,
+    s12_symrb_pointwise,
+)
+S12.sentence(
+    r"Note that the above Hamiltonian is equivalent to the standard rigid body Hamiltonian $H="
+    r"\frac{1}{4} \left\langle J^{-1}M,M\right\rangle$, as in [Ratiu1980].",
+    s12_quarter_energy_general_n,
+    s12_symrb_pointwise,
+)
