@@ -21,7 +21,7 @@ from derivations.claims.section3._symmetric import ARG_B, ARG_Q, MOMENTUM, B, Bd
 from derivations.claims.section3._words import ddt, jinv_letters, reduce_words, rule
 from derivations.claims.section3.s05_maximum_principle import SYMMETRIC_RIGID_BODY_RHS
 from derivations.registry import Level, claim
-from derivations.symbolic import Words, eq
+from derivations.symbolic import Words, eq, explicit
 from derivations.vocabulary import Jinv, Kernel, matrix
 
 S7 = claim(
@@ -157,6 +157,36 @@ def s7_flow_against_elliptic() -> float:
     return float(np.abs(ref.vee(sol.y.M) - m).max() / np.linalg.norm(m[0]))
 
 
+def _rational_rotation(k: int, rng: np.random.Generator) -> sp.Matrix:
+    """The Cayley transform (I - A)^-1 (I + A) of a random rational skew A: an exact rotation."""
+    A = sp.zeros(k, k)
+    for i in range(k):
+        for j in range(i + 1, k):
+            A[i, j] = sp.Rational(int(rng.integers(-9, 10)), int(rng.integers(1, 7)))
+            A[j, i] = -A[i, j]
+    return (sp.eye(k) - A).inv() * (sp.eye(k) + A)
+
+
+@S7.check(Level.EXACT_RATIONAL)
+def s7_restricts_to_SO_x_SO() -> sp.Integer:
+    """The symmetric rigid body system restricts to SO(n) x SO(n): at exact rational rotations
+    (Q, P) (Cayley transforms, 3 pairs each for n = 3, 4, rational Lambda) the emitted field is
+    tangent to SO(n) x SO(n), Q^T Qdot and P^T Pdot skew, so the closed set SO(n) x SO(n) is
+    invariant.  The number of entries of Q^T Qdot + Qdot^T Q and P^T Pdot + Pdot^T P that are
+    not 0."""
+    rng = np.random.default_rng(7)
+    bad = 0
+    for k in (3, 4):
+        lam = [sp.Rational(int(rng.integers(3, 30)), 10) for _ in range(k)]
+        for _ in range(3):
+            env = {"Q": _rational_rotation(k, rng), "P": _rational_rotation(k, rng)}
+            for name, rate in (("Q", "Qdot"), ("P", "Pdot")):
+                X, Xdot = env[name], explicit(SYMMETRIC_RIGID_BODY_RHS[rate], env, lam)
+                sym = X.T * Xdot + Xdot.T * X
+                bad += sum(1 for e in sym if sp.simplify(e) != 0)
+    return sp.Integer(bad)
+
+
 # the paper's sentences
 S7.sentence(
     r"While in general there are no constraints on the costate vector $P\in\mathfrak{gl}(n)$ one "
@@ -173,6 +203,7 @@ S7.sentence(
 S7.sentence(
     r"For example this system restricts to a system on $\operatorname{SO}(n)\times "
     r"\operatorname{SO}(n)$.",
+    s7_restricts_to_SO_x_SO,
 )
 S7.sentence(
     r"One can make other assumptions on the costate vector.",
