@@ -370,8 +370,6 @@ S13.sentence(
 S13.sentence(
     r"In this case a natural drift free control system on an orbit of $G_u$ takes the form "
     r"$$\dot x=[x,u]$$",
-    s13_hamiltonian_convention,
-    s13_coordinates,
 )
 S13.sentence(
     r"We remark that we formulate the problem in this generality for convenience, but the most "
