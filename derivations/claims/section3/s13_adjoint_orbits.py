@@ -388,7 +388,7 @@ S13.sentence(
     s13_coordinates,
 )
 S13.sentence(
-    r"where $||\cdot || = \lt \cdot ,\cdot \gt^{1/2}$ is the norm induced on $\mathfrak{g}_u$ by "
+    r"where $||\cdot || = < \cdot ,\cdot >^{1/2}$ is the norm induced on $\mathfrak{g}_u$ by "
     r"the negative of the Killing form $\kappa (\cdot, \cdot)$ on $\mathfrak{g}$ and V is a "
     r"smooth function on $\mathfrak{g}_u$.",
     s13_killing_forms,
@@ -396,7 +396,7 @@ S13.sentence(
 )
 S13.sentence(
     r"The pairing between vectors $x$ in $\mathfrak{g}$ and dual vectors $p$ in "
-    r"$\mathfrak{g}^*$ may be written $\lt p,x \gt = -\kappa(x,p)$.",
+    r"$\mathfrak{g}^*$ may be written $< p,x > = -\kappa(x,p)$.",
     s13_killing_forms,
     s13_coordinates,
 )
@@ -409,20 +409,20 @@ S13.sentence(
     s13_coordinates,
 )
 S13.sentence(
-    r"The Hamiltonian is given by $$H(x,p,u)=\lt p,[x,u] \gt -1/2||u||^2+V(x)\,.$$",
+    r"The Hamiltonian is given by $$H(x,p,u)=< p,[x,u] > -1/2||u||^2+V(x)\,.$$",
     s13_hamiltonian_convention,
     s13_coordinates,
     s13_symrb_hamiltonian,
 )
 S13.sentence(
-    r"Hence $${\partial H\over\partial u}=-\lt [x,p],\cdot \gt - \lt u,\cdot \gt$$ and thus the "
+    r"Hence $${\partial H\over\partial u}=-< [x,p],\cdot > - < u,\cdot >$$ and thus the "
     r"optimal control is given by $$u^*=[p,x]$$",
     s13_stationary_control,
     s13_coordinates,
 )
 S13.sentence(
     r"Substituting this into $H$ we find the Hamiltonian evaluated along the optimal trajectory is "
-    r"given by $$H^*(p,x)=-1/2 \lt x,[p,[p,x]] \gt +V(x)$$",
+    r"given by $$H^*(p,x)=-1/2 < x,[p,[p,x]] > +V(x)$$",
     s13_optimal_hamiltonian,
     s13_coordinates,
     s13_symrb_hamiltonian,

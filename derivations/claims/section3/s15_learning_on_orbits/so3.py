@@ -342,7 +342,7 @@ S15.sentence(
     s15_corrected_endpoint_gradient,
 )
 S15.sentence(
-    r"In particular we would like to consider $\phi(x^a_T)=\lt x^a_T,n \gt$.",
+    r"In particular we would like to consider $\phi(x^a_T)=< x^a_T,n >$.",
     s15_one_sample_exact,
     s15_one_sample_bvp,
     s15_two_samples_above_bound,
