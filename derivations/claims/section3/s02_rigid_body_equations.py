@@ -249,3 +249,46 @@ def s2_symrb_euler_pointwise() -> float:
     inertia = lam.sum(axis=-1, keepdims=True) - lam
     want = np.cross(m, m / inertia)
     return float(np.abs(symrb.rigid_body.euler_rhs_so3(m, lam) - want).max() / np.abs(want).max())
+
+
+# the paper's sentences
+S2.sentence(
+    r"Firstly we review the classical rigid body equations in $n$ dimensions for completeness.",
+    kind="prose",
+    reason="announces the review that follows",
+)
+S2.sentence(
+    r"Further details may be found in [BlCrMaRa2002].",
+    kind="prose",
+    reason="a citation",
+)
+S2.sentence(
+    r"We recall from [Manakov1976] and [Ratiu1980] that the left invariant generalized rigid body "
+    r"equations on $\operatorname{SO}(n)$ may be written as $$\dot Q = Q\Omega ; \qquad \dot M = "
+    r"[M,\Omega]\,,$$ where $Q\in \operatorname{SO}(n)$ denotes the configuration space variable "
+    r"(the attitude of the body), $\Omega=Q^{-1}\dot{Q} \in \mathfrak{so}(n)$ is the body angular "
+    r"velocity, and $$M:=J(\Omega)=\Lambda\Omega +\Omega\Lambda \in \mathfrak{so}(n)$$ is the "
+    r"body angular momentum.",
+    s2_emitted_field,
+    s2_symrb_field_pointwise,
+    s2_symrb_inertia_operators,
+    s2_flow_against_elliptic,
+)
+S2.sentence(
+    r"Here $J: \mathfrak{so}(n) \rightarrow \mathfrak{so}(n)$ is the symmetric (with respect to "
+    r"the inner product (killing.eqn)), positive definite, and hence invertible, operator defined "
+    r"by $$J(\Omega)=\Lambda\Omega +\Omega\Lambda ,$$ where $\Lambda$ is a diagonal matrix "
+    r"satisfying $\Lambda_i + \Lambda_j >0$ for all $i \neq j$.",
+    s2_J_symmetric,
+    s2_J_positive,
+    s2_symrb_inertia_operators,
+)
+S2.sentence(
+    r"For $n=3$ the elements of $\Lambda_i$ are related to the standard diagonal moment of "
+    r"inertia tensor $I$ by $I_1 = \Lambda_2 + \Lambda_3$, $I_2 = \Lambda_3 + \Lambda_1$, "
+    r"$I_3 = \Lambda_1 + \Lambda_2$.",
+    s2_moments_n3,
+    s2_euler_n3,
+    s2_symrb_euler_pointwise,
+    s2_flow_against_elliptic,
+)

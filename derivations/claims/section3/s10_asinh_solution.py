@@ -281,3 +281,47 @@ def s10_asinh_series_on_the_boundary() -> float:
         return float("inf")
     e100, e10k = (np.abs(_asinh_series(u, K) - limit).max() for K in (100, 10_000))
     return float(abs(np.log(e10k / e100) / np.log(100.0) + 0.5))
+
+
+# the paper's sentences
+S10.sentence(
+    r"Recall that $\sinh : \mathfrak{so}(n) \rightarrow \mathfrak{so}(n)$ is defined by $\sinh \xi "
+    r"= \left( e^\xi - e^{- \xi} \right) /2$.",
+)
+S10.sentence(
+    r"One sees that indeed $\sinh$ takes values in $\mathfrak{so}(n)$ by using, for example, its "
+    r"series expansion: $$\sinh \xi = \xi + \frac{1}{3!}\xi^3 + \frac{1}{5!} \xi^5 + \ldots.$$",
+)
+S10.sentence(
+    r"Recall from calculus that the inverse function $\sinh^{-1} (u)$ has a convergent power "
+    r"series expansion for $| u | < 1$ that is given by integrating the power series expansion of "
+    r"the function $1/ \sqrt{1 + u^2}$ term by term.",
+    s10_asinh_series_inside,
+    s10_asinh_series_on_the_boundary,
+)
+S10.sentence(
+    r"This power series expansion shows that the map $\sinh : \mathfrak{so}(n) \rightarrow "
+    r"\mathfrak{so}(n)$ has an inverse on the set $U = \left\{ u \in \mathfrak{so}(n) \mid \| u "
+    r"\|_{\mathrm{op}} < 1 \right\}$.",
+    s10_asinh_series_inside,
+)
+S10.sentence(
+    r"We shall denote this inverse by $\sinh^{-1}$, so $\sinh^{-1}: U \rightarrow "
+    r"\mathfrak{so}(n)$.",
+)
+S10.sentence(
+    r"For $\| M \|_{\mathrm{op}} < 2$, the equation (M_Q_P.eqn) has the solution "
+    r"$$P=Q\left( e^{\sinh^{-1}M/2}\right)$$",
+    s10_printed_scalar,
+    s10_corrected_scalar,
+    s10_printed_matrix,
+    s10_corrected_matrix,
+    s10_high_precision_identity,
+)
+S10.sentence(
+    r"Notice that $M=e^{\sinh^{-1}M/2}-e^{-\sinh^{-1}M/2}\,.$",
+    s10_printed_scalar,
+    s10_corrected_scalar,
+    s10_printed_matrix,
+    s10_corrected_matrix,
+)

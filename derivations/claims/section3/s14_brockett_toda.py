@@ -287,3 +287,37 @@ def s14_toda_flow() -> float:
     Lt[:, idx, idx] = s2.y[:k].T
     Lt[:, idx[:-1], idx[1:]] = Lt[:, idx[1:], idx[:-1]] = s2.y[k:].T
     return float(np.max(np.abs(Ls - Lt)))
+
+
+# the paper's sentences
+S14.sentence(
+    r"A particularly interesting special case of this problem is that of Brockett [1994] where we "
+    r"have",
+    kind="prose",
+    reason="introduces the corollary, with a citation",
+)
+S14.sentence(
+    r"The equations of the maximum principle for the variational problem (var) subject to "
+    r"equations (orb) with $V(x)=-\tfrac{1}{2} \|[x,n]\|^2$ are $$\begin{aligned} \dot x &= "
+    r"[x,[p,x] \\ \dot p &= [p,[p,x]]-[n,[n,x]]\,. \end{aligned}$$",
+    s14_potential,
+    s14_gradient,
+    s14_emitted_field_is_hamiltonian,
+    s14_symrb_potential_and_double_bracket,
+    s14_symrb_extremal_field,
+)
+S14.sentence(
+    r"The proof of the corollary follows immediately, setting $V(x)=\tfrac{1}{2} \left\langle "
+    r"x,[n,[n,x]]\right\rangle$.",
+    s14_potential,
+    s14_gradient,
+)
+S14.sentence(
+    r"Note that with this functional the equations lie naturally on an adjoint orbit.",
+)
+S14.sentence(
+    r"In addition, these equations are interesting in that the optimal flow may be related to the "
+    r"integrable Toda lattice equations (see [Bloch1990], [BlBrRa1992] and Brockett [1994].)",
+    s14_toda,
+    s14_toda_flow,
+)
