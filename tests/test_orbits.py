@@ -400,7 +400,7 @@ def test_extremal_flow_only_the_derived_costate_gives_toda():
     for scale in (0.0, -1.1):
         bad = s14.toda_through_extremal(4, scale, ts)
         assert bad["symes"] > 0.1, (scale, bad)
-    L0, D = s14._tridiagonal(4, 4), np.diag([1.0, 2.0, 3.0, 4.0])
+    L0, D = s14.toda_start(4, 4), np.diag([1.0, 2.0, 3.0, 4.0])
     L, _ = orbits.orbit_extremal_flow(L0, D, D, ts, algebra="isym")
     assert np.abs(L - s14.ref.toda_symes(L0, ts)).max() > 0.1  # +N is Toda backwards
 
@@ -409,7 +409,7 @@ def test_extremal_flow_leaves_toda_at_the_predicted_rate():
     """The extremal p = -N is unstable in (x, p): the distance of p from -N grows like e^{r t}
     with r = (lambda_max - lambda_min)(d_max - d_min) near the sorted limit (the Notes of
     orbit_extremal_flow; 9.80 for the k = 3 data of S14)."""
-    L0, D = s14._tridiagonal(3, 3), np.diag([1.0, 2.0, 3.0])
+    L0, D = s14.toda_start(3, 3), np.diag([1.0, 2.0, 3.0])
     lam = np.linalg.eigvalsh(L0)
     rate = (lam[-1] - lam[0]) * 2.0
     ts = np.array([2.0, 3.0])

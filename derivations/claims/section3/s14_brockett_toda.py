@@ -85,7 +85,7 @@ S14 = claim(
     "condition of S15's terminal cost with the corrected sign gives the same $p$). That extremal "
     "is unstable in the $(x, p)$ system: near the sorted limit a perturbation of $p$ grows like "
     "$e^{rt}$ with $r$ up to $(\\lambda_{max} - \\lambda_{min})(d_{max} - d_{min})$ (9.80 at $k = 3$ "
-    "and 10.74 at $k = 4$ for the data of the book), so a float64 integration of the coupled "
+    "and 10.74 at $k = 4$ for the data of the evidence), so a float64 integration of the coupled "
     "system follows Symes' solution to 4e-10 up to $t = 2$ and leaves it near $t = 4$.",
 )
 # the potential is built by _orbits.brockett, which S13's optimal Hamiltonian kernel also reads
@@ -366,7 +366,9 @@ def s14_constant_costate_gives_toda() -> sp.Expr:
     return r
 
 
-def _tridiagonal(k: int, seed: int) -> np.ndarray:
+def toda_start(k: int, seed: int) -> np.ndarray:
+    """The tridiagonal L_0 of the Toda evidence: diagonal standard normal, off-diagonal uniform
+    in [0.4, 1] (NumPy generator ``seed``)."""
     rng = np.random.default_rng(seed)
     a, b = rng.standard_normal(k), rng.uniform(0.4, 1.0, k - 1)
     return np.diag(a) + np.diag(b, 1) + np.diag(b, -1)
@@ -379,7 +381,7 @@ def toda_through_extremal(k: int, p0_scale: float, ts: np.ndarray) -> dict[str, 
     band and of the eigenvalues from those of L_0."""
     import symrb
 
-    L0, D = _tridiagonal(k, k), np.diag(np.arange(1.0, k + 1))
+    L0, D = toda_start(k, k), np.diag(np.arange(1.0, k + 1))
     P0 = p0_scale * D
     L, P = symrb.orbits.orbit_extremal_flow(L0, P0, D, ts, algebra="isym")
     symes = ref.toda_symes(L0, -ts if p0_scale > 0 else ts)
@@ -419,7 +421,7 @@ def s14_toda_limit_sorted() -> float:
     worst = 0.0
     ts = np.array([0.0, 5.0, 10.0, 20.0, 40.0, 80.0])
     for k in (3, 4):
-        L0 = _tridiagonal(k, k)
+        L0 = toda_start(k, k)
         L = symrb.toda_flow(np.diag(L0), np.diag(L0, 1), ts)
         worst = max(worst, float(np.abs(L - ref.toda_symes(L0, ts, dps=200)).max()))
         limit = np.diag(np.sort(np.linalg.eigvalsh(L0))[::-1])
