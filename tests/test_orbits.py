@@ -466,3 +466,26 @@ def test_extremal_flow_argument_errors():
         orbits.orbit_extremal_flow(1j * S, 1j * S, 1j * S, [0.0, 1.0], algebra="isym")
     xs, ps = orbits.orbit_extremal_flow(x, p, N, [0.0])
     assert xs.shape == ps.shape == (1, 3, 3) and np.array_equal(xs[0], x)
+
+
+@pytest.mark.parametrize(
+    ("name", "wrong"),
+    [("P_TODA", lambda f: eq(f.lhs, -f.rhs)), ("TODA_B", lambda f: eq(f.lhs, -f.rhs))],
+)
+def test_toda_every_k_can_fail(monkeypatch, name, wrong):
+    """s14_toda_every_k fails for the costate p = +N (Toda backwards) and for a wrong sign of the
+    displayed b-equation."""
+    assert s14.s14_toda_every_k() == 0
+    monkeypatch.setattr(s14, name, wrong(getattr(s14, name)))
+    assert s14.s14_toda_every_k() > 0
+
+
+def test_constant_costate_check_can_fail(monkeypatch):
+    """s14_constant_costate_gives_toda fails when a displayed costate is not a root (p = -2N) or
+    the reversed field has the wrong sign."""
+    monkeypatch.setattr(s14, "P_TODA", eq(orb.p, -2 * orb.N))
+    assert s14.s14_constant_costate_gives_toda() > 0
+    monkeypatch.undo()
+    shown = s14.DOUBLE_BRACKET_REVERSED
+    monkeypatch.setattr(s14, "DOUBLE_BRACKET_REVERSED", eq(shown.lhs, s14.DOUBLE_BRACKET.rhs))
+    assert s14.s14_constant_costate_gives_toda() > 0

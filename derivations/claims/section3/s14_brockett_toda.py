@@ -4,7 +4,11 @@ lattice.
 For Brockett's potential V(x) = -1/2 ||[x, N]||^2 the gradient is V_x = [N, [N, x]], so the
 extremals of S13 solve xdot = [x, [p, x]], pdot = [p, [p, x]] - [N, [N, x]].  For x = iL with L
 real symmetric tridiagonal and N = iD, D = diag(1, ..., k), the double bracket flow
-xdot = [x, [x, N]] keeps L tridiagonal and is Flaschka's Toda lattice.
+xdot = [x, [x, N]] keeps L tridiagonal and is Flaschka's Toda lattice.  The optimal flow itself
+reaches it: p = -N is a constant solution of the costate equation for every x (and p = N, which
+runs the flow backwards), so the extremal from (iL_0, -N) is Symes' solution of Toda; checked for
+every n and k symbolically and by integrating the coupled (x, p) system with
+``symrb.orbits.orbit_extremal_flow`` against Symes' QR formula (``derivations.reference``).
 
 Emitted to ``symrb/_generated/adjoint_orbits.py``: ``brockett_potential``, ``orbit_extremal_rhs``
 and ``double_bracket_rhs``.
@@ -364,6 +368,44 @@ def s14_constant_costate_gives_toda() -> sp.Expr:
             r += len(_by_word(w.of(xdot.xreplace(at).doit()) - want))
         r += trace_residual(trace_poly(ORBIT_HAMILTONIAN["H"].xreplace(at), w))
     return r
+
+
+def _band_entry(word: tuple[str, ...], r: int, c: int) -> sp.Expr:
+    """Entry (i + r, i + c) of the product of the letters of ``word``, x standing for the
+    tridiagonal L (diagonal a, off-diagonal b, symbolic index i) and N for D, the diagonal of
+    the row numbers; every letter has bandwidth <= 1, so the sum over the middle index runs
+    over r - 1, r, r + 1."""
+    if not word:
+        return sp.Integer(int(r == c))
+
+    def letter(name: str, row: int, col: int) -> sp.Expr:
+        if name == "N":
+            return _i + row if row == col else sp.Integer(0)
+        if row == col:
+            return _ia[_i + row]
+        return _ib[_i + min(row, col)] if abs(row - col) == 1 else sp.Integer(0)
+
+    return sp.Add(*[letter(word[0], r, m) * _band_entry(word[1:], m, c) for m in (r - 1, r, r + 1)])
+
+
+@S14.check(Level.SYMBOLIC_GENERAL_N)
+def s14_toda_every_k() -> sp.Expr:
+    """Every k, by a symbolic row index i: the state equation of the emitted extremal field at the
+    displayed p = -N, for x = iL, N = iD (L tridiagonal with a_i, b_i, D the diagonal of the row
+    numbers, so Ldot = i times the field), has entry (i, i) equal to the displayed Toda a-equation,
+    (i, i+1) and (i+1, i) equal to the b-equation, and (i, i+2), (i, i+3) zero, as polynomials in
+    a_{i-1..i+2}, b_{i-2..i+2} and i.  Each entry is a sum over paths of indices; a path leaving
+    1..k passes through b_0 or b_k, so the k x k matrix is this with b_0 = b_k = 0."""
+    w = Words()
+    field = sp.expand(w.of(ORBIT_EXTREMAL_RHS["xdot"].xreplace({p: P_TODA.rhs}).doit()))
+
+    def Ldot(r: int, c: int) -> sp.Expr:  # x = iL, N = iD: the field is i^3 times that of L, D
+        terms = _by_word(field)
+        return -sp.expand(sp.Add(*[coef * _band_entry(word, r, c) for word, coef in terms.items()]))
+
+    r = residual(Ldot(0, 0) - TODA_A.rhs)
+    r += residual(Ldot(0, 1) - TODA_B.rhs) + residual(Ldot(1, 0) - TODA_B.rhs)
+    return r + residual(Ldot(0, 2)) + residual(Ldot(0, 3)) + residual(Ldot(2, 0))
 
 
 def toda_start(k: int, seed: int) -> np.ndarray:
