@@ -489,3 +489,15 @@ def test_constant_costate_check_can_fail(monkeypatch):
     shown = s14.DOUBLE_BRACKET_REVERSED
     monkeypatch.setattr(s14, "DOUBLE_BRACKET_REVERSED", eq(shown.lhs, s14.DOUBLE_BRACKET.rhs))
     assert s14.s14_constant_costate_gives_toda() > 0
+
+
+def test_toda_is_optimal_can_fail(monkeypatch):
+    """s14_toda_is_optimal fails for the square with the opposite cross term and for the
+    minimising control [N, x]."""
+    assert s14.s14_toda_is_optimal() == 0
+    sq = s14.SQUARE
+    monkeypatch.setattr(s14, "SQUARE", eq(sq.lhs, sq.rhs + 2 * sp.Add.make_args(sq.rhs)[-1]))
+    assert s14.s14_toda_is_optimal() > 0
+    monkeypatch.undo()
+    monkeypatch.setattr(s14, "U_MIN", eq(orb.u, -s14.U_MIN.rhs))
+    assert s14.s14_toda_is_optimal() > 0

@@ -20,7 +20,7 @@ import numpy as np
 import sympy as sp
 
 from derivations import reference as ref
-from derivations.claims.section3._display import minus
+from derivations.claims.section3._display import _Norm, minus
 from derivations.claims.section3._orbits import (
     ARG_N,
     ARG_P,
@@ -41,9 +41,17 @@ from derivations.claims.section3._orbits import (
     so_basis,
     t,
     trace_poly,
+    u,
     x,
 )
-from derivations.claims.section3.s13_adjoint_orbits import ORBIT_HAMILTONIAN, PDOT_EQ, XDOT_EQ
+from derivations.claims.section3.s13_adjoint_orbits import (
+    COST,
+    OPTIMAL_CONTROL,
+    ORB,
+    ORBIT_HAMILTONIAN,
+    PDOT_EQ,
+    XDOT_EQ,
+)
 from derivations.registry import Level, claim
 from derivations.symbolic import (
     Bracket,
@@ -75,7 +83,11 @@ S14 = claim(
     "$iL_0$ ($L_0$ real symmetric tridiagonal) and the costate [[p_toda]] is Symes' solution of "
     "the Toda "
     "lattice: $L$ stays tridiagonal with the eigenvalues of $L_0$, and its diagonal tends to "
-    "them sorted in decreasing order.",
+    "them sorted in decreasing order. It is optimal, not only extremal: along [[orb]] with "
+    "Brockett's potential the cost integrand is [[square]], so a control that joins two points "
+    "in time $t_f$ costs at least the decrease of $\\langle x, N\\rangle$, with equality exactly "
+    "for [[u_min]], the optimal control at [[p_toda]] (Brockett 1994): the Toda trajectory "
+    "minimises the cost among all trajectories with its end points.",
     expected="holds",
     section="3.4",
     where="Section 3.4, the first corollary (Brockett's potential $V(x) = -\\tfrac12\\|[x, "
@@ -109,6 +121,12 @@ P_REVERSE = S14.formula("p_reverse", eq(p, N))
 DOUBLE_BRACKET_REVERSED = S14.formula(
     "double_bracket_reversed", eq(XDOT, Bracket(Bracket(x, N), x))
 )
+S14.formula("orb", ORB)  # S13's control system, shown again in this statement
+(_INTEGRAND,) = (i.function for i in COST.rhs.atoms(sp.Integral))
+SQUARE = S14.formula(
+    "square", eq(_INTEGRAND, _Norm(minus(u, Bracket(x, N))) ** 2 / 2 - Pair(XDOT, N))
+)
+U_MIN = S14.formula("u_min", eq(u, Bracket(x, N)))
 
 
 BROCKETT_POTENTIAL = Kernel(
@@ -368,6 +386,19 @@ def s14_constant_costate_gives_toda() -> sp.Expr:
             r += len(_by_word(w.of(xdot.xreplace(at).doit()) - want))
         r += trace_residual(trace_poly(ORBIT_HAMILTONIAN["H"].xreplace(at), w))
     return r
+
+
+@S14.check(Level.SYMBOLIC_GENERAL_N)
+def s14_toda_is_optimal() -> sp.Expr:
+    """Trace words, every n: S13's displayed cost integrand with Brockett's potential minus the
+    displayed completed square, with the displayed xdot = [x, u] of S13 put in, has no words
+    left; and the emitted optimal control at the displayed p = -N is the displayed minimising
+    control [x, N] (word by word)."""
+    w = Words()
+    orb = {XDOT: ORB.rhs}
+    r = trace_residual(trace_poly((SQUARE.lhs - SQUARE.rhs).xreplace(orb), w, brockett))
+    ustar = w.of(OPTIMAL_CONTROL["u"].xreplace({p: P_TODA.rhs}).doit())
+    return r + len(_by_word(ustar - w.of(U_MIN.rhs.doit())))
 
 
 def _band_entry(word: tuple[str, ...], r: int, c: int) -> sp.Expr:
