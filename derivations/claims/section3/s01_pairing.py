@@ -126,8 +126,8 @@ def s1_pairing_is_inner_product() -> sp.Integer:
 S1.sentence(
     r"We use the following pairing (multiple of the Killing form) on $\mathfrak{so}(n)$, the Lie "
     r"algebra of $n \times n$ real skew matrices regarded as the Lie algebra of the "
-    r"$n$-dimensional proper rotation group $\operatorname{SO}(n)$: $$\left\langle \xi, \eta "
-    r"\right\rangle = - \frac{1}{2} \operatorname{trace} (\xi \eta).$$",
+    r"$n$-dimensional proper rotation group $\operatorname{SO}(n)$: $\left\langle \xi, \eta "
+    r"\right\rangle = - \frac{1}{2} \operatorname{trace} (\xi \eta).$",
     s1_multiple_of_killing,
     s1_pairing_is_dot,
     s1_symrb_hat_and_pairing,

@@ -264,10 +264,10 @@ S2.sentence(
 )
 S2.sentence(
     r"We recall from [Manakov1976] and [Ratiu1980] that the left invariant generalized rigid body "
-    r"equations on $\operatorname{SO}(n)$ may be written as $$\dot Q = Q\Omega ; \qquad \dot M = "
-    r"[M,\Omega]\,,$$ where $Q\in \operatorname{SO}(n)$ denotes the configuration space variable "
+    r"equations on $\operatorname{SO}(n)$ may be written as $\dot Q = Q\Omega ; \qquad \dot M = "
+    r"[M,\Omega]\,,$ where $Q\in \operatorname{SO}(n)$ denotes the configuration space variable "
     r"(the attitude of the body), $\Omega=Q^{-1}\dot{Q} \in \mathfrak{so}(n)$ is the body angular "
-    r"velocity, and $$M:=J(\Omega)=\Lambda\Omega +\Omega\Lambda \in \mathfrak{so}(n)$$ is the "
+    r"velocity, and $M:=J(\Omega)=\Lambda\Omega +\Omega\Lambda \in \mathfrak{so}(n)$ is the "
     r"body angular momentum.",
     s2_emitted_field,
     s2_symrb_field_pointwise,
@@ -277,7 +277,7 @@ S2.sentence(
 S2.sentence(
     r"Here $J: \mathfrak{so}(n) \rightarrow \mathfrak{so}(n)$ is the symmetric (with respect to "
     r"the inner product (killing.eqn)), positive definite, and hence invertible, operator defined "
-    r"by $$J(\Omega)=\Lambda\Omega +\Omega\Lambda ,$$ where $\Lambda$ is a diagonal matrix "
+    r"by $J(\Omega)=\Lambda\Omega +\Omega\Lambda ,$ where $\Lambda$ is a diagonal matrix "
     r"satisfying $\Lambda_i + \Lambda_j >0$ for all $i \neq j$.",
     s2_J_symmetric,
     s2_J_positive,

@@ -183,7 +183,7 @@ def s3_hamiltons_principle_on_the_group() -> float:
 
 # the paper's sentences
 S3.sentence(
-    r"The equations $\dot{M} = [M, \Omega]$ are readily checked to be the Euler-Poincar\'e "
+    r"The equations $\dot{M} = [M, \Omega]$ are readily checked to be the Euler-Poincaré "
     r"equations on $\mathfrak{so}(n)$ for the Lagrangian $l(\Omega) = \frac{1}{2} \left\langle "
     r"\Omega, J(\Omega) \right\rangle$.",
     s3_variational_derivative,
@@ -192,7 +192,7 @@ S3.sentence(
     s3_symrb_kinetic_energy,
 )
 S3.sentence(
-    r"This corresponds to the Lagrangian on $T \operatorname{SO}(n)$ given by $$L(g, \dot{g}) = "
-    r"\frac{1}{2} \left\langle g^{-1} \dot{g}, J(g^{-1} \dot{g}) \right\rangle\,.$$",
+    r"This corresponds to the Lagrangian on $T \operatorname{SO}(n)$ given by $L(g, \dot{g}) = "
+    r"\frac{1}{2} \left\langle g^{-1} \dot{g}, J(g^{-1} \dot{g}) \right\rangle\,.$",
     s3_hamiltons_principle_on_the_group,
 )

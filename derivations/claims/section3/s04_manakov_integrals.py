@@ -422,9 +422,9 @@ S4.sentence(
 )
 S4.sentence(
     r"A key observation in this regard, due to Manakov, was that one could write the generalized "
-    r"rigid body equations as Lax equations with parameter: $$\frac{d}{dt}(M+\lambda \Lambda^2)= "
-    r"[M+\lambda \Lambda^2,\Omega+\lambda \Lambda],$$ where $M=J(\Omega)=\Lambda\Omega +\Omega "
-    r"\Lambda$, as in \S2.",
+    r"rigid body equations as Lax equations with parameter: $\frac{d}{dt}(M+\lambda \Lambda^2)= "
+    r"[M+\lambda \Lambda^2,\Omega+\lambda \Lambda],$ where $M=J(\Omega)=\Lambda\Omega +\Omega "
+    r"\Lambda$, as in §2.",
     s4_lax_pair_general_n,
 )
 S4.sentence(

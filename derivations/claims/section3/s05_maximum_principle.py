@@ -252,28 +252,28 @@ S5.sentence(
     s5_first_variation,
 )
 S5.sentence(
-    r"Let the rigid body optimal control problem be given by $$\min_{U\in \mathfrak{so}(n)} "
-    r"\frac{1}{4}\int_0^T \langle U,J(U)\rangle dt$$ subject to the constraint on $U$ that there "
-    r"be a curve $Q(t) \in \operatorname{SO}(n)$ such that $$\dot Q=QU\qquad Q(0)=Q_0,\qquad "
-    r"Q(T)=Q_T.$$",
+    r"Let the rigid body optimal control problem be given by $\min_{U\in \mathfrak{so}(n)} "
+    r"\frac{1}{4}\int_0^T \langle U,J(U)\rangle dt$ subject to the constraint on $U$ that there "
+    r"be a curve $Q(t) \in \operatorname{SO}(n)$ such that $\dot Q=QU\qquad Q(0)=Q_0,\qquad "
+    r"Q(T)=Q_T.$",
     s5_first_variation,
 )
 S5.sentence(
-    r"The rigid body optimal control problem has optimal evolution equations $$\dot{Q}=QU\qquad "
-    r"\dot{P}=PU$$ where $P$ is the costate vector given by the maximum principle.",
+    r"The rigid body optimal control problem has optimal evolution equations $\dot{Q}=QU\qquad "
+    r"\dot{P}=PU$ where $P$ is the costate vector given by the maximum principle.",
     s5_corrected_hamiltonian,
     s5_first_variation,
 )
 S5.sentence(
-    r"The optimal controls in this case are given by $$U=J^{-1}(Q^TP-P^TQ).$$",
+    r"The optimal controls in this case are given by $U=J^{-1}(Q^TP-P^TQ).$",
     s5_printed_hamiltonian,
     s5_corrected_hamiltonian,
     s5_first_variation,
 )
 S5.sentence(
     r"The proof (see [BlCr1996]) simply involves, as in the discrete analysis above, writing the "
-    r"Hamiltonian of the maximum principle as $$H= \left\langle P,QU \right\rangle +\frac{1}{4} "
-    r"\left\langle U,J(U) \right\rangle,$$ where the costate vector $P$ is a multiplier "
+    r"Hamiltonian of the maximum principle as $H= \left\langle P,QU \right\rangle +\frac{1}{4} "
+    r"\left\langle U,J(U) \right\rangle,$ where the costate vector $P$ is a multiplier "
     r"enforcing the dynamics, and then maximizing with respect to $U$ in the standard fashion "
     r"(see, for example, Brockett [1973]).",
     s5_printed_hamiltonian,

@@ -217,8 +217,8 @@ S7.sentence(
     s7_skew_set_invariant,
 )
 S7.sentence(
-    r"Then it is easy to check that that the extremal evolution equations become $$\dot Q = "
-    r"QJ^{-1}(Q^TB); \qquad \dot B = BJ^{-1}(Q^TB)\,,$$ and that these equations restrict to an "
+    r"Then it is easy to check that that the extremal evolution equations become $\dot Q = "
+    r"QJ^{-1}(Q^TB); \qquad \dot B = BJ^{-1}(Q^TB)\,,$ and that these equations restrict to an "
     r"invariant submanifold defined by the condition that $Q^TB$ is skew symmetric.",
     s7_printed_extremals,
     s7_corrected_extremals,

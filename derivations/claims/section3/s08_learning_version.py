@@ -229,27 +229,27 @@ S8.sentence(
     r"Let $T >0$, $Q_0, Q_T \in \operatorname{SO}(n)$ be given and fixed.",
 )
 S8.sentence(
-    r"Let the rigid body optimal control problem be given by $$\min_{U\in \mathfrak{so}(n)} "
-    r"\frac{1}{4}\int_0^T \langle U,J(U)\rangle dt +\sum_{a=1}^M\phi(Q^a_T)$$ subject to the "
-    r"constraint on $U$ that there be a curve $Q(t) \in \operatorname{SO}(n)$ such that $$\dot "
-    r"Q^a=Q^aU\qquad Q^a(0)=Q^a_0,\, a=1\dots M.$$",
+    r"Let the rigid body optimal control problem be given by $\min_{U\in \mathfrak{so}(n)} "
+    r"\frac{1}{4}\int_0^T \langle U,J(U)\rangle dt +\sum_{a=1}^M\phi(Q^a_T)$ subject to the "
+    r"constraint on $U$ that there be a curve $Q(t) \in \operatorname{SO}(n)$ such that $\dot "
+    r"Q^a=Q^aU\qquad Q^a(0)=Q^a_0,\, a=1\dots M.$",
     s8_two_samples,
     s8_printed_endpoint,
     s8_corrected_endpoint,
 )
 S8.sentence(
-    r"The smooth machine learning symmetric rigid body flow has optimal evolution equations $$\dot "
-    r"Q^a=Q^aU,\, \dot P^a=P^aU$$ where $P$ is the costate vector given by the maximum principle",
+    r"The smooth machine learning symmetric rigid body flow has optimal evolution equations $\dot "
+    r"Q^a=Q^aU,\, \dot P^a=P^aU$ where $P$ is the costate vector given by the maximum principle",
     s8_two_samples,
     s8_symrb_multi_sample,
 )
 S8.sentence(
-    r"The optimal controls in this case are given by $$U=\sum_aJ^{-1}((Q^a)^TP^a-(P^a)^TQ^a).$$",
+    r"The optimal controls in this case are given by $U=\sum_aJ^{-1}((Q^a)^TP^a-(P^a)^TQ^a).$",
     s8_two_samples,
     s8_symrb_multi_sample,
 )
 S8.sentence(
-    r"and we have the endpoint conditions $$P^a_T=\frac{\partial\phi (Q^a_T)}{\partial Q^a_T}$$",
+    r"and we have the endpoint conditions $P^a_T=\frac{\partial\phi (Q^a_T)}{\partial Q^a_T}$",
     s8_printed_endpoint,
     s8_corrected_endpoint,
 )

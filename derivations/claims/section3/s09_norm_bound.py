@@ -203,7 +203,7 @@ S9.sentence(
     reason="sets up the question; the rigid body equations are S2",
 )
 S9.sentence(
-    r"We seek to solve for $P$ in the expression $$M=Q^TP-P^TQ.$$",
+    r"We seek to solve for $P$ in the expression $M=Q^TP-P^TQ.$",
     s9_no_bound_on_gl,
 )
 S9.sentence(

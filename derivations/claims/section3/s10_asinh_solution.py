@@ -290,7 +290,7 @@ S10.sentence(
 )
 S10.sentence(
     r"One sees that indeed $\sinh$ takes values in $\mathfrak{so}(n)$ by using, for example, its "
-    r"series expansion: $$\sinh \xi = \xi + \frac{1}{3!}\xi^3 + \frac{1}{5!} \xi^5 + \ldots.$$",
+    r"series expansion: $\sinh \xi = \xi + \frac{1}{3!}\xi^3 + \frac{1}{5!} \xi^5 + \ldots.$",
 )
 S10.sentence(
     r"Recall from calculus that the inverse function $\sinh^{-1} (u)$ has a convergent power "
@@ -311,7 +311,7 @@ S10.sentence(
 )
 S10.sentence(
     r"For $\| M \|_{\mathrm{op}} < 2$, the equation (M_Q_P.eqn) has the solution "
-    r"$$P=Q\left( e^{\sinh^{-1}M/2}\right)$$",
+    r"$P=Q\left( e^{\sinh^{-1}M/2}\right)$",
     s10_printed_scalar,
     s10_corrected_scalar,
     s10_printed_matrix,

@@ -282,11 +282,11 @@ S12.sentence(
 )
 S12.sentence(
     r"Consider the Hamiltonian system on the symplectic vector space $\mathfrak{gl}(n) \times "
-    r"\mathfrak{gl}(n)$ with the symplectic structure $$\Omega_{\mathfrak{gl}(n)} (\xi_1, \eta_1, "
-    r"\xi_2, \eta_2 ) = \frac{1}{2} \operatorname{trace} ( \eta_2^T \xi_1 - \eta_1^T \xi_2 )$$ "
+    r"\mathfrak{gl}(n)$ with the symplectic structure $\Omega_{\mathfrak{gl}(n)} (\xi_1, \eta_1, "
+    r"\xi_2, \eta_2 ) = \frac{1}{2} \operatorname{trace} ( \eta_2^T \xi_1 - \eta_1^T \xi_2 )$ "
     r"where $(\xi_i,\eta_i)\,,i=1,2$ are elements of $\mathfrak{gl}(n) \times \mathfrak{gl}(n)$ "
-    r"and Hamiltonian $$H ( \xi, \eta ) = - \frac{1}{8} \operatorname{trace} \left[ \left( "
-    r"J^{-1}(\xi^T \eta -\eta^T \xi ) \right) \left( \xi^T\eta - \eta^T \xi \right) \right] .$$",
+    r"and Hamiltonian $H ( \xi, \eta ) = - \frac{1}{8} \operatorname{trace} \left[ \left( "
+    r"J^{-1}(\xi^T \eta -\eta^T \xi ) \right) \left( \xi^T\eta - \eta^T \xi \right) \right] .$",
     s12_hamilton_equations,
     s12_symrb_pointwise,
 )

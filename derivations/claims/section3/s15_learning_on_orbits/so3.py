@@ -319,8 +319,8 @@ def s15_two_samples_above_bound() -> float:
 # the paper's sentences (here, below the last of S15's evidence in this package)
 S15.sentence(
     r"The smooth machine learning version of this problem considers for smooth functions "
-    r"$\phi^a:\mathbb{R}\times\mathbb{R}\rightarrow\mathbb{R}^+$, $a=1,\dots, M$ $$\eta(x,u)="
-    r"\tfrac{1}{2} \int_0^{T}\|u\|^2-V(x)dt +\sum_{a=1}^M\phi(x^a_T)$$ with $\dot{x^a}=[x^a,u],"
+    r"$\phi^a:\mathbb{R}\times\mathbb{R}\rightarrow\mathbb{R}^+$, $a=1,\dots, M$ $\eta(x,u)="
+    r"\tfrac{1}{2} \int_0^{T}\|u\|^2-V(x)dt +\sum_{a=1}^M\phi(x^a_T)$ with $\dot{x^a}=[x^a,u],"
     r"\,a=1\dots M$",
     s15_corrected_endpoint,
     s15_emitted_shared_field,
@@ -330,9 +330,9 @@ S15.sentence(
 S15.sentence(r"As before we now have", kind="prose", reason="introduces the corollary")
 S15.sentence(
     r"The equations of the maximum principle for the variational problem subject to equations "
-    r"(orb) with $V(x)=-1/2||[x,n]||^2$ are $$\begin{aligned} \dot x^a &= [x^a,[p^a,x^a]] \\ "
-    r"\dot p^a &= [p^a,[p^a,x]]-[n,[n,x^a]]\,. \end{aligned}$$ with $$p^a_T=\frac{\partial"
-    r"\phi(x^a_T)}{\partial x^a_T}$$",
+    r"(orb) with $V(x)=-1/2||[x,n]||^2$ are $\begin{aligned} \dot x^a &= [x^a,[p^a,x^a]] \\ "
+    r"\dot p^a &= [p^a,[p^a,x]]-[n,[n,x^a]]\,. \end{aligned}$ with $p^a_T=\frac{\partial"
+    r"\phi(x^a_T)}{\partial x^a_T}$",
     s15_printed_equations,
     s15_corrected_equations,
     s15_printed_endpoint,
