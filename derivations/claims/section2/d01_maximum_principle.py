@@ -22,6 +22,8 @@ from typing import Any
 
 import sympy as sp
 
+from derivations.claims.section2._any_dimension import DIMS, Evaluator, gradient, minus
+from derivations.claims.section2._any_dimension import nonzero as any_nonzero
 from derivations.claims.section2._hamiltonians import (
     _C,
     _H,
@@ -296,3 +298,38 @@ def d1_corrected_rewrite() -> sp.Expr:
     """The corrected V minus the corrected rewrite (sum up to N - 1, minus <p_N, x_N>) vanishes
     identically (undefined f, g, h, N = 2)."""
     return _d1_rewrite_defect(V_DEF, REWRITE)
+
+
+def d1_any_dimension_defect(v_formula: sp.Eq, N: int = 3) -> int:
+    """Number of displayed equations (state, costate, stationarity, constraint over their displayed
+    ranges) that differ from the gradient of the first variation of the given V in their variable,
+    plus the coverage defect, with x_k, p_k of size n, u_k of size m, sigma_k of size l (symbols)
+    and undefined f, g, h."""
+    n, m, l = DIMS
+    columns = {("x", k): sp.MatrixSymbol(f"x_{k}", n, 1) for k in range(N + 1)}
+    columns.update({("p", k): sp.MatrixSymbol(f"p_{k}", n, 1) for k in range(1, N + 1)})
+    columns.update({("u", k): sp.MatrixSymbol(f"u_{k}", m, 1) for k in range(N)})
+    columns.update({(r"\sigma", k): sp.MatrixSymbol(f"sigma_{k}", l, 1) for k in range(N)})
+    defined = {"H": H_DEF, r"\hat{H}": HHAT_DEF}
+    ev = Evaluator(columns, {("x", 0), ("x", N)}, {"f": n, "g": 1, "h": l}, defined, {"N": N})
+    _value_V, dV = ev(v_formula.rhs)
+    total, covered = 0, []
+    for steps, var, sign in ((STATE, _p[_k + 1], -1), (COSTATE, _x[_k], -1),
+                             (STATIONARY, _u[_k], 1), (CONSTRAINT, _sig[_k], 1)):  # fmt: skip
+        for k in steps.steps(N):
+            key = _key(var.xreplace({_k: k}))
+            covered.append(key)
+            lhs, rhs = (ev(side)[0] for side in steps.at(k))
+            total += any_nonzero(minus(gradient(dV, ev.deltas[key]), sign * minus(lhs, rhs)))
+    variables = {key for key, d in ev.deltas.items() if ev.free(key) and dV.has(d)}
+    return total + len(variables.symmetric_difference(covered)) + len(covered) - len(set(covered))
+
+
+@D1.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d1_extremals_any_dimension() -> int:
+    """The displayed V (one multiplier per step, x_0 and x_N fixed) on columns of symbolic sizes
+    n, m, l, undefined f, g, h (Jacobians as matrix symbols): the gradients of its first
+    variation in p_{k+1}, x_k, u_k and sigma_k (SymPy matrix calculus) are the displayed state,
+    costate, stationarity and constraint equations over their displayed ranges, each variable
+    once (N = 3; every dimension)."""
+    return d1_any_dimension_defect(V_DEF)
