@@ -17,6 +17,8 @@ from typing import Any
 
 import sympy as sp
 
+from derivations.claims.section2._any_dimension import DIMS, Evaluator, gradient, minus
+from derivations.claims.section2._any_dimension import nonzero as any_nonzero
 from derivations.claims.section2._hamiltonians import (
     _C,
     _H,
@@ -310,3 +312,50 @@ def d5_free_endpoint() -> sp.Expr:
     """The same problem with a free endpoint: at the exact minimiser one of the endpoint
     conditions holds (the corrected one, as the stationarity check above shows in general)."""
     return _d5_endpoint_defect(fixed=False)
+
+
+def d5_any_dimension_defect(N: int = 2, M: int = 2) -> int:
+    """Number of displayed equations (state, costate, endpoint, stationarity, constraint) that
+    differ from the gradient of the first variation of the displayed V in their variable, plus the
+    coverage defect: x^a_k, p^a_k of size n, u_k of size m, sigma_k of size l (symbols), undefined
+    f, g, h, phi, x^a_0 fixed."""
+    n, m, l = DIMS
+    columns: dict[Any, sp.MatrixSymbol] = {}
+    for a in range(1, M + 1):
+        columns.update({("x", a, k): sp.MatrixSymbol(f"x^{a}_{k}", n, 1) for k in range(N + 1)})
+        columns.update({("p", a, k): sp.MatrixSymbol(f"p^{a}_{k}", n, 1) for k in range(1, N + 1)})
+    columns.update({("u", k): sp.MatrixSymbol(f"u_{k}", m, 1) for k in range(N)})
+    columns.update({(r"\sigma", k): sp.MatrixSymbol(f"sigma_{k}", l, 1) for k in range(N)})
+    fixed = {("x", a, 0) for a in range(1, M + 1)}
+    outputs = {"f": n, "g": 1, "h": l, r"\phi": 1}
+    ev = Evaluator(columns, fixed, outputs, {"H": H_DEF}, {"N": N, "M": M})
+    _value_V, dV = ev(V5.rhs)
+    total, covered = 0, []
+
+    def compare(lhs: sp.Basic, rhs: sp.Basic, var: sp.Basic, sign: int) -> int:
+        key = _key(var)
+        covered.append(key)
+        side = minus(ev(lhs)[0], ev(rhs)[0])
+        return any_nonzero(minus(gradient(dV, ev.deltas[key]), sign * side))
+
+    for a in range(1, M + 1):
+        for k in STATE5.steps(N):
+            total += compare(*STATE5.at(k, a=a), _pa(a, k + 1), -1)
+        for k in COSTATE5.steps(N):
+            total += compare(*COSTATE5.at(k, a=a), _xa(a, k), -1)
+        total += compare(*_instance(ENDPOINT, {_a: a, _N: N}), _xa(a, N), -1)
+    for k in STATIONARY5.steps(N):
+        total += compare(*STATIONARY5.at(k, 0), _u[k], 1)
+        total += compare(*STATIONARY5.at(k, 1), _sig[k], 1)
+    variables = {key for key, d in ev.deltas.items() if ev.free(key) and dV.has(d)}
+    return total + len(variables.symmetric_difference(covered)) + len(covered) - len(set(covered))
+
+
+@D5.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d5_extremals_any_dimension() -> int:
+    """The displayed V (free endpoint) on columns of symbolic sizes n, m, l with undefined f, g,
+    h, phi (Jacobians as matrix symbols): the gradients of its first variation in p^a_{k+1},
+    x^a_k, x^a_N, u_k and sigma_k (SymPy matrix calculus) are the displayed state, costate,
+    endpoint, stationarity and constraint equations over their displayed ranges, each variable
+    once (M = 2 samples, N = 2; every dimension)."""
+    return d5_any_dimension_defect()
