@@ -8,7 +8,8 @@ Recorded outcome: holds after correction.  The endpoint is free, the costate equ
 :math:`x^a_k`, and the endpoint condition is :math:`p^a_N = -\partial\phi/\partial x^a_N` for
 :math:`H = \langle p, f\rangle - g`.  Evidence: the derivatives of the displayed :math:`V`
 (undefined :math:`f, g, h, \phi`) are the displayed equations; exact examples at their exact
-minimisers separate the printed forms; independent of symrb.
+minimisers separate the printed forms; independent of symrb.  With the endpoint free the
+constraints are always regular (no abnormal multiplier), checked on the displayed :math:`V`.
 """
 
 from __future__ import annotations
@@ -70,7 +71,9 @@ D5 = claim(
     "[[costate_printed]] with the un-indexed $x_k$; its endpoint condition is [[m8]].",
     corrected="The endpoint is free. The extremal equations are the critical points of [[V]]: "
     "[[state]], [[costate]], [[stationary]] with one multiplier per step, and [[endpoint]] for this "
-    "$H$ (equivalently the costates are minus the gradients of the cost, D6).",
+    "$H$ (equivalently the costates are minus the gradients of the cost, D6). With the endpoint "
+    "free and $h$ a submersion the constraints are always regular, so these hold with the cost "
+    "multiplier one at every solution (no abnormal case, unlike the fixed endpoint of D1).",
     expected="holds after correction",
     section="2",
     where="Section 2, the second definition (several samples $a = 1, \\dots, M$ and an endpoint "
@@ -85,7 +88,12 @@ D5 = claim(
     "carries $+\\phi$ and an extra $-p_N x_N$). If $x^a_N$ is fixed, $\\phi(x^a_N)$ is a constant "
     "and no endpoint condition follows. The term $-\\phi(x^a_N)$ inside the proposition's "
     "Hamiltonian is harmless (constant in the variables of $H$). The proof's $V$ needs "
-    "$\\sigma_k$ per step, as in D1 (checked there).",
+    "$\\sigma_k$ per step, as in D1 (checked there). Normality: with $x^a_N$ free the "
+    "dynamics rows of the constraint Jacobian have a unit triangular block in the states and "
+    "$h$ is a submersion, so the Jacobian always has full row rank and no abnormal multiplier "
+    "is needed; with the printed fixed endpoints the regularity condition of D1 would be needed "
+    "(its abnormal example is an instance with one sample). An all-dimension symbolic check "
+    "(matrix symbols of sizes $n, m, l$) derives the extremal equations from $V$.",
 )
 COST5 = D5.formula(
     "cost",
@@ -359,3 +367,24 @@ def d5_extremals_any_dimension() -> int:
     endpoint, stationarity and constraint equations over their displayed ranges, each variable
     once (M = 2 samples, N = 2; every dimension)."""
     return d5_any_dimension_defect()
+
+
+@D5.check(Level.SYMBOLIC_FIXED_N, form="corrected")
+def d5_free_endpoint_is_normal() -> sp.Expr:
+    """With the endpoint free the multiplier rule needs no extra hypothesis: the Jacobian of the
+    constraints (the derivatives of the displayed V in p^a_{k+1} and sigma_k) in the free
+    variables x^a_1..x^a_N, u_k has, for undefined f and h, a block in the x-columns of the
+    dynamics rows with determinant +-1 and zero x-columns in the constraint rows, so its row rank
+    is N M n plus that of the h'(u_k), full since h is a submersion (n = m = 2, l = 1, M = 2,
+    N = 2): |det| - 1 and the nonzero x-entries of the constraint rows."""
+    N, M = 2, 2
+    values = _d5_variables(N, M, 2, 2, 1)
+    fn = _with_hamiltonians(_generic(2, 2, 1))
+    V = _value(V5.rhs, values, fn)
+    dynamics = sp.Matrix([e for a in range(1, M + 1) for k in range(1, N + 1)
+                          for e in _grad(V, values[("p", a, k)])])  # fmt: skip
+    constraint = sp.Matrix([e for k in range(N) for e in _grad(V, values[(r"\sigma", k)])])
+    states = sp.Matrix([s for a in range(1, M + 1) for k in range(1, N + 1)
+                        for s in values[("x", a, k)]])  # fmt: skip
+    det = sp.expand(dynamics.jacobian(states).det())
+    return sp.Abs(sp.Abs(det) - 1) + _nonzero(constraint.jacobian(states))
