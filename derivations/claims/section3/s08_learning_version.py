@@ -3,8 +3,9 @@ sharing one control.
 
 For samples Qdot^a = Q^a U sharing one control, with the cost of S5 plus sum_a phi(Q^a_T), the
 extremals satisfy Qdot^a = Q^a U, Pdot^a = P^a U with U = sum_a J^-1((Q^a)^T P^a - (P^a)^T Q^a).
-Erratum: the endpoint condition is P^a_T = -2 dphi/dQ^a_T (minus the gradient in the pairing of
-S5), not +dphi/dQ^a_T.
+Erratum: the endpoints Q^a_T are free (the definition keeps Q_T fixed beside the terminal cost, the
+slip D5 corrects in Section 2), and the endpoint condition is P^a_T = -2 dphi/dQ^a_T (minus the
+gradient in the pairing of S5), not +dphi/dQ^a_T.
 
 Emitted to ``symrb/_generated/symmetric_rigid_body.py``: ``control_rhs``.
 """
@@ -41,12 +42,21 @@ S8 = claim(
     "$\\sum_a\\phi(Q^a_T)$, the extremals satisfy [[costates]] with [[control]], the maximiser "
     "of [[H]], and an endpoint condition on $P^a_T$.",
     expected="holds after correction",
-    printed="[[endpoint_printed]] (with the printed $U$).",
-    corrected="[[endpoint_corrected]], where $\\partial\\phi/\\partial Q$ is the matrix of "
-    "entrywise partial derivatives: minus the gradient in the pairing of S5.",
-    note="The endpoint condition $P^a_T = \\partial\\phi/\\partial Q^a_T$ has the wrong sign and "
-    "factor for the printed control. Corrected: $P^a_T = -2\\,\\partial\\phi/\\partial Q^a_T$, "
-    "minus the gradient of $\\phi$ in the pairing of S5. With the running cost entering the "
+    printed="The definition keeps $Q_T$ given and fixed beside the terminal cost "
+    "$\\sum_a\\phi(Q^a_T)$; [[endpoint_printed]] (with the printed $U$).",
+    corrected="The endpoints $Q^a_T$ are free (fixed, they make the terminal cost a constant "
+    "and give no endpoint condition); [[endpoint_corrected]], where "
+    "$\\partial\\phi/\\partial Q$ is the matrix of entrywise partial derivatives: minus the "
+    "gradient in the pairing of S5.",
+    note="The definition keeps $Q_T$ given and fixed beside the terminal cost, and the endpoint "
+    "condition $P^a_T = \\partial\\phi/\\partial Q^a_T$ has the wrong sign and factor for the "
+    "printed control. Corrected: the endpoints $Q^a_T$ are free and $P^a_T = "
+    "-2\\,\\partial\\phi/\\partial Q^a_T$, minus the gradient of $\\phi$ in the pairing of S5. "
+    "The fixed endpoint is the slip D5 corrects in Section 2: with $Q_T$ fixed, "
+    "$\\phi(Q_T)$ is a constant and no endpoint condition follows; in an exact example ($Q_0 = "
+    "I$, the fixed $Q_T$ a rational rotation $R$, $\\phi(Q) = \\tfrac12\\|Q - R\\|_F^2$) either "
+    "endpoint condition gives $P_T = 0$, where the extremal equations are at rest, so the "
+    "extremal meeting it starts at $R$ instead of $Q_0$ ($\\|R - I\\|_F^2 = 48/55$). With the running cost entering the "
     "maximum principle with multiplier $-1$ (so that $U$ is the printed $+J^{-1}(\\cdots)$, see "
     "S5), transversality gives $P_T = -\\nabla\\phi$, and the gradient in the pairing "
     "$\\tfrac12\\operatorname{tr}(A^T B)$ is twice the entrywise derivative. Checked against a "
@@ -217,3 +227,55 @@ def s8_printed_endpoint() -> float:
 def s8_corrected_endpoint() -> float:
     """The same with P integrated backward from the displayed corrected endpoint condition."""
     return _endpoint_mismatch("corrected")
+
+
+def _s8_endpoint_extremal_start(target: sp.Matrix, form: str) -> sp.Matrix:
+    """Where the extremal through the endpoint (Q_T, P_T) starts, one sample, n = 3, rational
+    Lambda: Q_T is the target R of phi(Q) = 1/2 ||Q - R||_F^2, P_T from the displayed endpoint
+    condition ``form`` (its coefficient times the entrywise derivative of phi, by SymPy), U from
+    the displayed control.  There the displayed fields Q U and P U vanish, so the extremal is
+    constant and starts at Q_T (anything else raises: the example would need an integration)."""
+    coeff, deriv = S8.formulas[f"endpoint_{form}"].rhs.as_coeff_Mul()
+    if not (isinstance(deriv, sp.Derivative) and deriv.variables == (_QT,)):
+        raise ValueError("the endpoint condition is not a multiple of d phi / d Q^a_T")
+    lam = [sp.Rational(7, 10), sp.Rational(11, 10), sp.Rational(8, 5)]
+    Qs = general_matrix("q", 3)
+    phi = sum(((e - r) ** 2 for e, r in zip(Qs, target, strict=True)), sp.Integer(0)) / 2
+    point = dict(zip(Qs, target, strict=True))
+    P_T = (coeff * Qs.applyfunc(lambda e: sp.diff(phi, e))).xreplace(point)
+    env = {"Q1": target, "P1": P_T}
+    Ux = explicit(_samples(CONTROL.rhs, 1), env, lam)
+    one = {"Q^a": target, "P^a": P_T, "U": Ux}
+    fields = [explicit(rel.rhs, one, lam) for rel in COSTATES]
+    if any(f != sp.zeros(3, 3) for f in fields):
+        raise ValueError("the extremal through the endpoint is not an equilibrium")
+    return target
+
+
+def _rational_rotation(a: int, b: int, c: int, d: int) -> sp.Matrix:
+    """The Cayley rotation (I - A)^{-1}(I + A) of the skew A with entries a, b, c over d."""
+    A = skew_matrix("a", 3).xreplace(dict(zip(sp.symbols("a12 a13 a23", real=True),
+                                              (sp.Rational(a, d), sp.Rational(b, d), sp.Rational(c, d)))))  # fmt: skip
+    return (sp.eye(3) - A).inv() * (sp.eye(3) + A)
+
+
+@S8.check(Level.EXACT_RATIONAL, form="printed")
+def s8_printed_fixed_endpoint() -> sp.Expr:
+    """The definition keeps Q_T given and fixed beside the terminal cost: with Q_0 = I, the fixed
+    Q_T a rational rotation R (Cayley, entries 1, 2, -1 over 7) and phi(Q) = 1/2 ||Q - R||^2, an
+    admissible control is not zero, yet either displayed endpoint condition gives P_T = 0, where
+    the displayed extremal equations are at rest, so the extremal meeting it starts at R, not at
+    Q_0: the smaller of ||Q(0) - Q_0||_F^2 over the printed and corrected conditions."""
+    R = _rational_rotation(1, 2, -1, 7)
+    gaps = [_s8_endpoint_extremal_start(R, form) - sp.eye(3) for form in ("printed", "corrected")]
+    return sp.Min(*(sp.nsimplify(sum(e**2 for e in g)) for g in gaps))
+
+
+@S8.check(Level.EXACT_RATIONAL, form="corrected")
+def s8_free_endpoint() -> sp.Expr:
+    """The same terminal cost with Q_T free and Q_0 = R: U = 0 is optimal (the cost, a sum of
+    non-negative terms, vanishes there), so Q_T = R, and the corrected endpoint condition with
+    the displayed extremal equations gives the extremal that starts at Q_0:
+    ||Q(0) - Q_0||_F^2."""
+    R = _rational_rotation(1, 2, -1, 7)
+    return sp.nsimplify(sum(e**2 for e in _s8_endpoint_extremal_start(R, "corrected") - R))
