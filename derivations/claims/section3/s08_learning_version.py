@@ -31,8 +31,8 @@ from derivations.claims.section3.s05_maximum_principle import (
     unfold,
 )
 from derivations.registry import Level, claim
-from derivations.symbolic import eq, explicit, general_matrix, skew_matrix
-from derivations.vocabulary import Jinv, Kernel, matrix
+from derivations.symbolic import Words, eq, explicit, general_matrix, skew_matrix, trace_residual
+from derivations.vocabulary import Jinv, Kernel, W, matrix
 
 S8 = claim(
     "S8",
@@ -63,7 +63,11 @@ S8 = claim(
     "forward tangent-linear derivative of the cost: with the corrected endpoint the reduced "
     "gradient is $\\tfrac12 J(U - \\sum_a J^{-1}(M^a))$ and vanishes exactly at the printed $U$; "
     "with the printed one it does not match. Equivalently the printed sign is right after $P "
-    "\\mapsto -P$, $U \\mapsto -J^{-1}(\\cdots)$.",
+    "\\mapsto -P$, $U \\mapsto -J^{-1}(\\cdots)$. For every $n$ (noncommutative symbols): "
+    "along the extremal fields $\\tfrac{d}{dt}\\langle P^a, \\delta Q^a\\rangle$ is "
+    "$\\tfrac12\\langle M^a, \\delta U\\rangle$, so the two derivatives agree exactly when "
+    "$\\operatorname{tr}(G^T\\delta Q_T) + \\langle P_T, \\delta Q_T\\rangle$ vanishes for every "
+    "free $\\delta Q_T$, which the corrected condition gives and the printed one does not.",
     section="3.2",
     where="Section 3.2, the second definition (several samples $Q^a$ and a terminal cost "
     "$\\phi$), the third proposition ($U = \\sum_a J^{-1}((Q^a)^T P^a - (P^a)^T Q^a)$) and the "
@@ -279,3 +283,53 @@ def s8_free_endpoint() -> sp.Expr:
     ||Q(0) - Q_0||_F^2."""
     R = _rational_rotation(1, 2, -1, 7)
     return sp.nsimplify(sum(e**2 for e in _s8_endpoint_extremal_start(R, "corrected") - R))
+
+
+def _s8_adjoint_defect(form: str) -> sp.Integer:
+    """Trace words left in the two identities behind the endpoint condition, every n (one
+    sample: the sum over samples is linear).  (A) Along the displayed fields, with dQ the
+    variation of the displayed dynamics in a direction dU (skew) and U skew: d/dt <P, dQ> minus
+    1/2 <M, dU>, M the displayed momentum in U, both in the displayed pairing of S5.  (B) At the
+    free endpoint, with P_T from the displayed endpoint condition (coefficient c times G, the
+    entrywise derivative of phi, so that dphi is tr(G^T dQ_T)): tr(G^T dQ_T) + <P_T, dQ_T>.
+    Traces vanish for all matrices when the words of (E + E^T)/2 cancel cyclically."""
+    w = Words(skew=["U", "dU"])
+    dQ, dU, G = matrix("dQ^a"), matrix("dU"), matrix("G^a")
+    eps = sp.Symbol("epsilon")
+    qdot, pdot = (rel.rhs for rel in COSTATES)
+    moved = w.of(qdot.xreplace({Qa: Qa + eps * dQ, U: U + eps * dU}))
+    dqdot = sp.expand(sp.diff(sp.expand(moved), eps)).subs(eps, 0)
+    # (A) the product rule on the displayed pairing, then the pairing unfolded into traces
+    pair = w.trace_argument(unfold(GlPair(Pa, dQ)))  # c * P^T dQ
+    c_pair = sp.expand(pair).coeff(w.T(w("P^a")) * w("dQ^a"))
+    rate = c_pair * (w.T(w.of(pdot)) * w("dQ^a") + w.T(w("P^a")) * dqdot)
+    (momentum,) = (x for x in CONTROL.rhs.function.args if x != W)
+    adjoint = w.trace_argument(unfold(GlPair(momentum, dU))) / 2
+    identity_a = sp.expand(rate - adjoint)
+    # (B) the endpoint condition with its displayed coefficient
+    coeff, deriv = S8.formulas[f"endpoint_{form}"].rhs.as_coeff_Mul()
+    if not (isinstance(deriv, sp.Derivative) and deriv.variables == (_QT,)):
+        raise ValueError("the endpoint condition is not a multiple of d phi / d Q^a_T")
+    identity_b = w.T(w("G^a")) * w("dQ^a") + w.trace_argument(unfold(GlPair(coeff * G, dQ)))
+    return sum(
+        (trace_residual(sp.expand((e + w.T(e)) / 2)) for e in (identity_a, identity_b)),
+        sp.Integer(0),
+    )
+
+
+@S8.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def s8_endpoint_any_n() -> sp.Integer:
+    """Why the corrected endpoint condition, for every n (noncommutative symbols): along the
+    displayed fields d/dt <P^a, dQ^a> equals 1/2 <M^a, dU> (dQ^a the variation of the
+    displayed dynamics, U and dU skew), so the cost's derivative, tr(G^T dQ_T) plus the running
+    part, equals the adjoint form int 1/2 <J(U - sum_a J^-1(M^a)), dU> dt exactly when
+    tr(G^T dQ_T) + <P_T, dQ_T> vanishes for every free dQ_T; with the displayed corrected P_T it
+    does (G the entrywise derivative of phi; count of trace words left)."""
+    return _s8_adjoint_defect("corrected")
+
+
+@S8.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def s8_printed_endpoint_any_n() -> sp.Integer:
+    """The same with the printed endpoint condition: tr(G^T dQ_T) + <P_T, dQ_T> does not vanish
+    (every n)."""
+    return _s8_adjoint_defect("printed")
