@@ -65,7 +65,10 @@ class Evaluator:
         return self.deltas[key] if live(key) else sp.ZeroMatrix(*self.columns[key].shape)
 
     def __call__(
-        self, e: Any, bound: dict[Any, Pair] | None = None, live: Callable[[Any], bool] | None = None
+        self,
+        e: Any,
+        bound: dict[Any, Pair] | None = None,
+        live: Callable[[Any], bool] | None = None,
     ) -> Pair:
         """(value, variation) of ``e``; ``bound`` gives the pairs of the parameters of a
         definition being expanded; ``live(key)`` says which variables vary (by default those
@@ -112,7 +115,9 @@ class Evaluator:
         pairs = [self(inner.xreplace({k: sp.Integer(j)}), bound, live) for j in range(lo, hi + 1)]
         return _fold(_add, [v for v, _ in pairs]), _fold(_add, [d for _, d in pairs])
 
-    def _function(self, e: AppliedUndef, bound: dict[Any, Pair], live: Callable[[Any], bool]) -> Pair:
+    def _function(
+        self, e: AppliedUndef, bound: dict[Any, Pair], live: Callable[[Any], bool]
+    ) -> Pair:
         name = e.func.__name__
         args = [self(x, bound, live) for x in e.args]
         if name in self.defined:

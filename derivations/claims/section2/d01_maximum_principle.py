@@ -392,7 +392,10 @@ def _normality_example(endpoint: int) -> tuple[dict[str, Any], dict[Any, Any], d
     return fn, values, at_min
 
 
-_PRIMAL, _DUAL = (("x", 1), ("u", 0), ("u", 1)), (("p", 1), ("p", 2), (r"\sigma", 0), (r"\sigma", 1))
+_PRIMAL, _DUAL = (
+    (("x", 1), ("u", 0), ("u", 1)),
+    (("p", 1), ("p", 2), (r"\sigma", 0), (r"\sigma", 1)),
+)
 
 
 def _multiplier_system(endpoint: int, cost_multiplier: int) -> tuple[list[sp.Expr], list[Any]]:

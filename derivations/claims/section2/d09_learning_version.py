@@ -410,9 +410,9 @@ def d9_free_endpoint_is_normal() -> int:
                    "U_k": controls[k] * (sp.eye(3) + xis[k])}  # fmt: skip
             rows += list(explicit(D9_DYNAMICS.lhs, env) - explicit(D9_DYNAMICS.rhs, env))
             Q = Q * controls[k]
-            point.update(zip(states[(a, k + 1)], Q))
-    free = [s for m in states.values() for s in m] + [xi[i, j] for xi in xis
-                                                     for i, j in itertools.combinations(range(3), 2)]  # fmt: skip
-    point.update({s: 0 for xi in xis for s in xi.free_symbols})
+            point.update(zip(states[(a, k + 1)], Q, strict=True))
+    skew = [xi[i, j] for xi in xis for i, j in itertools.combinations(range(3), 2)]
+    free = [s for m in states.values() for s in m] + skew
+    point.update(dict.fromkeys(skew, 0))
     jac = sp.Matrix(rows).jacobian(free).xreplace(point)
     return jac.rows - jac.rank()

@@ -258,8 +258,7 @@ def _s8_endpoint_extremal_start(target: sp.Matrix, form: str) -> sp.Matrix:
 
 def _rational_rotation(a: int, b: int, c: int, d: int) -> sp.Matrix:
     """The Cayley rotation (I - A)^{-1}(I + A) of the skew A with entries a, b, c over d."""
-    A = skew_matrix("a", 3).xreplace(dict(zip(sp.symbols("a12 a13 a23", real=True),
-                                              (sp.Rational(a, d), sp.Rational(b, d), sp.Rational(c, d)))))  # fmt: skip
+    A = sp.Matrix([[0, a, b], [-a, 0, c], [-b, -c, 0]]) / d
     return (sp.eye(3) - A).inv() * (sp.eye(3) + A)
 
 
