@@ -455,3 +455,109 @@ def d1_corrected_normality() -> sp.Expr:
     fn = _with_hamiltonians(_generic(2, 2, 1))
     normal = _value(V_LAMBDA.rhs, {**values, _key(_lam0): sp.Integer(1)}, fn)
     return total + _nonzero(normal - _value(V_DEF.rhs, values, fn))
+
+
+# the paper's sentences (the definition, the proposition and its proof)
+
+D1.sentence(
+    r"Let $N$ be a positive integer and $X_0,X_N\in\mathbb{R}^n$ be given.",
+    d1_stationarity,
+)
+D1.sentence(
+    r"Let $f:\mathbb{R}^n\times\mathbb{R}^m \rightarrow \mathbb{R}^n$ and "
+    r"$g:\mathbb{R}^n\times\mathbb{R}^m \rightarrow \mathbb{R}^+:=[0,\infty)$ be smooth functions.",
+    d1_stationarity,
+)
+D1.sentence(
+    r"Denote points in $\mathbb{R}^n$ by $x$, points in $\mathbb{R}^m$ by $u$.",
+    kind="prose",
+    reason="fixes notation",
+)
+D1.sentence(
+    r"Let $E\subset\mathbb{R}^m$ be a control constraint set and assume that $E = h^{-1}(0)$, "
+    r"where $h:\mathbb{R}^m\to\mathbb{R}^l$ is a submersion.",
+    d1_stationarity,
+    d1_corrected_multipliers,
+)
+D1.sentence(
+    r"Let $\langle\cdot,\cdot\rangle$ denote the pairing between vectors in $\mathbb{R}^p$ given "
+    r"by the dot product; $p$ can be $n$, $m$, or $l$.",
+    kind="prose",
+    reason="fixes notation (the dot product, which every check uses)",
+)
+D1.sentence(
+    r"Define the optimal control problem: $\min_{u_k\in E}\sum^{N-1}_{k=0}g(x_k,u_k)$ subject to "
+    r"$x_{k+1}=f(x_k,u_k)$, with $x_0=X_0$ and $x_N=X_N$, for $u_k\in E$.",
+    d1_stationarity,
+    d1_corrected_costate_range,
+    d1_corrected_multipliers,
+)
+D1.sentence(
+    r"A solution to problem (prob8.1) satisfies the following extremal solution equations "
+    r"$p_k = \frac{\partial H}{\partial x_k}(p_{k+1},x_k,u^*_k), \qquad "
+    r"x_{k+1} = \frac{\partial H}{\partial p_{k+1}}(p_{k+1},x_k,u^*_k),$ where "
+    r"$H(p_{k+1},x_k,u_k):=\langle p_{k+1},f(x_k,u_k)\rangle-g(x_k,u_k), \quad k=0, \ldots, N, "
+    r"\quad p_{N+1} =0,$ and $\partial/ \partial x$, $\partial/ \partial p$ denote the partial "
+    r"$x$- and $p$-gradients.",
+    d1_stationarity,
+    d1_printed_costate_at_N,
+    d1_corrected_costate_range,
+)
+D1.sentence(
+    r"In these equations, $u_k^\ast$ is determined as follows.",
+    kind="prose",
+    reason="announces the next sentence",
+)
+D1.sentence(
+    r"Define $\hat{H}(p_{k+1},x_k,u_k,\sigma):=H(p_{k+1},x_k,u_k)+ "
+    r"\left\langle \sigma,h(u_k)\right\rangle$ for $\sigma\in\mathbb{R}^l$, $\sigma$ a Lagrange "
+    r"multiplier; then $u^*_k$ and $\sigma$ are solutions of the equations "
+    r"$\frac{\partial\hat{H}}{\partial u_k}(p_{k+1},x_k,u^*_k,\sigma)=0,\quad h(u^*_k)=0.$",
+    d1_stationarity,
+    d1_printed_single_multiplier,
+    d1_corrected_multipliers,
+)
+D1.sentence(
+    r"Proof. Use the discrete maximum principle.",
+    kind="prose",
+    reason="names the method of the proof",
+)
+D1.sentence(
+    r"We wish to minimize $\sum^{N-1}_{k=0}g(x_k,u_k)$ subject to the given discrete dynamics "
+    r"and control constraint set $E$.",
+    kind="prose",
+    reason="restates the problem of the definition (its sentence above is mapped)",
+)
+D1.sentence(
+    r"To implement the constraints defining $E$, we consider maximizing the augmented functional "
+    r"(which is independent of $p_0$) "
+    r"$V(p_{0},\ldots, p_N, x_0,\ldots x_{N-1},u_0, \ldots, u_{N-1}) := \sum^{N-1}_{k=0}\left( "
+    r"\langle p_{k+1},f(x_k,u_k)-x_{k+1}\rangle+ \left\langle \sigma ,h(u_k)\right\rangle "
+    r"-g(x_k,u_k) \right) = \sum^{N-1}_{k=0}\left( -\langle p_{k+1},x_{k+1}\rangle+ "
+    r"\hat{H}(p_{k+1},x_k,u_k,\sigma) \right) = \left\langle p_0, x_0 \right\rangle + "
+    r"\sum^N_{k=0} \left( -\langle p_k,x_k\rangle+\hat{H}(p_{k+1},x_k,u_k,\sigma)\right),$ "
+    r"where we set $p_{N+1}=0$ for notational convenience since there is no $x_{N+1}$.",
+    d1_stationarity,
+    d1_printed_rewrite,
+    d1_corrected_rewrite,
+    d1_printed_single_multiplier,
+    d1_corrected_multipliers,
+)
+D1.sentence(
+    r"The critical points of $V$ are hence given by $0= \delta V = \left\langle \delta p_0, x_0 "
+    r"\right\rangle + \sum^N_{k=0}\left( -\langle p_k,\delta x_k\rangle-\langle\delta "
+    r"p_k,x_k\rangle+\frac{\partial \hat{H}}{\partial p_{k+1}}\delta p_{k+1} "
+    r"+\frac{\partial\hat{H}}{\partial x_k}\delta x_k+ \frac{\partial\hat{H}}{\partial u_k}\delta "
+    r"u_k \right)$ since $\delta x_0 = 0$ because $x_0 = X_0$ is a given constant vector.",
+    d1_stationarity,
+)
+D1.sentence(
+    r"This gives the extremal equations (eq8.3) and (eq8.6) since "
+    r"$\frac{\partial\hat{H}}{\partial p_{k+1}}(p_{k+1},x_k,u_k,\sigma)= \frac{\partial "
+    r"H}{\partial p_{k+1}}(p_{k+1},x_k,u_k), \quad \frac{\partial\hat{H}}{\partial "
+    r"x_k}(p_{k+1},x_k,u_k,\sigma)= \frac{\partial H}{\partial x_k}(p_{k+1},x_k,u_k),$ and "
+    r"$h(u_k)=0$, for $k=0, \ldots , N$ and $p_{N+1}=0$.",
+    d1_stationarity,
+    d1_printed_costate_at_N,
+    d1_corrected_costate_range,
+)

@@ -123,3 +123,25 @@ def d2_reduced_matrix() -> sp.Expr:
     """The same comparison with the displayed right side of the corrected step Jacobian, the mixed
     derivative of H* built from the displayed reduced Hamiltonian: equal in both examples."""
     return _d2_defect(STEP_JACOBIAN.rhs)
+
+
+# the paper's sentences (the remark after the proof of the first proposition)
+
+D2.sentence(
+    r"Note that for the algorithm described by equation (eq8.3) to make sense we need to able to "
+    r"compute $p_{k+1}$ from the given implicit form.",
+    d2_printed_matrix,
+    d2_reduced_matrix,
+)
+D2.sentence(
+    r"This follows if the $n \times n$ matrix with entries "
+    r"$\frac{\partial ^2 H}{\partial y_i \partial x_j} (y,x,u)$ for $i,j = 1, \ldots, n,$ is "
+    r"invertible at every $(y,x,u) \in \mathbb{R}^n \times \mathbb{R}^n \times \mathbb{R}^m$.",
+    d2_printed_matrix,
+    d2_reduced_matrix,
+)
+D2.sentence(
+    r"We need such a condition to be satisfied for any given algorithm.",
+    kind="prose",
+    reason="a general remark on implicit algorithms; the condition itself is the sentence above",
+)

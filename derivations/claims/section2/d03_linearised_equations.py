@@ -224,3 +224,39 @@ def d3_nonlinear_printed() -> float:
     """Same family: the printed equations with blocks of Hhat at frozen u* miss that Jacobian for
     either index convention."""
     return _d3_float_defect(LINEARISED_PRINTED, _P, "frozen")
+
+
+# the paper's sentences (the hypothesis before the corollary, and the corollary)
+
+D3.sentence(
+    r"We assume that both $u^*_k$ and $\sigma$ are determined uniquely by equations (eq8.6).",
+    d3_corrected,
+    d3_nonlinear_corrected,
+)
+D3.sentence(
+    r"Also note that $u^*_k=u^*_k(p_{k+1},x_k)$, $\sigma=\sigma (p_{k+1},x_k)$.",
+    d3_nonlinear_corrected,
+    d3_printed_frozen_control,
+    d3_nonlinear_printed,
+)
+D3.sentence(
+    r"Using this hypothesis, we have the following consequence.",
+    kind="prose",
+    reason="announces the corollary",
+)
+D3.sentence(
+    r"Corollary. Assume that the extremal equations (eq8.3) hold.",
+    d3_corrected,
+    d3_nonlinear_corrected,
+)
+D3.sentence(
+    r"Then $dp_k= \frac{\partial^2\hat{H}}{\partial x^2_k}(p_{k+1},x_k,u^*_k)dx_k+ "
+    r"\frac{\partial^2\hat{H}}{\partial p_{k+1}\partial x_k} (p_{k+1},x_k,u^*_k)dp_{k+1}\,, "
+    r"\quad dx_{k+1}= \frac{\partial^2\hat{H}}{\partial p_{k+1}\partial x_k} (p_{k+1},x_k,u^*_k) "
+    r"dx_k+ \frac{\partial^2\hat{H}}{\partial p^2_{k+1}}(p_{k+1},x_k,u^*_k) dp_{k+1}\,.$",
+    d3_corrected,
+    d3_printed_frozen_control,
+    d3_printed_same_matrix,
+    d3_nonlinear_corrected,
+    d3_nonlinear_printed,
+)

@@ -388,3 +388,119 @@ def d5_free_endpoint_is_normal() -> sp.Expr:
                         for s in values[("x", a, k)]])  # fmt: skip
     det = sp.expand(dynamics.jacobian(states).det())
     return sp.Abs(sp.Abs(det) - 1) + _nonzero(constraint.jacobian(states))
+
+
+# the paper's sentences (the definition, the proposition and its proof)
+
+D5.sentence(
+    r"Let $N, M$ be a positive integers and $X_0,X_N^a\in\mathbb{R}^n$, $a=1, \ldots, M$ be "
+    r"given.",
+    d5_stationarity,
+    d5_printed_fixed_endpoint,
+    d5_free_endpoint,
+)
+D5.sentence(
+    r"Let $f:\mathbb{R}^n\times\mathbb{R}^m \times \mathbb{R}^n \rightarrow \mathbb{R}^n$, "
+    r"$g:\mathbb{R}^n\times\mathbb{R}^m \rightarrow \mathbb{R}^+:=[0,\infty)$, and "
+    r"$\phi: \mathbb{R}^n \rightarrow \mathbb{R}^+$ be smooth functions.",
+    d5_stationarity,
+)
+D5.sentence(
+    r"Let $E\subset\mathbb{R}^m$ be a control constraint set and assume that $E = h^{-1}(0)$, "
+    r"where $h:\mathbb{R}^m\to\mathbb{R}^l$ is a submersion.",
+    d5_stationarity,
+)
+D5.sentence(
+    r"Define the optimal control problem: $\min_{u_k\in E}\sum_{a=1}^M\sum^{N-1}_{k=0}"
+    r"g(x^a_k,u_k) +\sum_{a=1}^M\phi(x^a_N)$ subject to "
+    r"$x^a_{k+1}=f^a(x_k,u_k):=f(x_k,u_k,X_0^a)$ with $x_0=X^a_0$ and $x^a_N = X_N^a$, for "
+    r"$u_k\in E$, $k=0, \ldots, N-1$, and $a=1,\ldots, M$.",
+    d5_stationarity,
+    d5_corrected_example,
+    d5_printed_fixed_endpoint,
+    d5_free_endpoint,
+)
+D5.sentence(
+    r"The proof of the next proposition is analogous to that of Proposition (gendiscprop).",
+    kind="prose",
+    reason="points to the proof of the first proposition (D1)",
+)
+D5.sentence(
+    r"A solution to problem (eq8.1m) satisfies the following extremal solution equations "
+    r"$p^a_k = \frac{\partial H}{\partial x_k}(p^a_{k+1},x_k,u^*_k), \qquad "
+    r"x^a_{k+1} = \frac{\partial H}{\partial p_{k+1}}(p^a_{k+1},x_k,u^*_k),$ where "
+    r"$k=0,\ldots, N-1$, $p^a_{N+1}=0$ for all $a=1,\ldots, M$, and "
+    r"$H(p_{k+1},x_k,u_k)=\sum_{a=1}^M\left( \langle p^a_{k+1},f^a(x_k,u_k)\rangle-g(x^a_k,u_k) "
+    r"-\phi(x^a_N)\right).$",
+    d5_stationarity,
+    d5_corrected_example,
+    d5_printed_shared_state,
+)
+D5.sentence(
+    r"In these equations, $u _k ^\ast$ is determined as follows.",
+    kind="prose",
+    reason="announces the next sentences",
+)
+D5.sentence(
+    r"Let $\hat{H}(p_{k+1},x_k,u_k,\sigma):= \sum_{a=1}^M\left( \langle "
+    r"p^a_{k+1},f^a(x_k,u_k)\rangle-g(x^a_k,u_k)\right)+ \left\langle \sigma,h(u_k)\right\rangle$ "
+    r"for $\sigma\in\mathbb{R}^l$, $\sigma$ a Lagrange multiplier.",
+    d5_stationarity,
+)
+D5.sentence(
+    r"Then $u^*_k$ and $\sigma$ are solutions of the equations "
+    r"$\frac{\partial\hat{H}}{\partial u_k}(p^a_{k+1},x^a_k,u^*_k,\sigma)=0,\quad h(u^*_k)=0.$",
+    d5_stationarity,
+    d5_corrected_example,
+)
+D5.sentence(
+    r"In addition we have the endpoint condition "
+    r"$p^a_N=\frac{\partial\phi(x^a_N)}{\partial x^a_N}, \quad a=1, \ldots, M.$",
+    d5_stationarity,
+    d5_corrected_example,
+    d5_printed_endpoint_sign,
+    d5_printed_fixed_endpoint,
+    d5_free_endpoint,
+)
+D5.sentence(r"Proof. Use the discrete maximum principle.", kind="prose", reason="names the method")
+D5.sentence(
+    r"We wish to minimize $\sum_{a=1}^M\sum^{N-1}_{k=0}g(x^a_k,u_k)+\sum_{a=1}^M\phi(x^a_N)$ "
+    r"subject to the given discrete dynamics and control constraint set $E$.",
+    kind="prose",
+    reason="restates the problem of the definition (its sentence above is mapped)",
+)
+D5.sentence(
+    r"To implement the constraints defining $E$, we consider maximizing the augmented functional "
+    r"(which is independent of $p_0$) $V(p_{0},\ldots, p_N, x_0,\ldots x_{N-1},u_0, \ldots, "
+    r"u_{N-1}) := \sum^{N-1}_{k=0}\sum^{M}_{a=1}\left( \langle p^a_{k+1},f^a(x^a_k,u_k)-"
+    r"x^a_{k+1}\rangle+ \left\langle \sigma ,h(u_k)\right\rangle -g(x^a_k,u_k) \right) "
+    r"-\sum_{a=1}^M(p^a(N)x^a(N)-\phi(x^a_N)) = \sum_{a-1}^M\sum^{N-1}_{k=0}\left( -\langle "
+    r"p^a_{k+1},x^a_{k+1}\rangle+ \hat{H}(p^a_{k+1},x^a_k,u_k,\sigma) \right) "
+    r"-\sum_{a=1}^M(p^a(N)x^a(N)-\phi(x^a_N)) =\sum_{a=1}^M\left( \left\langle p^a_0, x^a_0 "
+    r"\right\rangle + \sum^N_{k=0} ( -\langle p^a_k,x^a_k\rangle+\hat{H}(p^a_{k+1},x^a_k,u_k,"
+    r"\sigma)) \right) -\sum_{a=1}^M(p^a(N)x^a(N)-\phi(x^a_N))$ where we set $p^a_{N+1}=0$ for "
+    r"notational convenience since there is no $x_{N+1}$.",
+    d5_stationarity,
+    d5_printed_endpoint_sign,
+)
+D5.sentence(
+    r"The critical points of $V$ are hence given by $0= \delta V = \left\langle \delta p_0, x_0 "
+    r"\right\rangle + \sum^N_{k=0}\left( \sum_{a=1}^M(-\langle p^a_k,\delta "
+    r"x^a_k\rangle-\langle\delta p^a_k,x^a_k\rangle+\frac{\partial \hat{H}}{\partial "
+    r"p^a_{k+1}}\delta p^a_{k+1} +\frac{\partial\hat{H}}{\partial x^a_k}\delta x^a_k)+ "
+    r"\frac{\partial\hat{H}}{\partial u_k}\delta u_k \right) +\sum_{a=1}^M\left(\delta "
+    r"p^a(N)x^a(N)+p^a(N)\delta x^a(N)-\frac{\partial\phi(x^a(N)}{\partial x^a(N)}\delta "
+    r"x^a(N)\right),$ since $\delta x_0 = 0$ because $x_0 = X_0$ is a given constant vector.",
+    d5_stationarity,
+    d5_printed_endpoint_sign,
+)
+D5.sentence(
+    r"This gives the extremal equations (eq8.3m), (eq8.6m) and (m8) since "
+    r"$\frac{\partial\hat{H}}{\partial p_{k+1}}(p_{k+1},x_k,u_k,\sigma)= \frac{\partial "
+    r"H}{\partial p_{k+1}}(p_{k+1},x_k,u_k), \quad \frac{\partial\hat{H}}{\partial "
+    r"x_k}(p_{k+1},x_k,u_k,\sigma)= \frac{\partial H}{\partial x_k}(p_{k+1},x_k,u_k),$ and "
+    r"$h(u_k)=0$, for $k=0, \ldots , N$ and $p_{N+1}=0$ and $p_N$ is fixed",
+    d5_stationarity,
+    d5_printed_endpoint_sign,
+    d5_corrected_example,
+)

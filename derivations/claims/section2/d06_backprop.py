@@ -412,3 +412,34 @@ def d6_float64() -> float:
         for got, want in ((states, ref_states), (gK, cK), (gb, cb), (-p, cx)):
             errors.append(np.max(np.abs(got - want)) / np.max(np.abs(want)))
     return float(np.max(errors))
+
+
+# the paper's sentences (the paragraph 'Remark' closing Section 2 before Section 2.1)
+
+D6.sentence(
+    r"Remark 1. As described in [BeCeEhOwSc2019], a common choice for $f$ is "
+    r"$f(x,u)=\sigma(Kx+\beta)$, where $u=(K,\beta)$ and $sigma$ is the sigmoid function.",
+    d6_sigmoid,
+    d6_kernels,
+    d6_adjoint_formulas,
+    d6_float64,
+)
+D6.sentence(
+    r"This is the so-called ResNet framework.",
+    d6_printed_plain_is_not_residual,
+    d6_residual_layer_is_residual,
+)
+D6.sentence(
+    r"We can, of course, consider other problems of this type but here we are interested in a "
+    r"particular group theoretic form.",
+    kind="prose",
+    reason="motivation for Section 2.1",
+)
+D6.sentence(
+    r"2. The form of the solution in Proposition (gendiscpropm) is very close to that of "
+    r"[LeCun1988] and, at least on a superficial level, even more so in the rigid body case.",
+    d6_backprop_no_running_cost,
+    d6_printed_m8_running_cost,
+    d6_corrected_running_cost,
+    d6_float64,
+)

@@ -416,3 +416,59 @@ def d9_free_endpoint_is_normal() -> int:
     point.update(dict.fromkeys(skew, 0))
     jac = sp.Matrix(rows).jacobian(free).xreplace(point)
     return jac.rows - jac.rank()
+
+
+# the paper's sentences (the definition, the theorem and its proof)
+
+D9.sentence(
+    r"We can now obtain the machine learning generalization of the discrete rigid body equations.",
+    kind="prose",
+    reason="announces the definition and theorem",
+)
+D9.sentence(r"Let $\Lambda$ be a positive definite diagonal matrix.", d9_theorem)
+D9.sentence(
+    r"Let $\overline{Q}_0, \overline{Q}_N^a\in \operatorname{SO}(n)$, $a=1, \ldots, M$, be given "
+    r"and fixed."
+)
+D9.sentence(
+    r"Let $\hat{V}(U_0, \ldots, U_{N-1}) :=\sum_{k=1}^{N-1}\operatorname{trace}(\Lambda U_{k}) "
+    r"+\sum_{a=1}^M\phi(\overline{Q}^a_N)$ and let "
+    r"$\phi:\mathbb{R}^n\times\mathbb{R}^n\rightarrow\mathbb{R}^+$ be a given smooth function.",
+    d9_theorem,
+    d9_printed_index,
+)
+D9.sentence(
+    r"Define the optimal control problem $\mathop{\rm min}_{U_k\in \operatorname{SO}(n)}"
+    r"\hat{V}(U_0, \ldots, U_{N-1})= \mathop{\rm min}_{U_k\in \operatorname{SO}(n)} "
+    r"\sum_{k=1}^{N-1}\operatorname{trace}(\Lambda U_{k}) +\sum_{a=1}^M\phi(\overline{Q}^a_N)$ "
+    r"subject to dynamics and initial data $Q^a_{r+1}=Q^a_rU_{r}, \qquad "
+    r"Q^a_0=\overline{Q}^a_0, \qquad r=0, \ldots, N-1,$ for $Q_k, U_k\in \operatorname{SO}(n)$.",
+    d9_theorem,
+    d9_printed_index,
+    d9_so_network_gradient_exact,
+)
+D9.sentence(
+    r"Theorem. A solution of the optimal control problem in Defintion (mvoptprobm1) satisfies the "
+    r"optimal evolution equations for each $a=1, \ldots, M$, $Q^a_{k+1} = Q^a_kU_{k} \qquad "
+    r"P^a_{k+1} = P^a_kU_{k}\,, \qquad k=0, \ldots, N-1, \qquad Q^a_0 = \overline{Q}^a_0,$ where "
+    r"$P^a_k$ is the discrete covector in the discrete maximum principle and $U_{k}$ is defined "
+    r"by $U_{k}\Lambda-\Lambda U^T_{k}=\sum_{^Ma=1}((Q^a_k)^TP^a_k-(P^a_k)^TQ^a_k)\,.$ with "
+    r"$P^a_N=\frac{\partial\phi(Q^a_N)}{\partial Q^a_N}\,.$",
+    d9_theorem,
+    d9_printed_index,
+    d9_so_network_gradient_is_ukdef2,
+    d9_so_network_gradient_exact,
+    d9_symrb_so_network_gradients,
+)
+D9.sentence(
+    r"Proof. We apply Proposition (gendiscpropm) with "
+    r"$H(P_{k+1},Q_k,U_{k})= \sum_{a=1}^M\operatorname{trace}((P^a_{k+1})^TQ^a_kU_{k})"
+    r"+\sum_{a=1}^M\phi(Q^a_N) -\operatorname{trace}(\Lambda U_{k})$",
+    d9_unflipped_endpoint,
+    d9_unflipped_endpoint_printed,
+)
+D9.sentence(
+    r"Then the computation is as above for the optimal control setting.",
+    d9_so_network_gradient_is_ukdef2,
+    d9_unflipped_endpoint,
+)
