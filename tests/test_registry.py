@@ -209,10 +209,9 @@ def test_sentences_name_the_claims_own_evidence() -> None:
 #: here must have no sentences, so the set only shrinks: empty it when the S maps are merged.
 UNMAPPED = {f"S{i}" for i in range(1, 16)}
 
-#: The math sentences without evidence, over every claim.  Recorded, not a goal: D9's "Q_N^a
-#: given and fixed" (a fixed endpoint beside a terminal cost, the slip D5 checks) has no check
-#: yet.  Lower it as evidence arrives (the goal is 0); a new uncovered sentence fails this test.
-UNCOVERED = 1
+#: The math sentences without evidence, over every claim (D9's "Q_N^a given and fixed" is now
+#: checked by d9_printed_fixed_endpoint).  A new uncovered sentence fails this test.
+UNCOVERED = 0
 
 
 def _paper_claims() -> list[Claim]:
