@@ -20,12 +20,18 @@ that reduces to zero holds for every dimension.  Three tools:
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import Any
 import sympy as sp
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
+from derivations.claims.section2._hamiltonians import REDUCED, _with_hamiltonians
+from derivations.claims.section2._indexed import _define
 from derivations.symbolic import Words, letters_of, trace_words_of
+from derivations.vocabulary import n
 
 _t = sp.Symbol("t")
+#: the size of the control u (the state has size n)
+m = sp.Symbol("m", integer=True, positive=True)
 
 
 class Alphabet(Words):
@@ -154,3 +160,27 @@ def blocks(e: sp.Basic, env: dict[str, sp.Matrix], alphabet: Alphabet) -> sp.Mat
         parts = [blocks(a, env, alphabet) for a in e.args]
         return sum(parts[1:], parts[0])
     raise TypeError(f"blocks: no rule for {type(e).__name__}")
+
+
+def quadratic_problem() -> tuple[dict[str, Any], dict[str, sp.MatrixSymbol], Alphabet]:
+    """f = A x + B u, g = x^T P x/2 + x^T S u + u^T R u/2 with matrix symbols of sizes n x n,
+    n x m, n x n, n x m, m x m (P, R symmetric, R invertible), no constraint (h = 0, sigma = 0),
+    u* = R^-1 (B^T y - S^T x): the functions f, g, h, H, Hhat, u*, sigma, H* (H and H* from the
+    displayed formulas), the symbols y, x, A, B, P, S, R and the alphabet.
+
+    This is the second-order Taylor polynomial of any problem at a point (H is linear in y; linear
+    terms of g change no second derivative): what first derivatives of the step and second
+    derivatives of H* at a point involve."""
+    sym = {c: sp.MatrixSymbol(c, r, k) for c, r, k in
+           (("y", n, 1), ("x", n, 1), ("A", n, n), ("B", n, m), ("P", n, n), ("S", n, m),
+            ("R", m, m))}  # fmt: skip
+    A, B, P, S, R = (sym[c] for c in "ABPSR")
+    fn = _with_hamiltonians({
+        "f": lambda x, u: A * x + B * u,
+        "g": lambda x, u: x.T * P * x / 2 + x.T * S * u + u.T * R * u / 2,
+        "h": lambda u: sp.ZeroMatrix(1, 1),
+    })  # fmt: skip
+    fn["u^*"] = lambda y, x: R.I * (B.T * y - S.T * x)
+    fn[r"\sigma"] = lambda y, x: sp.ZeroMatrix(1, 1)
+    fn["H^*"] = _define(REDUCED, fn)
+    return fn, sym, Alphabet(symmetric=["P", "R"], invertible=["R"])

@@ -42,11 +42,10 @@ from derivations.claims.section2._hamiltonians import (
     _xs,
     _y,
 )
-from derivations.claims.section2._general_n import Alphabet
+from derivations.claims.section2._general_n import Alphabet, quadratic_problem
 from derivations.claims.section2._indexed import _define, _grad, _nonzero, _value
 from derivations.registry import Level, claim
 from derivations.symbolic import eq
-from derivations.vocabulary import n
 
 D2 = claim(
     "D2",
@@ -143,30 +142,15 @@ def d2_reduced_matrix() -> sp.Expr:
     return _d2_defect(STEP_JACOBIAN.rhs)
 
 
-_m = sp.Symbol("m", integer=True, positive=True)
-
-
 def _d2_general_n() -> tuple[sp.MatrixExpr, dict[str, sp.MatrixExpr], Alphabet, sp.Expr]:
-    """The quadratic problem f = A x + B u, g = x^T P x/2 + x^T S u + u^T R u/2 in matrix symbols
-    (x, y in R^n, u in R^m), u* = R^-1 (B^T y - S^T x): the Jacobian in y of the displayed step,
-    the displayed matrices (the printed one at u = u*), the alphabet and the number of words of
-    dH/du at u* (zero: u* is the stationary point)."""
-    Y, X = sp.MatrixSymbol("y", n, 1), sp.MatrixSymbol("x", n, 1)
-    A, B, P, S, R = (sp.MatrixSymbol(c, r, k) for c, r, k in
-                     (("A", n, n), ("B", n, _m), ("P", n, n), ("S", n, _m), ("R", _m, _m)))  # fmt: skip
-    fn = _with_hamiltonians({
-        "f": lambda x, u: A * x + B * u,
-        "g": lambda x, u: x.T * P * x / 2 + x.T * S * u + u.T * R * u / 2,
-        "h": lambda u: sp.ZeroMatrix(1, 1),
-    })  # fmt: skip
-    fn["u^*"] = lambda y, x: R.I * (B.T * y - S.T * x)
-    fn[r"\sigma"] = lambda y, x: sp.ZeroMatrix(1, 1)
-    fn["H^*"] = _define(REDUCED, fn)
-    w = Alphabet(symmetric=["P", "R"], invertible=["R"])
-    at = {"y": Y, "x": X}
-    frozen = {**at, "u": fn["u^*"](Y, X)}
+    """On :func:`._general_n.quadratic_problem`: the Jacobian in y of the displayed step, the
+    displayed matrices (the printed one at u = u*), the alphabet and the number of words of dH/du
+    at u* (zero: u* is the stationary point)."""
+    fn, sym, w = quadratic_problem()
+    at = {"y": sym["y"], "x": sym["x"]}
+    frozen = {**at, "u": fn["u^*"](sym["y"], sym["x"])}
     stationary = w.is_zero(w.nc(_value(sp.Derivative(_H(_y, _xs, _us), _us), frozen, fn)))
-    jac = _grad(_value(STEP.rhs, at, fn), Y)
+    jac = _grad(_value(STEP.rhs, at, fn), sym["y"])
     shown = {
         "corrected": _value(STEP_JACOBIAN.rhs, at, fn),
         "printed": _value(PRINTED_MATRIX, frozen, fn),
