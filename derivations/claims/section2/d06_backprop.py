@@ -24,6 +24,7 @@ import numpy as np
 import sympy as sp
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
+from derivations.claims.section2._general_n import Alphabet, directional, pairing_defect
 from derivations.claims.section2._hamiltonians import (
     H_DEF,
     _g,
@@ -52,6 +53,10 @@ from derivations.claims.section2._indexed import (
 )
 from derivations.claims.section2._layers import (
     _SIGMA,
+    _bv,
+    _Km,
+    _pv,
+    _xv,
     ACTIVATIONS,
     _hstep,
     _layer_env,
@@ -412,3 +417,35 @@ def d6_float64() -> float:
         for got, want in ((states, ref_states), (gK, cK), (gb, cb), (-p, cx)):
             errors.append(np.max(np.abs(got - want)) / np.max(np.abs(want)))
     return float(np.max(errors))
+
+
+# ---------------------------------------------------------------------------------------------
+# every n: the layers in matrix symbols of symbolic size
+
+
+def _layer_at(shown: sp.Basic, K: Any, x: Any, beta: Any, p: Any = None) -> Any:
+    """A displayed layer or adjoint formula with its K, x, beta (and p) replaced."""
+    sub = {_Km: K, _xv: x, _bv: beta}
+    return shown.xreplace({**sub, _pv: p} if p is not None else sub)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N)
+def d6_adjoint_formulas_general_n() -> sp.Expr:
+    """Every n: the displayed adjoint formulas of both layers (generic sigma, step h) are the
+    gradients of the displayed H with f the displayed layer and g = 0: the derivative of H along
+    dx, dK and dbeta (SymPy's differentiation in t of H(x + t dx, ...), sigma' entrywise) equals
+    <dH/dx, dx>, tr((dH/dK)^T dK) and <dH/dbeta, dbeta> from the displayed formulas (trace words
+    left; sigma'(z) o v is diag(sigma'(z)) v, a symmetric letter)."""
+    w = Alphabet(symmetric=[])
+    d = {"x": vector("dx"), "K": matrix("dK"), "beta": vector("dbeta")}
+    fn = {"f": lambda x, u: _layer_at(u[2], u[0], x, u[1]), "g": lambda x, u: sp.ZeroMatrix(1, 1)}
+    total = sp.Integer(0)
+    for shown, adjoint in ((RESIDUAL_LAYER, ADJOINT), (PLAIN_LAYER, ADJOINT_PLAIN)):
+        H = _define(H_DEF, fn)(_pv, _xv, (_Km, _bv, shown.rhs))
+        grads = {str(f.lhs.name): f.rhs for f in adjoint}
+        for var, name in ((_xv, r"\partial H/\partial x"), (_Km, r"\partial H/\partial K"),
+                          (_bv, r"\partial H/\partial \beta")):  # fmt: skip
+            dv = d[str(var.name)]
+            along = w.nc(directional(H, {var: dv}))
+            total += pairing_defect(along, w.T(w.nc(grads[name])) * w(str(dv.name)), w(str(dv.name)), w)
+    return total
