@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from typing import Any
+
 import sympy as sp
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
@@ -132,7 +133,9 @@ def _oriented(expr: sp.Expr, direction: sp.Symbol, alphabet: Alphabet) -> sp.Exp
 def pairing_defect(a: sp.Expr, b: sp.Expr, direction: sp.Symbol, alphabet: Alphabet) -> int:
     """Number of cyclic trace words of ``a - b`` (scalars linear in ``direction``) left after each
     word holding the transposed direction is transposed: 0 when a = b for every dimension."""
-    return len(trace_words_of(_oriented(a, direction, alphabet) - _oriented(b, direction, alphabet)))
+    return len(
+        trace_words_of(_oriented(a, direction, alphabet) - _oriented(b, direction, alphabet))
+    )
 
 
 def frobenius(X: sp.Expr, dX: sp.Symbol, alphabet: Alphabet) -> sp.Expr:

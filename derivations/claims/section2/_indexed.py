@@ -140,8 +140,10 @@ def _grad(value: Any, var: Any) -> Any:
     gradient of a 1 x 1 expression, the Jacobian (rows: the components) of a vector one."""
     if isinstance(var, sp.MatrixSymbol):
         if not value.has(var):
-            return sp.ZeroMatrix(var.rows, 1) if value.shape == (1, 1) else sp.ZeroMatrix(
-                value.rows, var.rows
+            return (
+                sp.ZeroMatrix(var.rows, 1)
+                if value.shape == (1, 1)
+                else sp.ZeroMatrix(value.rows, var.rows)
             )
         d = sp.diff(value, var)
         return d if value.shape == (1, 1) else d.T  # sp.diff gives the transposed Jacobian

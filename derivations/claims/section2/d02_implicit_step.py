@@ -31,6 +31,7 @@ from typing import Any
 
 import sympy as sp
 
+from derivations.claims.section2._general_n import Alphabet, quadratic_problem
 from derivations.claims.section2._hamiltonians import (
     _H,
     H_DEF,
@@ -42,7 +43,6 @@ from derivations.claims.section2._hamiltonians import (
     _xs,
     _y,
 )
-from derivations.claims.section2._general_n import Alphabet, quadratic_problem
 from derivations.claims.section2._indexed import _define, _grad, _nonzero, _value
 from derivations.registry import Level, claim
 from derivations.symbolic import eq

@@ -22,7 +22,7 @@ import sympy as sp
 from derivations.claims.section2._general_n import Alphabet, blocks
 from derivations.claims.section2._indexed import _nonzero, _vec
 from derivations.claims.section2._nonlinear_family import NonlinearFamily
-from derivations.claims.section2.d03_linearised_equations import LINEARISED, _R
+from derivations.claims.section2.d03_linearised_equations import _R, LINEARISED
 from derivations.registry import Level, claim
 from derivations.symbolic import eq, explicit, lhs_minus_rhs
 from derivations.vocabulary import n
@@ -92,7 +92,9 @@ def d4_general_n() -> sp.Expr:
     w = Alphabet(symmetric=[str(Hxx.name), str(Hyy.name)], invertible=[str(Hxy.name)])
     Hi = sp.Inverse(Hxy)
     J = sp.Matrix([[Hxy.T - Hyy * Hi * Hxx, Hyy * Hi], [-Hi * Hxx, Hi]])
-    dxk, dpk, dx1, dp1 = (sp.MatrixSymbol(s, n, 1) for s in ("dx_k", "dp_k", "dx_{k+1}", "dp_{k+1}"))
+    dxk, dpk, dx1, dp1 = (
+        sp.MatrixSymbol(s, n, 1) for s in ("dx_k", "dp_k", "dx_{k+1}", "dp_{k+1}")
+    )
     solved = {dx1: J[0, 0] * dxk + J[0, 1] * dpk, dp1: J[1, 0] * dxk + J[1, 1] * dpk}
     total = sum((w.is_zero(w.nc(lhs_minus_rhs(f).xreplace(solved))) for f in LINEARISED),
                 sp.Integer(0))  # fmt: skip

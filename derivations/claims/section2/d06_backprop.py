@@ -53,15 +53,15 @@ from derivations.claims.section2._indexed import (
 )
 from derivations.claims.section2._layers import (
     _SIGMA,
-    _bv,
-    _Km,
-    _pv,
-    _xv,
     ACTIVATIONS,
+    _bv,
     _hstep,
+    _Km,
     _layer_env,
     _layer_function,
+    _pv,
     _unflatten,
+    _xv,
     layer,
 )
 from derivations.claims.section2._resnet_reference import (
@@ -447,5 +447,70 @@ def d6_adjoint_formulas_general_n() -> sp.Expr:
                           (_bv, r"\partial H/\partial \beta")):  # fmt: skip
             dv = d[str(var.name)]
             along = w.nc(directional(H, {var: dv}))
-            total += pairing_defect(along, w.T(w.nc(grads[name])) * w(str(dv.name)), w(str(dv.name)), w)
+            total += pairing_defect(
+                along, w.T(w.nc(grads[name])) * w(str(dv.name)), w(str(dv.name)), w
+            )
     return total
+
+
+def _network_defect(shown: sp.Eq, adjoint: tuple[sp.Eq, ...], widths: Sequence[Any]) -> sp.Expr:
+    """Two displayed layers x_1 = f(x_0, u_0), x_2 = f(x_1, u_1) in matrix symbols (widths
+    n_0, n_1, n_2), phi(x) = G^T x (so G is the loss gradient at x_2; a gradient involves nothing
+    more of phi), costates from the displayed endpoint condition and the displayed adjoint
+    p_k = dH/dx: trace words left in the displayed backprop relation paired with dx (k = 0, 1) and
+    in the weights relation (one sample) paired with dK_k, dbeta_k, for s = 1 and s = -1."""
+    w = Alphabet(symmetric=[])
+    X = [sp.MatrixSymbol(f"x_{k}", widths[k], 1) for k in range(3)]
+    Ks = [sp.MatrixSymbol(f"K_{k}", widths[k + 1], widths[k]) for k in range(2)]
+    bs = [sp.MatrixSymbol(f"beta_{k}", widths[k + 1], 1) for k in range(2)]
+    G = sp.MatrixSymbol("G", widths[2], 1)
+    grads = {str(f.lhs.name): f.rhs for f in adjoint}
+    x1 = _layer_at(shown.rhs, Ks[0], X[0], bs[0])
+    states = [X[0], x1, _layer_at(shown.rhs, Ks[1], x1, bs[1])]
+    fn = {r"\phi": lambda x: G.T * x}
+    _lhs, end = _instance(ENDPOINT_S, {_a: 1, _N: 2})
+    p = {2: _value(end, {("x", 1, 2): X[2], "s": _s}, fn)}
+    for k in (1, 0):
+        p[k] = _layer_at(grads[r"\partial H/\partial x"], Ks[k], states[k], bs[k], p[k + 1])
+    total = sp.Integer(0)
+    for k in (0, 1):  # dC along dx_k, the later states recomputed from a free x_k
+        tail = X[k]
+        for j in range(k, 2):
+            tail = _layer_at(shown.rhs, Ks[j], tail, bs[j])
+        dx = sp.MatrixSymbol(f"dx_{k}", widths[k], 1)
+        dC = (G.T * directional(tail, {X[k]: dx})).xreplace({X[1]: x1})
+        vals = {
+            ("p", 1, k): w.T(w.nc(p[k])) * w(str(dx.name)),
+            (str(_dCdx.label), 1, k): w.nc(dC),
+            "s": _s,
+        }
+        lhs, rhs = _instance(BACKPROP, {_a: 1, _k: k})
+        total += pairing_defect(_value(lhs, vals, {}), _value(rhs, vals, {}), w(str(dx.name)), w)
+        for var, name in ((Ks[k], r"\partial H/\partial K"), (bs[k], r"\partial H/\partial \beta")):
+            dv = w(f"d{var.name}")
+            along = w.nc(G.T * directional(states[2], {var: sp.MatrixSymbol(str(dv), *var.shape)}))
+            dH = _layer_at(grads[name], Ks[k], states[k], bs[k], p[k + 1])
+            vals = {"dHdu": w.T(w.nc(dH)) * dv, "M": 1, "s": _s}
+            weights = WEIGHTS.rhs.xreplace({sp.Derivative(_H_ak, _u[_k]): _dHdu})
+            for sign in (1, -1):  # s^2 = 1: the weights relation needs s = +-1
+                total += pairing_defect(along, _value(weights, vals, {}).subs(_s, sign), dv, w)
+    return total
+
+
+_dHdu = sp.Symbol("dHdu")
+_n0, _n1, _n2 = sp.symbols("n_0 n_1 n_2", integer=True, positive=True)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N)
+def d6_backprop_general_n() -> sp.Expr:
+    """Every width: two displayed plain layers R^{n_0} -> R^{n_1} -> R^{n_2} (K_k of size
+    n_{k+1} x n_k) and two residual layers (width n), generic sigma, one sample, the loss
+    gradient at x_2 a vector symbol G: with the displayed endpoint condition p_2 = s G and the
+    displayed adjoint, p_k paired with dx_k equals s times the derivative of the loss along dx_k
+    (SymPy's differentiation of the composed layers), the displayed backprop relation; and the
+    derivatives along dK_k, dbeta_k equal s times the pairing with the displayed dH/dK, dH/dbeta,
+    the displayed weights relation (s = 1 and s = -1).  Any number of layers follows by induction:
+    each step is the chain rule through one layer (trace words left)."""
+    return _network_defect(PLAIN_LAYER, ADJOINT_PLAIN, (_n0, _n1, _n2)) + _network_defect(
+        RESIDUAL_LAYER, ADJOINT, (n, n, n)
+    )
