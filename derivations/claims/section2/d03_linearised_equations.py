@@ -15,6 +15,7 @@ for why this covers every smooth problem).
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -191,12 +192,13 @@ def d3_printed_same_matrix() -> sp.Expr:
     return _d3_symbolic_defect(LINEARISED_PRINTED, _P, "reduced")
 
 
-def _d3_general_n(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: str) -> sp.Expr:
-    """On the quadratic problem in matrix symbols: lhs - rhs of the displayed linearisation with
-    dp_k and dx_{k+1} the true differentials (the Jacobians of the displayed step and of
-    x_{k+1} = f(x, u*(y, x)) by SymPy's matrix calculus, applied to dx_k and dp_{k+1}) and the
-    blocks of the displayed H* or of H at frozen u* (the displayed Derivative objects in x and
-    y), fewest words left over the index orders the mixed symbol admits."""
+@functools.cache
+def _d3_general_data(kind: str) -> tuple[Any, dict[Any, Any], dict[str, Any]]:
+    """On the quadratic problem in matrix symbols: the alphabet; the true differentials dp_k and
+    dx_{k+1} (the Jacobians of the displayed step and of x_{k+1} = f(x, u*(y, x)) by SymPy's
+    matrix calculus, applied to dx_k and dp_{k+1}); and the blocks xx, xy, yy of the displayed
+    H* (kind "reduced") or of H at frozen u* (kind "frozen"), the displayed Derivative objects in
+    x and y (computed once: SymPy's matrix calculus takes about a second)."""
     fn, sym, w = quadratic_problem()
     Y, X = sym["y"], sym["x"]
     at = {"y": Y, "x": X}
@@ -207,7 +209,13 @@ def _d3_general_n(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: st
     fun = _Hstar(_y, _xs) if kind == "reduced" else _H(_y, _xs, _us)
     vals = at if kind == "reduced" else {**at, "u": us}
     pairs = {"xx": (_xs, _xs), "xy": (_xs, _y), "yy": (_y, _y)}
-    blocks = {k: _value(sp.Derivative(fun, *v), vals, fn) for k, v in pairs.items()}
+    return w, true, {k: _value(sp.Derivative(fun, *v), vals, fn) for k, v in pairs.items()}
+
+
+def _d3_general_n(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: str) -> sp.Expr:
+    """lhs - rhs of the displayed linearisation with the true differentials and the blocks of
+    :func:`_d3_general_data`, fewest words left over the index orders the mixed symbol admits."""
+    w, true, blocks = _d3_general_data(kind)
     options = (False,) if names is _R else (False, True)
     counts = []
     for t in options:
