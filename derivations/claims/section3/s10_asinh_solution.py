@@ -24,7 +24,7 @@ from derivations.claims.section3._display import MatFn, OpNorm
 from derivations.claims.section3._symmetric import M, P, Q
 from derivations.claims.section3.s06_symmetric_to_rigid_body import SYMMETRIC_MOMENTUM
 from derivations.registry import Level, claim
-from derivations.symbolic import eq
+from derivations.symbolic import Words, eq, lhs_minus_rhs
 from derivations.vocabulary import n
 
 S10 = claim(
@@ -155,6 +155,46 @@ def s10_corrected_scalar() -> sp.Integer:
     x/2 + (1 + x^2/4)^(1/2) (identities of analytic functions, simplified for real x after
     rewriting asinh as a log, so they hold on the imaginary eigenvalues of M too)."""
     return _s10_scalar("corrected")
+
+
+def _s10_general_n(form: str) -> sp.Integer:
+    """Every n, in two steps.  (1) Noncommutative: the displayed M formula with P the displayed
+    Q F (F the displayed function of M, a letter) reduces, Q orthogonal, to F - F^T.  (2) F is a
+    real power series in the single matrix M, so F^T = F(M^T) = F(-M) (M skew), and power series
+    of one matrix form a commutative algebra on which M -> z is a homomorphism: F - F^T - M
+    vanishes for every n (with ||M||_op < 2) exactly when F(z) - F(-z) - z does as a function.
+    Returns the words left after step (1) other than F, F^T, M, plus 1 if step (2) fails."""
+    w = Words(skew=["M"], orthogonal=["Q"])
+    F = sp.MatrixSymbol("F", n, n)
+    inner = _after_Q(S10.formulas[form].rhs)
+    solved = eq(S10_M.lhs, S10_M.rhs.xreplace({P: Q * F}))
+    gap = w.reduce(w.of(lhs_minus_rhs(solved)))
+    f, fT, m = w("F"), w.T(w("F")), w("M")
+    left = sp.expand(
+        gap - sp.Add(*[t for t in sp.Add.make_args(gap) if t.free_symbols <= {f, fT, m}])
+    )
+    z = sp.Symbol("z", real=True)
+    Fz = _scalar(inner, z)
+    scalar = gap.xreplace({f: Fz, fT: Fz.xreplace({z: -z}), m: z})
+    total = sp.Integer(len(sp.Add.make_args(left)) if left != 0 else 0)
+    return total + (0 if sp.simplify(sp.expand(scalar).rewrite(sp.log)) == 0 else 1)
+
+
+@S10.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def s10_corrected_general_n() -> sp.Integer:
+    """Every n: Q^T P - P^T Q - M (the displayed M formula, noncommutative Q orthogonal, M skew)
+    with P = Q F, F the displayed corrected exp(asinh(M/2)), reduces to F - F^T - M; F^T = F(-M)
+    for a real power series of skew M, and functions of one matrix commute, so it vanishes for
+    every n when exp(asinh(z/2)) - exp(asinh(-z/2)) = z, which SymPy confirms."""
+    return _s10_general_n("corrected")
+
+
+@S10.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def s10_printed_general_n() -> sp.Integer:
+    """The same reduction for the printed reading F = exp(asinh(M)/2): F(z) - F(-z) - z does not
+    vanish, so the printed formula fails for every n (a nonzero function of M is nonzero on some
+    skew M of norm below 2, already for n = 2)."""
+    return _s10_general_n("printed")
 
 
 def _s10_equation(form: str) -> float:
