@@ -102,6 +102,9 @@ class Alphabet(Words):
             return sp.Add(*[self._nc(a) for a in e.args])
         if isinstance(e, sp.MatPow) and e.exp.is_Integer and e.exp >= 0:
             return self._nc(e.base) ** int(e.exp)
+        if isinstance(e, (sp.HadamardProduct, ElementwiseApplyFunction)) and e.shape[0] == 1:
+            # a row: the transpose of the column form (sigma(z^T) = sigma(z)^T, D diagonal)
+            return self.T(self._nc(e.func(*[_transposed(a) for a in e.args])))
         if isinstance(e, sp.HadamardProduct) and len(e.args) == 2:
             fun = [a for a in e.args if isinstance(a, ElementwiseApplyFunction)]
             if fun:
@@ -112,6 +115,11 @@ class Alphabet(Words):
             head = str(e.function.expr.func)
             return self._function_letter(head, self._nc(e.expr), False)
         raise TypeError(f"no noncommutative form for {type(e).__name__} ({e})")
+
+
+def _transposed(a: sp.Basic) -> sp.Basic:
+    """A matrix argument transposed; the function of an entrywise application is kept."""
+    return a.T if isinstance(a, sp.MatrixExpr) else a
 
 
 def directional(expr: sp.Basic, moves: dict[sp.MatrixSymbol, sp.MatrixExpr]) -> sp.Basic:
@@ -187,3 +195,22 @@ def quadratic_problem() -> tuple[dict[str, Any], dict[str, sp.MatrixSymbol], Alp
     fn[r"\sigma"] = lambda y, x: sp.ZeroMatrix(1, 1)
     fn["H^*"] = _define(REDUCED, fn)
     return fn, sym, Alphabet(symmetric=["P", "R"], invertible=["R"])
+
+
+def gradient(scalar: sp.Expr, direction: sp.Symbol, alphabet: Alphabet) -> sp.Expr:
+    """The vector g with scalar = g^T direction, for a scalar polynomial linear in
+    ``direction``: each word is oriented to end with the direction (a scalar is its own
+    transpose) and the rest of it, transposed, is a term of g."""
+    total = sp.Integer(0)
+    for term in sp.Add.make_args(_oriented(scalar, direction, alphabet)):
+        c, word = letters_of(term)
+        if not word or word[-1] != direction or direction in word[:-1]:
+            raise ValueError(f"{term} is not linear in {direction} at the right end")
+        total += c * alphabet.T(sp.Mul(*word[:-1]))
+    return sp.expand(total)
+
+
+def substitute(poly: sp.Expr, letter: sp.Symbol, value: sp.Expr, alphabet: Alphabet) -> sp.Expr:
+    """The polynomial with a letter and its transpose letter replaced by a polynomial and its
+    transpose."""
+    return alphabet.reduce(poly.xreplace({letter: value, alphabet.T(letter): alphabet.T(value)}))

@@ -24,7 +24,13 @@ import numpy as np
 import sympy as sp
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
-from derivations.claims.section2._general_n import Alphabet, directional, pairing_defect
+from derivations.claims.section2._general_n import (
+    Alphabet,
+    directional,
+    gradient,
+    pairing_defect,
+    substitute,
+)
 from derivations.claims.section2._hamiltonians import (
     H_DEF,
     _g,
@@ -514,3 +520,79 @@ def d6_backprop_general_n() -> sp.Expr:
     return _network_defect(PLAIN_LAYER, ADJOINT_PLAIN, (_n0, _n1, _n2)) + _network_defect(
         RESIDUAL_LAYER, ADJOINT, (n, n, n)
     )
+
+
+def _identity_general_n(shown: sp.Eq) -> sp.Expr:
+    """Words left in (J - displayed right side of the identity property) dx, J dx the derivative
+    of the displayed layer along dx at K = 0 (every n, generic sigma, symbolic beta and h)."""
+    w = Alphabet()
+    dx = vector("dx")
+    J_dx = directional(shown.rhs, {_xv: dx}).xreplace({_Km: sp.ZeroMatrix(n, n)})
+    return w.is_zero(w.nc(J_dx) - w.nc(IDENTITY.rhs * dx))
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def d6_printed_plain_is_not_residual_general_n() -> sp.Expr:
+    """Every n: the derivative of Remark 1's layer sigma(K x + beta) along dx at K = 0 is 0, not
+    the displayed I dx (words left)."""
+    return _identity_general_n(PLAIN_LAYER)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d6_residual_layer_is_residual_general_n() -> sp.Expr:
+    """Every n: the derivative of x + h sigma(K x + beta) along dx at K = 0 is the displayed
+    I dx, for every beta and h (words left)."""
+    return _identity_general_n(RESIDUAL_LAYER)
+
+
+def _running_cost_general_n(endpoint: sp.Eq, s: int) -> sp.Expr:
+    """Two displayed residual layers of width n (generic sigma, h), one sample, running cost
+    g(x, u) = x^T R x/2 (R a symmetric matrix symbol), phi(x) = G^T x: costates from the given
+    endpoint condition and the displayed costate equation p_k = dH/dx(p_{k+1}, x_k, u_k) (the
+    gradient of the displayed H along dx, p_{k+1} held as a letter and then substituted), against
+    s times the derivative of the displayed cost C along dx_k, the later states recomputed
+    (trace words left, k = 0, 1, 2)."""
+    w = Alphabet(symmetric=["R"])
+    X0, G, R, P = vector("x_0"), vector("G"), matrix("R"), vector("P")
+    us = [(matrix(f"K_{k}"), vector(f"beta_{k}")) for k in range(2)]
+    fn = _with_hamiltonians({
+        "f": lambda x, u: _layer_at(RESIDUAL_LAYER.rhs, u[0], x, u[1]),
+        "g": lambda x, u: x.T * R * x / 2,
+        "h": lambda u: sp.ZeroMatrix(1, 1),
+        r"\phi": lambda x: G.T * x,
+    })  # fmt: skip
+    states = [X0]
+    for k in range(2):
+        states.append(fn["f"](states[k], us[k]))
+    values = {"N": 2, "M": 1, **{("u", k): us[k] for k in range(2)}}
+    t, dx = sp.Symbol("t"), vector("dx")
+    lhs, rhs = _instance(endpoint, {_a: 1, _N: 2})
+    p = {2: w.nc(_value(rhs, {**values, ("x", 1, 2): states[2]}, fn))}
+    for k in (1, 0):
+        H = fn["H"](P, states[k] + t * dx, us[k])
+        along = w.nc(sp.diff(H, t).xreplace({t: 0}))
+        p[k] = substitute(gradient(along, w("dx"), w), w("P"), p[k + 1], w)
+    total = sp.Integer(0)
+    for k in range(3):
+        moved = {**values, **{("x", 1, j): states[j] for j in range(k)}}
+        moved[("x", 1, k)] = states[k] + t * dx
+        for j in range(k, 2):
+            moved[("x", 1, j + 1)] = fn["f"](moved[("x", 1, j)], us[j])
+        dC = w.nc(sp.diff(_value(COST5.rhs, moved, fn), t).xreplace({t: 0}))
+        total += pairing_defect(w.T(p[k]) * w("dx"), s * dC, w("dx"), w)
+    return total
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def d6_printed_m8_running_cost_general_n() -> sp.Expr:
+    """Every n, with a running cost g = x^T R x/2 (R a symmetric matrix symbol), two displayed
+    residual layers, phi = G^T x: with m8's endpoint condition the costates are not the gradients
+    of the displayed cost (s = 1), for every n (trace words left)."""
+    return _running_cost_general_n(M8, 1)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d6_corrected_running_cost_general_n() -> sp.Expr:
+    """The same with D5's endpoint condition: the costates are minus the gradients of the
+    displayed cost (s = -1) at every layer, for every n."""
+    return _running_cost_general_n(ENDPOINT, -1)
