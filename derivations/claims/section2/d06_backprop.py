@@ -11,7 +11,10 @@ Emitted (``symrb/_generated/discrete_control.py``): the steps and adjoint steps 
 plain layers for tanh and the logistic function, built by :func:`._layers.layer`.  Evidence: the
 kernels against the displayed layer and the gradients of the displayed :math:`H`; exact networks
 with generic :math:`\sigma`; and symrb's ResNet against the independent NumPy network and
-complex-step derivatives of :mod:`._resnet_reference`.
+complex-step derivatives of :mod:`._resnet_reference`.  For every width (every n): the
+displayed layers, adjoint formulas, endpoint, costate, backprop and weights relations in matrix
+symbols of symbolic size, differentiated along directions by SymPy (:mod:`._general_n`), with
+the entrywise activation's derivative as a diagonal letter.
 """
 
 from __future__ import annotations
