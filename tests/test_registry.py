@@ -209,10 +209,9 @@ def test_sentences_name_the_claims_own_evidence() -> None:
 #: here must have no sentences, so the set only shrinks: empty it when the S maps are merged.
 UNMAPPED: set[str] = set()
 
-#: The math sentences without evidence, over every claim.  Recorded, not a goal: three of S10 on
-#: sinh have no check yet.  Lower it as evidence arrives (the goal is 0); a new uncovered
-#: sentence fails this test.
-UNCOVERED = 3
+#: The math sentences without evidence, over every claim: none.  A new uncovered sentence (a
+#: math sentence mapped to no evidence) fails this test.
+UNCOVERED = 0
 
 
 def _paper_claims() -> list[Claim]:

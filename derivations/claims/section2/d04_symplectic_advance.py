@@ -3,10 +3,13 @@ r"""D4: the advance map of the extremal equations is symplectic (paper, Section 
 Where: Section 2, the remark after the corollary: :math:`\Phi^*(dx_{k+1}\wedge dp_{k+1}) =
 dx_k\wedge dp_k` for the advance map :math:`\Phi`.
 
-Recorded outcome: holds.  Evidence: :math:`D\Phi` from D3's corrected equations for generic
-symbolic blocks (:math:`n = 2`) and exact rational blocks (:math:`n = 3`), and on the nonlinear
-float64 family of :mod:`._nonlinear_family` by implicit differentiation and by central
-differences; independent of symrb.
+Recorded outcome: holds.  Evidence: for every :math:`n`, :math:`D\Phi` in :math:`n\times n`
+blocks that are noncommutative symbols (:math:`H^*_{xx}`, :math:`H^*_{yy}` symmetric,
+:math:`H^*_{xy}` invertible), checked to solve D3's corrected equations and to satisfy the
+displayed identity; :math:`D\Phi` from D3's corrected equations for generic symbolic entries
+(:math:`n = 2`) and exact rational blocks (:math:`n = 3`); and on the nonlinear float64 family of
+:mod:`._nonlinear_family` by implicit differentiation and by central differences; independent of
+symrb.
 """
 
 from __future__ import annotations
@@ -16,9 +19,10 @@ from collections.abc import Sequence
 import numpy as np
 import sympy as sp
 
+from derivations.claims.section2._general_n import Alphabet, blocks
 from derivations.claims.section2._indexed import _nonzero, _vec
 from derivations.claims.section2._nonlinear_family import NonlinearFamily
-from derivations.claims.section2.d03_linearised_equations import LINEARISED
+from derivations.claims.section2.d03_linearised_equations import _R, LINEARISED
 from derivations.registry import Level, claim
 from derivations.symbolic import eq, explicit, lhs_minus_rhs
 from derivations.vocabulary import n
@@ -35,8 +39,9 @@ D4 = claim(
     where="Section 2, the remark after the corollary: the advance map $\\Phi$ is symplectic, "
     "$\\Phi^*(dx_{k+1} \\wedge dp_{k+1}) = dx_k \\wedge dp_k$",
     note="Shown for every symmetric $H^*_{xx}$, $H^*_{yy}$ and invertible $H^*_{xy}$ (so for "
-    "every smooth $H^*$ with invertible mixed derivative): symbolic for $n = 2$, exact rational "
-    "random blocks for $n = 3$, and on a nonlinear family solved numerically.",
+    "every smooth $H^*$ with invertible mixed derivative): for every $n$ with the blocks as "
+    "noncommutative symbols, symbolic entries for $n = 2$, exact rational random blocks for "
+    "$n = 3$, and on a nonlinear family solved numerically.",
 )
 _DPhi, _Omega = sp.MatrixSymbol(r"D\Phi", 2 * n, 2 * n), sp.MatrixSymbol(r"\Omega", 2 * n, 2 * n)
 OMEGA = D4.formula(
@@ -74,6 +79,27 @@ def d4_symbolic() -> sp.Expr:
     Hyy = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"t{min(i, j)}{max(i, j)}"))
     Hxy = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"a{i}{j}"))
     return _nonzero(_symplectic_defect(_advance_jacobian(Hxx, Hxy, Hyy)).applyfunc(sp.cancel))
+
+
+@D4.check(Level.SYMBOLIC_GENERAL_N)
+def d4_general_n() -> sp.Expr:
+    """Every n: with H*_xx, H*_yy symmetric and H*_xy invertible as noncommutative symbols, the
+    blocks D Phi = [[H*_xy^T - H*_yy H*_xy^-1 H*_xx, H*_yy H*_xy^-1], [-H*_xy^-1 H*_xx,
+    H*_xy^-1]] solve D3's displayed corrected equations (the unique solution: H*_xy is
+    invertible), and the displayed D Phi^T Omega D Phi - Omega, multiplied out in blocks with the
+    displayed Omega, reduces to zero (number of words left)."""
+    Hxx, Hxy, Hyy = _R["xx"], _R["xy"], _R["yy"]
+    w = Alphabet(symmetric=[str(Hxx.name), str(Hyy.name)], invertible=[str(Hxy.name)])
+    Hi = sp.Inverse(Hxy)
+    J = sp.Matrix([[Hxy.T - Hyy * Hi * Hxx, Hyy * Hi], [-Hi * Hxx, Hi]])
+    dxk, dpk, dx1, dp1 = (
+        sp.MatrixSymbol(s, n, 1) for s in ("dx_k", "dp_k", "dx_{k+1}", "dp_{k+1}")
+    )
+    solved = {dx1: J[0, 0] * dxk + J[0, 1] * dpk, dp1: J[1, 0] * dxk + J[1, 1] * dpk}
+    total = sum((w.is_zero(w.nc(lhs_minus_rhs(f).xreplace(solved))) for f in LINEARISED),
+                sp.Integer(0))  # fmt: skip
+    env = {str(_DPhi.name): J.applyfunc(w.nc), str(_Omega.name): blocks(OMEGA.rhs, {}, w)}
+    return total + sum(w.is_zero(b) for b in blocks(lhs_minus_rhs(SYMPLECTIC), env, w))
 
 
 @D4.check(Level.EXACT_RATIONAL)
@@ -131,11 +157,13 @@ D4.sentence(
     d4_exact_n3,
     d4_float64,
     d4_float64_fd,
+    d4_general_n,
 )
 D4.sentence(
     r"This is easily demonstrated by using Corollary (C:8.3).",
     d4_symbolic,
     d4_exact_n3,
+    d4_general_n,
 )
 D4.sentence(
     r"One can also derive symplecticity directly from Hamilton's phase space principle; see "
