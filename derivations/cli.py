@@ -54,6 +54,7 @@ from derivations.text import (
     evidence_lines,
     progress_line,
     seconds_text,
+    sentence_lines,
     statement_lines,
     terminal_width,
     verify_table,
@@ -152,6 +153,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
         result = verify_claim(claim)
         source = f"run now in {seconds_text(time.perf_counter() - start)}: {why}"
     out += evidence_lines(result, source, width)
+    out += sentence_lines(claim, width)
     out += ["", f"Rerun its evidence with: {args.prog} verify {claim.id}"]
     print("\n".join(out))
     return 0 if result.ok else 1

@@ -13,7 +13,10 @@ implementation instead of agreeing with it:
   (``scipy.special.ellipj``; Landau and Lifshitz, Mechanics, section 37);
 * the discrete symmetric representation and both Moser-Veselov algorithms in 50-digit arithmetic
   (``mpmath``), :math:`J_D(U) = M` solved by Newton's method on the Cayley parameters of
-  :math:`U` (``mpmath.findroot``) started from the identity's branch.
+  :math:`U` (``mpmath.findroot``) started from the identity's branch;
+* the Toda lattice by Symes' QR formula in ``mpmath`` (no differential equation is solved), and
+  the extremal equations of the adjoint-orbit problem on :math:`\mathfrak{so}(3)` written with
+  cross products and solved by ``mpmath.odefun``.
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ __all__ = [
     "Series",
     "series_eval",
     "rigid_body_taylor",
+    "toda_symes",
+    "orbit_extremal_so3_mp",
 ]
 
 
@@ -454,5 +459,69 @@ def rigid_body_mp(
         with mpmath.workdps(dps):
             y = np.array([float(x) for x in solution(t)])
         return y[:9].reshape(3, 3), y[9:]
+
+    return at
+
+
+def toda_symes(L0: Array, t: Array, dps: int = 60) -> Array:
+    r"""The Toda lattice :math:`\dot L = [B, L]`, :math:`B = L_+ - L_-` (strictly upper minus
+    strictly lower part of L), from the real symmetric :math:`L_0`, by Symes' QR formula:
+    :math:`\exp(tL_0) = Q(t)R(t)` with Q orthogonal and R upper triangular with a positive
+    diagonal, :math:`L(t) = Q(t)^T L_0 Q(t)`, in ``dps``-digit arithmetic (mpmath's ``expm`` and
+    Householder ``qr``); any real t, negative too.  Returns L at the times ``t``, shape (m, k, k).
+
+    Why it is Toda: differentiating :math:`L_0 e^{tL_0} = e^{tL_0}L_0` gives :math:`L = Q^T\dot Q +
+    \dot R R^{-1}`, a skew plus an upper triangular matrix, so :math:`Q^T\dot Q = L_- - L_-^T =
+    -B` and :math:`\dot L = [L, Q^T\dot Q] = [B, L]`.  ``dps`` must cover the spread
+    :math:`e^{|t|(\lambda_{max} - \lambda_{min})}` of the columns of the exponential."""
+    import mpmath
+
+    L0 = np.asarray(L0, dtype=float)
+    k = L0.shape[0]
+    out = []
+    with mpmath.workdps(dps):
+        A = mpmath.matrix(L0.tolist())
+        for tt in np.atleast_1d(t):
+            Q, R = mpmath.qr(mpmath.expm(mpmath.mpf(float(tt)) * A))
+            for j in range(k):  # the factorisation with a positive diagonal of R is unique
+                if R[j, j] < 0:
+                    for i in range(k):
+                        Q[i, j] = -Q[i, j]
+            L = Q.T * A * Q
+            out.append([[float(L[i, j]) for j in range(k)] for i in range(k)])
+    return np.array(out)
+
+
+def orbit_extremal_so3_mp(
+    x0: Array, p0: Array, N: Array, dps: int = 25
+) -> Callable[[float], tuple[Array, Array]]:
+    r"""The extremal equations :math:`\dot x = [x, [p, x]]`, :math:`\dot p = [p, [p, x]] -
+    [N, [N, x]]` on :math:`\mathfrak{so}(3)`, written for the vectors :math:`\xi, \pi, \nu`
+    of x, p, N with :math:`[\hat a, \hat b] = \widehat{a\times b}`:
+    :math:`\dot\xi = \xi\times(\pi\times\xi)`, :math:`\dot\pi = \pi\times(\pi\times\xi)
+    - \nu\times(\nu\times\xi)`, solved by mpmath's Taylor-series solver (``odefun``) in
+    ``dps`` digits.  Returns a function of :math:`t \ge 0` giving :math:`(x(t), p(t))` as float
+    3 x 3 skew matrices."""
+    import mpmath
+
+    def cross(a: list[Any], b: list[Any]) -> list[Any]:
+        return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+    with mpmath.workdps(dps):
+        nu = [mpmath.mpf(float(c)) for c in vee(np.asarray(N, dtype=float))]
+
+        def field(_t: Any, y: list[Any]) -> list[Any]:
+            xi, pi = y[:3], y[3:]
+            c = cross(pi, xi)
+            nnx = cross(nu, cross(nu, xi))
+            return cross(xi, c) + [a - b for a, b in zip(cross(pi, c), nnx, strict=True)]
+
+        start = np.concatenate([vee(np.asarray(x0, dtype=float)), vee(np.asarray(p0, dtype=float))])
+        solution = mpmath.odefun(field, 0, [mpmath.mpf(float(c)) for c in start])
+
+    def at(t: float) -> tuple[Array, Array]:
+        with mpmath.workdps(dps):
+            y = np.array([float(c) for c in solution(t)])
+        return hat(y[:3]), hat(y[3:])
 
     return at

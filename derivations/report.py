@@ -1,11 +1,14 @@
 """How the book shows claims: one module, so every page renders them the same way.
 
 ``check("S4")`` displays a claim's statement, the printed and corrected forms of an erratum, the
-note and a table of its evidence, from the one run of every claim's evidence that the build makes
+note, a table of its evidence and, in a collapsed dropdown, the map of the paper's sentences to that
+evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the build makes
 (``symrb verify --output book/_build/verify.json``, reused when it was written for the current
 code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
 which fails the book build.  :func:`claims_table` and :func:`claims_summary` are the claims
-page, one table per claim group (:func:`by_group`: the paper's claims, then symrb's own methods).
+page, one table per claim group (:func:`by_group`: the paper's claims, then symrb's own methods),
+with :func:`sentences_summary` counting the sentences of the paper's statements that evidence
+covers.
 """
 
 from __future__ import annotations
@@ -45,6 +48,10 @@ __all__ = [
     "by_group",
     "claims_table",
     "claims_summary",
+    "sentence_counts",
+    "sentences_summary",
+    "sentences_markdown",
+    "sentences_cell",
     "source_hash",
     "verify_json_path",
 ]
@@ -234,13 +241,13 @@ def _fmt_residual(e: Mapping[str, Any]) -> str:
 def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> str:
     """A Markdown table of evidence results (objects or the dicts of ``verify --json``)."""
     rows = [
-        "| form | level | evidence | residual | tol | time |",
-        "|---|---|---|---|---|---|",
+        "| # | form | level | evidence | residual | tol | time |",
+        "|---|---|---|---|---|---|---|",
     ]
-    for ev in evidence:
+    for k, ev in enumerate(evidence, 1):
         e = ev.to_dict() if isinstance(ev, EvidenceResult) else ev
         rows.append(
-            f"| {e['form']} | {e['level']} | {plain(e['description'])} | {_fmt_residual(e)} "
+            f"| {k} | {e['form']} | {e['level']} | {plain(e['description'])} | {_fmt_residual(e)} "
             f"| {e['tol']:.0e} | {e['seconds']:.3f} s |"
         )
     return "\n".join(rows)
@@ -261,6 +268,8 @@ def claim_markdown(result: ClaimResult) -> str:
         parts.append(f"*Note:* {prose(claim.note)}")
     parts.append(f"Outcome: **{result.outcome}** (recorded: {claim.expected}).")
     parts.append(evidence_table(result.evidence))
+    if claim.sentences:
+        parts.append(sentences_markdown(claim.id))
     return "\n\n".join(parts)
 
 
@@ -412,21 +421,25 @@ def _id_cell(r: Mapping[str, Any]) -> str:
 def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
     """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID,
     title, where in the paper (for a method check: the symrb function it backs), outcome, checks
-    by level, closest call, time."""
+    by level, for the paper's claims the sentences covered (:func:`sentences_cell`), closest
+    call, time."""
     paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
     where = "where in the paper" if paper else "what it backs in symrb"
+    sentences = " sentences covered |" if paper else ""
     rows = [
-        f"| ID | claim | {where} | outcome | checks | closest call (residual ≤ tolerance) | time |",
-        "|---|---|---|---|---|---|---|",
+        f"| ID | claim | {where} | outcome | checks |{sentences} closest call (residual ≤ "
+        "tolerance) | time |",
+        "|---|---|---|---|---|---|---|" + "---|" * paper,
     ]
     for r in results:
         outcome = r["outcome"]
         if outcome != r["expected"]:
             outcome += f" (recorded {r['expected']})"
+        covered = f" {sentences_cell(r['id'])} |" if paper else ""
         rows.append(
             f"| {_id_cell(r)} | {prose(r['title'], cell=True)} | {_where_cell(r['id'])} "
-            f"| {outcome} | {_levels_cell(r['evidence'])} | {_margin_cell(r['evidence'])} "
-            f"| {_seconds_cell(r['seconds'])} |"
+            f"| {outcome} | {_levels_cell(r['evidence'])} |{covered} "
+            f"{_margin_cell(r['evidence'])} | {_seconds_cell(r['seconds'])} |"
         )
     return "\n".join(rows)
 
@@ -443,3 +456,91 @@ def claims_summary(results: Sequence[Mapping[str, Any]]) -> str:
         f"{len(results)} {'claims' if paper else 'method checks'} ({summary}); every computed "
         f"outcome equals the recorded one. {nchecks} checks ran in {total:.1f} s"
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# the sentence map: every sentence of a claim's statement in the paper and the evidence checking it
+
+
+def _sentences(cids: Iterable[str]) -> list[Any]:
+    return [s for cid in cids for s in get_claim(cid).sentences]
+
+
+def sentence_counts(cids: Iterable[str]) -> dict[str, int]:
+    """How many sentences the claims ``cids`` map: ``sentences``, ``math`` (state mathematics),
+    ``covered`` (math with evidence), ``uncovered`` (math without) and ``prose``."""
+    sentences = _sentences(cids)
+    math = [s for s in sentences if s.kind == "math"]
+    covered = sum(bool(s.evidence) for s in math)
+    return {
+        "sentences": len(sentences),
+        "math": len(math),
+        "covered": covered,
+        "uncovered": len(math) - covered,
+        "prose": len(sentences) - len(math),
+    }
+
+
+def sentences_summary(results: Sequence[Mapping[str, Any]]) -> str:
+    """``120 sentences of the paper's statements: 100 state mathematics, 98 of them covered by
+    evidence, 2 uncovered; 20 prose.`` for the claims of ``results``, naming any claim whose
+    sentences are not mapped yet."""
+    ids = [str(r["id"]) for r in results]
+    c = sentence_counts(ids)
+    text = (
+        f"{c['sentences']} sentences of the paper's statements: {c['math']} state mathematics, "
+        f"{c['covered']} of them covered by evidence, {c['uncovered']} uncovered; "
+        f"{c['prose']} prose (motivation, citations, pointers to a proof: nothing to check)."
+    )
+    unmapped = [cid for cid in ids if not get_claim(cid).sentences]
+    if unmapped:
+        text += f" Not yet mapped sentence by sentence: {', '.join(unmapped)}."
+    return text
+
+
+def sentences_cell(cid: str) -> str:
+    """``4/5``: the sentences of claim ``cid`` that state mathematics and have evidence, of all
+    that state mathematics (``(not mapped)`` before its sentences are mapped)."""
+    c = sentence_counts([cid])
+    if not c["sentences"]:
+        return "(not mapped)"
+    return f"{c['covered']}/{c['math']}"
+
+
+def _short(cid: str, name: str) -> str:
+    """An evidence function's name without the claim's prefix (``d8_jd_skew`` is ``jd_skew``)."""
+    return name.removeprefix(cid.lower() + "_")
+
+
+def sentences_markdown(cid: str) -> str:
+    """A collapsed MyST dropdown with the map of claim ``cid``'s sentences in the paper: each
+    sentence (math typeset), whether evidence covers it, and the checks that do (their number in
+    the evidence table and short name); an uncovered sentence is marked and the dropdown turns
+    to the warning colour."""
+    claim = get_claim(cid)
+    number = {ev.name: k for k, ev in enumerate(claim.evidence, 1)}
+    c = sentence_counts([cid])
+    title = f"The paper's sentences: {c['covered']} of {c['math']} covered by evidence"
+    if c["uncovered"]:
+        title += f", {c['uncovered']} UNCOVERED"
+    if c["prose"]:
+        title += f"; {c['prose']} prose"
+    rows = [
+        f":::{{dropdown}} {title}",
+        *([":color: warning"] if c["uncovered"] else []),
+        "",
+        "| # | sentence of the paper | status | checked by (evidence #, name) |",
+        "|---|---|---|---|",
+    ]
+    for k, s in enumerate(claim.sentences, 1):
+        if s.kind == "prose":
+            status, by = "prose", plain(s.reason)
+        elif s.evidence:
+            status = "covered"
+            by = ", ".join(f"{number[n]}\N{NO-BREAK SPACE}`{_short(cid, n)}`" for n in s.evidence)
+        else:
+            status, by = "**⚠ uncovered**", "**no evidence yet**"
+        text = prose(breakable(s.text, limit=30), cell=True)
+        rows.append(f"| {k} | {text} | {status} | {by} |")
+    rows.append(":::")
+    return "\n".join(rows)

@@ -51,6 +51,7 @@ __all__ = [
     "claims_lines",
     "statement_lines",
     "evidence_lines",
+    "sentence_lines",
     "seconds_text",
     "verdict",
     "verify_table",
@@ -70,7 +71,9 @@ _SPACED = {
     "mapsto": "↦", "times": "×", "subset": "⊂", "quad": "  ", "qquad": "   ",
 }  # fmt: skip
 #: Macros pylatexenc does not know, with their arguments.
-_ARGUMENTS = {"operatorname": "{", "substack": "{", "tfrac": "{{", "dfrac": "{{"}
+_ARGUMENTS = {
+    "operatorname": "{", "substack": "{", "tfrac": "{{", "dfrac": "{{", "overline": "{",
+}  # fmt: skip
 _WALKER = _walker_context().filter_context()
 _WALKER.add_context_category(
     "symrb",
@@ -86,6 +89,7 @@ _TEXT.add_context_category(
         MacroTextSpec("substack", "%(1)s"),
         MacroTextSpec("tfrac", "%(1)s/%(2)s"),
         MacroTextSpec("dfrac", "%(1)s/%(2)s"),
+        MacroTextSpec("overline", "%(1)s\N{COMBINING OVERLINE}"),
         *(MacroTextSpec(name, f" {sym} ") for name, sym in _SPACED.items()),
     ],
     prepend=True,
@@ -362,6 +366,35 @@ def evidence_lines(result: ClaimResult, source: str, width: int) -> list[str]:
         head = f"  {k:>2}. [{e.form}] {e.level}, {seconds_text(e.seconds)}: {verdict(e)}"
         out += textwrap.wrap(head, width=width, subsequent_indent="      ")
         out.append(paragraph(text_of(e.description), indent="      ", width=width))
+    return out
+
+
+def sentence_lines(claim: Claim, width: int) -> list[str]:
+    """The sentences of the claim's statement in the paper for ``show``, each with its status
+    (covered, UNCOVERED, prose) and the evidence that checks it (or, for prose, why there is
+    nothing to check); nothing when the claim maps no sentences."""
+    if not claim.sentences:
+        return []
+    math = [s for s in claim.sentences if s.kind == "math"]
+    covered = sum(bool(s.evidence) for s in math)
+    out = ["", "The paper's sentences"]
+    head = f"{covered} of {len(math)} stating mathematics covered by evidence"
+    if covered < len(math):
+        head += f", {len(math) - covered} UNCOVERED"
+    out.append(paragraph(f"{head}; {len(claim.sentences) - len(math)} prose.", width=width))
+    number = {ev.name: k for k, ev in enumerate(claim.evidence, 1)}
+    for k, s in enumerate(claim.sentences, 1):
+        status = s.kind if s.kind == "prose" else ("covered" if s.evidence else "UNCOVERED")
+        out.append(f"  {k:>2}. [{status}]")
+        out.append(paragraph(text_of(s.text), indent="      ", width=width))
+        if s.kind == "prose":
+            why = f"Why nothing is checked: {text_of(s.reason)}"
+            out.append(paragraph(why, indent="      ", width=width))
+        elif s.evidence:
+            names = ", ".join(f"{number[n]} ({n})" for n in s.evidence)
+            out.append(paragraph(f"Checked by evidence {names}.", indent="      ", width=width))
+        else:
+            out.append("      No evidence checks this sentence yet.")
     return out
 
 

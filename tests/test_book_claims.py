@@ -157,3 +157,65 @@ def test_evidence_rows_show_residual_against_tolerance() -> None:
     rows = ext.evidence_rows(_result("holds after correction")["evidence"])
     assert rows[2].endswith("| 1.0e+00 > 1.0e-12 | fails, as expected |")
     assert rows[3].endswith("| 0 ≤ 1.0e-12 | passes |")
+
+
+# ---------------------------------------------------------------------------------------------
+# the sentence map on the claim pages and the claims page
+
+
+def _with_sentences(monkeypatch: pytest.MonkeyPatch) -> Any:
+    """D8 with one sentence of each status (covered, uncovered, prose)."""
+    from derivations.registry import Sentence, get_claim
+
+    c = get_claim("D8")
+    first = c.evidence[0].name
+    monkeypatch.setattr(c, "sentences", [
+        Sentence("A covered $J_D(U) = U\\Lambda - \\Lambda U^T$ with $|x|$.", (first,)),
+        Sentence("An unchecked $x = 1$."),
+        Sentence("See [MoVe1991].", (), "prose", "a citation"),
+    ])  # fmt: skip
+    return c
+
+
+def test_sentences_dropdown_marks_the_uncovered(monkeypatch: pytest.MonkeyPatch) -> None:
+    from derivations.report import sentences_cell, sentences_markdown, sentences_summary
+
+    c = _with_sentences(monkeypatch)
+    md = sentences_markdown("D8")
+    lines = md.splitlines()
+    assert lines[0].startswith(":::{dropdown} The paper's sentences: 1 of 2 covered")
+    assert "1 UNCOVERED" in lines[0] and ":color: warning" in lines[1] and lines[-1] == ":::"
+    rows = [line for line in lines if line.startswith("| ")][1:]
+    assert len(rows) == 3 and all(r.count(" | ") == 3 for r in rows)  # no bare | in a cell
+    assert f"1\N{NO-BREAK SPACE}`{c.evidence[0].name.removeprefix('d8_')}`" in rows[0]
+    assert "uncovered" in rows[1] and "no evidence" in rows[1]
+    assert "prose" in rows[2] and "a citation" in rows[2]
+    assert sentences_cell("D8") == "1/2"
+    summary = sentences_summary([{"id": "D8"}])
+    assert summary.startswith("3 sentences of the paper's statements: 2 state mathematics, 1 of")
+    assert "1 uncovered; 1 prose" in summary
+
+
+def test_a_fully_covered_map_is_not_a_warning() -> None:
+    from derivations.registry import get_claim
+    from derivations.report import sentences_markdown
+
+    c = next(c for c in CLAIMS if c.sentences and all(s.covered for s in c.sentences))
+    md = sentences_markdown(c.id)
+    assert "UNCOVERED" not in md and ":color: warning" not in md
+    assert md.count("\n| ") == len(get_claim(c.id).sentences) + 1
+
+
+def test_claims_table_has_a_sentences_column_for_the_paper_only(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from derivations.report import claims_table
+
+    _with_sentences(monkeypatch)
+    ev = {"form": "claim", "level": "float64", "residual": 0.0, "tol": 1e-12}
+    row = {"title": "t", "outcome": "holds", "expected": "holds", "seconds": 0.1, "evidence": [ev]}
+    paper = claims_table([{**row, "id": "D8"}]).splitlines()
+    assert "sentences covered" in paper[0] and "| 1/2 |" in paper[2]
+    assert len({line.count("|") for line in paper}) == 1
+    method = claims_table([{**row, "id": "M1"}]).splitlines()
+    assert "sentences" not in method[0] and len({line.count("|") for line in method}) == 1

@@ -475,3 +475,26 @@ def test_verify_group_runs_only_that_group(
     assert all_claims(group="paper") == CLAIMS[: len(all_claims(group="paper"))]
     code, _, err = _call(capsys, "verify", "--paper", "--group", "method")
     assert code == 2 and "not allowed with" in err
+
+
+def test_show_lists_the_papers_sentences_with_their_evidence(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from derivations.registry import Sentence
+
+    claim = get_claim("D10")
+    first = claim.evidence[0].name
+    monkeypatch.setattr(claim, "sentences", [
+        Sentence(r"A covered $M_k = \Omega_k^T \Lambda$.", (first,)),
+        Sentence(r"An unchecked $\overline{Q}_0 \in \operatorname{SO}(n)$."),
+        Sentence("See [MoVe1991].", (), "prose", "a citation"),
+    ])  # fmt: skip
+    code, out, _ = _call(capsys, "show", "D10", "--run")
+    assert code == 0
+    _assert_readable(out)
+    tail = out[out.index("\nThe paper's sentences\n") :]
+    assert "1 of 2 stating mathematics covered by evidence, 1 UNCOVERED; 1 prose." in tail
+    flat = " ".join(tail.split())
+    assert f"1. [covered] A covered M_k = Ω_k^T Λ. Checked by evidence 1 ({first})." in flat
+    assert "2. [UNCOVERED] An unchecked Q̅_0 ∈ SO(n). No evidence checks this sentence" in flat
+    assert "3. [prose] See [MoVe1991]. Why nothing is checked: a citation" in flat

@@ -385,3 +385,119 @@ def test_double_bracket_flow_at_time_zero_only_returns_x0():
     xs, info = orbits.double_bracket_flow(x0, N, [0.0], return_info=True)
     np.testing.assert_array_equal(xs[0], x0)
     assert info.nfev == 0 and abs(info.condition[0] - 1.0) < 1e-8  # the identity map
+
+
+# ----------------------------------------------------------------------------- orbit_extremal_flow
+# (S14: the Toda lattice through the coupled (x, p) extremal)
+
+
+def test_extremal_flow_only_the_derived_costate_gives_toda():
+    """The sensitivity of s14_optimal_flow_is_toda: from the same L_0 the costates p(0) = 0,
+    -1.1 N and +N (against Symes at +t) leave Toda at O(1); -N stays on it."""
+    ts = np.linspace(0.0, 2.0, 9)
+    good = s14.toda_through_extremal(4, -1.0, ts)
+    assert max(good.values()) < 1e-8
+    for scale in (0.0, -1.1):
+        bad = s14.toda_through_extremal(4, scale, ts)
+        assert bad["symes"] > 0.1, (scale, bad)
+    L0, D = s14.toda_start(4, 4), np.diag([1.0, 2.0, 3.0, 4.0])
+    L, _ = orbits.orbit_extremal_flow(L0, D, D, ts, algebra="isym")
+    assert np.abs(L - s14.ref.toda_symes(L0, ts)).max() > 0.1  # +N is Toda backwards
+
+
+def test_extremal_flow_leaves_toda_at_the_predicted_rate():
+    """The extremal p = -N is unstable in (x, p): the distance of p from -N grows like e^{r t}
+    with r = (lambda_max - lambda_min)(d_max - d_min) near the sorted limit (the Notes of
+    orbit_extremal_flow; 9.80 for the k = 3 data of S14)."""
+    L0, D = s14.toda_start(3, 3), np.diag([1.0, 2.0, 3.0])
+    lam = np.linalg.eigvalsh(L0)
+    rate = (lam[-1] - lam[0]) * 2.0
+    ts = np.array([2.0, 3.0])
+    _, P = orbits.orbit_extremal_flow(L0, -D, D, ts, algebra="isym")
+    drift = np.abs(P + D).max(axis=(1, 2))
+    measured = np.log(drift[1] / drift[0]) / (ts[1] - ts[0])
+    assert abs(measured - rate) < 0.05 * rate, (measured, rate)
+
+
+def test_extremal_flow_so_matches_the_field_and_conserves_H():
+    """On so(4) the run agrees with a plain solve_ivp of orbit_extremal_rhs, conserves H* and the
+    spectrum of x; p0 = -N reproduces double_bracket_flow."""
+    from scipy.integrate import solve_ivp
+
+    rng = np.random.default_rng(7)
+    x0, p0, N = rs(rng, 4), rs(rng, 4) * 0.3, rs(rng, 4)
+    ts = np.linspace(0.0, 1.0, 5)
+    xs, ps = orbits.orbit_extremal_flow(x0, p0, N, ts)
+
+    def f(_t, y):
+        a, b = orbits.orbit_extremal_rhs(y[:16].reshape(4, 4), y[16:].reshape(4, 4), N)
+        return np.concatenate([a.ravel(), b.ravel()])
+
+    sol = solve_ivp(f, (0, 1), np.concatenate([x0.ravel(), p0.ravel()]), t_eval=ts,
+                    method="DOP853", rtol=1e-12, atol=1e-13)  # fmt: skip
+    np.testing.assert_allclose(xs, sol.y[:16].T.reshape(-1, 4, 4), atol=1e-9)
+    np.testing.assert_allclose(ps, sol.y[16:].T.reshape(-1, 4, 4), atol=1e-9)
+    H = orbits.orbit_hamiltonian(xs, ps, N)
+    assert np.ptp(H) < 1e-9
+    ev = np.linalg.eigvals(xs).imag
+    assert np.abs(np.sort(ev, axis=1) - np.sort(ev[0])).max() < 1e-9
+    xd, pd = orbits.orbit_extremal_flow(x0, -N, N, ts)
+    np.testing.assert_allclose(xd, orbits.double_bracket_flow(x0, N, ts), atol=1e-9)
+    np.testing.assert_allclose(pd, np.broadcast_to(-N, pd.shape), atol=1e-12)
+
+
+def test_extremal_flow_argument_errors():
+    rng = np.random.default_rng(3)
+    x, p, N = rs(rng, 3), rs(rng, 3), rs(rng, 3)
+    S = x @ x  # symmetric
+    with pytest.raises(InputError, match="algebra must be"):
+        orbits.orbit_extremal_flow(x, p, N, [0.0, 1.0], algebra="su")
+    with pytest.raises(InputError, match="p0 must be skew"):
+        orbits.orbit_extremal_flow(x, S, N, [0.0, 1.0])
+    with pytest.raises(InputError, match="x0 must be symmetric"):
+        orbits.orbit_extremal_flow(x, S, S, [0.0, 1.0], algebra="isym")
+    with pytest.raises(InputError, match="single"):
+        orbits.orbit_extremal_flow(rs(rng, 3, (2,)), p, N, [0.0, 1.0])
+    with pytest.raises(InputError, match="t must be"):
+        orbits.orbit_extremal_flow(x, p, N, [1.0, 0.5])
+    with pytest.raises(InputError, match="rtol > 0"):
+        orbits.orbit_extremal_flow(x, p, N, [0.0, 1.0], rtol=0.0)
+    with pytest.raises(InputError, match="complex"):
+        orbits.orbit_extremal_flow(1j * S, 1j * S, 1j * S, [0.0, 1.0], algebra="isym")
+    xs, ps = orbits.orbit_extremal_flow(x, p, N, [0.0])
+    assert xs.shape == ps.shape == (1, 3, 3) and np.array_equal(xs[0], x)
+
+
+@pytest.mark.parametrize(
+    ("name", "wrong"),
+    [("P_TODA", lambda f: eq(f.lhs, -f.rhs)), ("TODA_B", lambda f: eq(f.lhs, -f.rhs))],
+)
+def test_toda_every_k_can_fail(monkeypatch, name, wrong):
+    """s14_toda_every_k fails for the costate p = +N (Toda backwards) and for a wrong sign of the
+    displayed b-equation."""
+    assert s14.s14_toda_every_k() == 0
+    monkeypatch.setattr(s14, name, wrong(getattr(s14, name)))
+    assert s14.s14_toda_every_k() > 0
+
+
+def test_constant_costate_check_can_fail(monkeypatch):
+    """s14_constant_costate_gives_toda fails when a displayed costate is not a root (p = -2N) or
+    the reversed field has the wrong sign."""
+    monkeypatch.setattr(s14, "P_TODA", eq(orb.p, -2 * orb.N))
+    assert s14.s14_constant_costate_gives_toda() > 0
+    monkeypatch.undo()
+    shown = s14.DOUBLE_BRACKET_REVERSED
+    monkeypatch.setattr(s14, "DOUBLE_BRACKET_REVERSED", eq(shown.lhs, s14.DOUBLE_BRACKET.rhs))
+    assert s14.s14_constant_costate_gives_toda() > 0
+
+
+def test_toda_is_optimal_can_fail(monkeypatch):
+    """s14_toda_is_optimal fails for the square with the opposite cross term and for the
+    minimising control [N, x]."""
+    assert s14.s14_toda_is_optimal() == 0
+    sq = s14.SQUARE
+    monkeypatch.setattr(s14, "SQUARE", eq(sq.lhs, sq.rhs + 2 * sp.Add.make_args(sq.rhs)[-1]))
+    assert s14.s14_toda_is_optimal() > 0
+    monkeypatch.undo()
+    monkeypatch.setattr(s14, "U_MIN", eq(orb.u, -s14.U_MIN.rhs))
+    assert s14.s14_toda_is_optimal() > 0

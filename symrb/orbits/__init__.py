@@ -25,8 +25,8 @@ Each vector field calls one kernel generated in :mod:`symrb._generated.adjoint_o
 the claims S13-S15 of :mod:`derivations.claims.section3`.  Here ``N`` is the paper's fixed
 element ``n``.
 
-The modules: :mod:`~symrb.orbits.extremal` (the extremal vector field, its Hamiltonian and
-Brockett's potential), :mod:`~symrb.orbits.double_bracket` (the double bracket flow and the Toda
+The modules: :mod:`~symrb.orbits.extremal` (the extremal vector field, its
+integration from initial data, its Hamiltonian and Brockett's potential), :mod:`~symrb.orbits.double_bracket` (the double bracket flow and the Toda
 lattice), :mod:`~symrb.orbits.closed_forms` (the closed forms of S15 on so(3)) and
 :mod:`~symrb.orbits.bvp` (the boundary value problem of the learning version).
 """
@@ -37,10 +37,16 @@ from .._package import adopt_classes
 from .bvp import OrbitBVPResult, solve_orbit_bvp
 from .closed_forms import one_sample_second_term, two_sample_bound
 from .double_bracket import DoubleBracketInfo, double_bracket_flow, double_bracket_rhs, toda_flow
-from .extremal import brockett_potential, orbit_extremal_rhs, orbit_hamiltonian
+from .extremal import (
+    brockett_potential,
+    orbit_extremal_flow,
+    orbit_extremal_rhs,
+    orbit_hamiltonian,
+)
 
 __all__ = [
     "orbit_extremal_rhs",
+    "orbit_extremal_flow",
     "orbit_hamiltonian",
     "brockett_potential",
     "double_bracket_rhs",

@@ -3,10 +3,12 @@ and the parameter blocks their docstrings have in common."""
 
 from __future__ import annotations
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _validate as v
 from .._validate import Array
+from ..errors import InputError
 
 #: numpydoc parameter blocks used by more than one docstring of the package
 DOC = {
@@ -30,3 +32,18 @@ def pair_xN(x: ArrayLike, N: ArrayLike, xname: str = "x") -> tuple[Array, Array]
     size n."""
     nn = v.skew(N, "N")
     return v.skew(x, xname, nn.shape[-1]), nn
+
+
+def symmetric(x: ArrayLike, name: str, n: int | None = None, rtol: float = 1e-10) -> Array:
+    """A float array of shape (..., n, n) with x^T = x to ``rtol`` relative to its size (a real
+    symmetric L standing for iL in u(n))."""
+    a = v.square(x, name, n)
+    dev = float(np.abs(a - np.swapaxes(a, -1, -2)).max()) if a.size else 0.0
+    scale = max(float(np.abs(a).max()) if a.size else 0.0, 1.0)
+    if dev > rtol * scale:
+        raise InputError(
+            f"{name} must be symmetric (it stands for i {name} in u(n)); max |{name} - {name}^T| "
+            f"= {dev:.3e} > {rtol:g} * {scale:.3g}; pass ({name} + {name}^T) / 2 if the skew "
+            "part is rounding"
+        )
+    return a

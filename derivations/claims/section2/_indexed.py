@@ -120,17 +120,33 @@ def _minus(a: Any, b: Any) -> Any:
 def _dot(a: Any, b: Any) -> sp.Expr:
     if isinstance(a, sp.MatrixBase):
         return (a.T * b)[0, 0]
+    if isinstance(a, sp.MatrixExpr):  # symbolic dimension: a 1 x 1 matrix expression
+        return a.T * b
     return a * b
 
 
 def _fresh(point: Any, tag: int) -> Any:
     if isinstance(point, sp.MatrixBase):
         return sp.Matrix(point.rows, 1, [sp.Dummy(f"d{tag}_{i}") for i in range(point.rows)])
+    if isinstance(point, sp.MatrixExpr):
+        return sp.MatrixSymbol(sp.Dummy(f"d{tag}"), *point.shape)
     return sp.Dummy(f"d{tag}")
 
 
 def _grad(value: Any, var: Any) -> Any:
-    """Derivative of a scalar (gradient), vector (Jacobian) or scalar-variable expression."""
+    """Derivative of a scalar (gradient), vector (Jacobian) or scalar-variable expression.
+
+    For a vector of symbolic dimension (a ``MatrixSymbol``) SymPy's matrix calculus is used: the
+    gradient of a 1 x 1 expression, the Jacobian (rows: the components) of a vector one."""
+    if isinstance(var, sp.MatrixSymbol):
+        if not value.has(var):
+            return (
+                sp.ZeroMatrix(var.rows, 1)
+                if value.shape == (1, 1)
+                else sp.ZeroMatrix(value.rows, var.rows)
+            )
+        d = sp.diff(value, var)
+        return d if value.shape == (1, 1) else d.T  # sp.diff gives the transposed Jacobian
     if not isinstance(var, sp.MatrixBase):
         return value.diff(var)
     if isinstance(value, sp.MatrixBase):
@@ -195,6 +211,8 @@ def _hider() -> tuple[Callable[[Any], Any], dict[sp.Basic, sp.Basic]]:
     def hide(v: Any) -> Any:
         if isinstance(v, sp.MatrixBase):
             return v.applyfunc(hide)
+        if isinstance(v, sp.MatrixExpr):  # symbolic dimension: nothing to expand
+            return v
         if isinstance(v, sp.Basic) and not v.is_Atom:
             return hidden.setdefault(v, sp.Dummy(f"c{len(hidden)}"))
         return v

@@ -8,7 +8,20 @@ Recorded outcome: holds after correction.  :math:`u^*` depends on :math:`y = p_{
 Jacobian of the step is the mixed derivative of :math:`H^*` (envelope theorem), not that of
 :math:`H` at fixed :math:`u`.  Evidence: two scalar examples (one exact, one with undefined
 :math:`a, b, V`) compare the determinant of each displayed matrix with that of the true Jacobian of
-the displayed step, computed by SymPy (independent of symrb).
+the displayed step, computed by SymPy (independent of symrb); and for every :math:`n` and
+:math:`m` the same comparison in matrix symbols.
+
+Every n: the statement is about an arbitrary smooth :math:`f, g`, whose derivatives have no
+index-free form.  What makes it all-n is that the Jacobian of the step and the mixed derivative of
+:math:`H^*` at a point depend on :math:`f, g` only through their Taylor polynomials of order two
+there (chain rule, and :math:`\partial u^*/\partial y = -H_{uu}^{-1}H_{uy}` by the implicit
+function theorem).  :math:`H` is linear in :math:`y`, so those polynomials are exactly
+:math:`f = Ax + Bu`, :math:`g = \tfrac12 x^TPx + x^TSu + \tfrac12 u^TRu` (linear terms change
+no second derivative) with free matrix symbols :math:`A, B, P, S, R` of sizes :math:`n\times n`,
+:math:`n\times m`, ... (:math:`P, R` symmetric, :math:`R = g_{uu}` invertible); the check is done
+on those.  An equality constraint :math:`h(u) = 0` is the same computation with :math:`u` replaced
+by :math:`(u, \sigma)`: :math:`\hat H` is stationary in both, and :math:`h` depends on neither
+:math:`x` nor :math:`y`.
 """
 
 from __future__ import annotations
@@ -18,6 +31,7 @@ from typing import Any
 
 import sympy as sp
 
+from derivations.claims.section2._general_n import Alphabet, quadratic_problem
 from derivations.claims.section2._hamiltonians import (
     _H,
     H_DEF,
@@ -29,7 +43,7 @@ from derivations.claims.section2._hamiltonians import (
     _xs,
     _y,
 )
-from derivations.claims.section2._indexed import _define, _nonzero, _value
+from derivations.claims.section2._indexed import _define, _grad, _nonzero, _value
 from derivations.registry import Level, claim
 from derivations.symbolic import eq
 
@@ -58,7 +72,10 @@ D2 = claim(
     "$H_{xu}\\,\\partial u^*/\\partial y$. Exact counterexample: $f = x + u$, $g = (u + x)^2/2 "
     "\\ge 0$ has $\\partial^2 H/\\partial y\\,\\partial x = 1$ everywhere, yet $u^* = y - x$ and "
     "$p_k = 0$ for every $p_{k+1}$: the step does not determine $p_{k+1}$. The index order ($y_i "
-    "x_j$ or $x_i y_j$) is a transpose and does not matter for invertibility.",
+    "x_j$ or $x_i y_j$) is a transpose and does not matter for invertibility. For every $n$ and "
+    "$m$ (matrix symbols for the second derivatives): the step's Jacobian is $H_{xy} - H_{xu}"
+    "H_{uu}^{-1}H_{uy}$, the mixed derivative of $H^*$, and the printed matrix misses the second "
+    "term.",
 )
 D2.formula("H", H_DEF)
 STEP = D2.formula(
@@ -123,3 +140,66 @@ def d2_reduced_matrix() -> sp.Expr:
     """The same comparison with the displayed right side of the corrected step Jacobian, the mixed
     derivative of H* built from the displayed reduced Hamiltonian: equal in both examples."""
     return _d2_defect(STEP_JACOBIAN.rhs)
+
+
+def _d2_general_n() -> tuple[sp.MatrixExpr, dict[str, sp.MatrixExpr], Alphabet, sp.Expr]:
+    """On :func:`._general_n.quadratic_problem`: the Jacobian in y of the displayed step, the
+    displayed matrices (the printed one at u = u*), the alphabet and the number of words of dH/du
+    at u* (zero: u* is the stationary point)."""
+    fn, sym, w = quadratic_problem()
+    at = {"y": sym["y"], "x": sym["x"]}
+    frozen = {**at, "u": fn["u^*"](sym["y"], sym["x"])}
+    stationary = w.is_zero(w.nc(_value(sp.Derivative(_H(_y, _xs, _us), _us), frozen, fn)))
+    jac = _grad(_value(STEP.rhs, at, fn), sym["y"])
+    shown = {
+        "corrected": _value(STEP_JACOBIAN.rhs, at, fn),
+        "printed": _value(PRINTED_MATRIX, frozen, fn),
+    }
+    return jac, shown, w, stationary
+
+
+@D2.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d2_reduced_matrix_general_n() -> sp.Expr:
+    """Every n and m: f = A x + B u, g = x^T P x/2 + x^T S u + u^T R u/2 with matrix symbols (the
+    second-order Taylor polynomials of any problem at a point, which is all the Jacobians
+    involve), u* = R^-1 (B^T y - S^T x) checked to make dH/du vanish: the Jacobian in y of the
+    displayed step (SymPy's matrix calculus), A^T - S R^-1 B^T, equals the transpose (the index
+    order) of the displayed mixed derivative of the displayed H* (words left after cancelling
+    R R^-1)."""
+    jac, shown, w, stationary = _d2_general_n()
+    return stationary + w.is_zero(w.nc(jac - shown["corrected"].T))
+
+
+@D2.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def d2_printed_matrix_general_n() -> sp.Expr:
+    """The same problem: the printed d^2H/dy dx at fixed u (A, or A^T in the other index order)
+    differs from the step's Jacobian by the word S R^-1 B^T, i.e. H_xu H_uu^-1 H_uy, for every n
+    and m (fewest words left over both index orders)."""
+    jac, shown, w, _stationary = _d2_general_n()
+    return sp.Min(*(w.is_zero(w.nc(jac - m)) for m in (shown["printed"], shown["printed"].T)))
+
+
+# the paper's sentences (the remark after the proof of the first proposition)
+
+D2.sentence(
+    r"Note that for the algorithm described by equation (eq8.3) to make sense we need to able to "
+    r"compute $p_{k+1}$ from the given implicit form.",
+    d2_printed_matrix,
+    d2_reduced_matrix,
+    d2_reduced_matrix_general_n,
+    d2_printed_matrix_general_n,
+)
+D2.sentence(
+    r"This follows if the $n \times n$ matrix with entries "
+    r"$\frac{\partial ^2 H}{\partial y_i \partial x_j} (y,x,u)$ for $i,j = 1, \ldots, n,$ is "
+    r"invertible at every $(y,x,u) \in \mathbb{R}^n \times \mathbb{R}^n \times \mathbb{R}^m$.",
+    d2_printed_matrix,
+    d2_reduced_matrix,
+    d2_reduced_matrix_general_n,
+    d2_printed_matrix_general_n,
+)
+D2.sentence(
+    r"We need such a condition to be satisfied for any given algorithm.",
+    kind="prose",
+    reason="a general remark on implicit algorithms; the condition itself is the sentence above",
+)

@@ -7,18 +7,31 @@ Recorded outcome: holds after correction.  The second derivatives are those of t
 Hamiltonian :math:`H^*`, not of :math:`\hat H` at frozen :math:`u^*`, and the two lines use the
 transposed mixed matrices.  Evidence: a symbolic family (:math:`f = a(x) + Bu`) and a nonlinear
 float64 family (:mod:`._nonlinear_family`, solved with SciPy) against the Jacobians of the true
-maps; independent of symrb.
+maps; independent of symrb.  For every :math:`n` and :math:`m`: the same comparison on the
+quadratic problem of :func:`._general_n.quadratic_problem` in matrix symbols (second-order Taylor
+polynomials with free blocks, which is all a linearisation at a point involves; see D2's module
+for why this covers every smooth problem).
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
 import sympy as sp
 
-from derivations.claims.section2._hamiltonians import _H, REDUCED, _us, _with_hamiltonians, _xs, _y
-from derivations.claims.section2._indexed import _define, _dot, _nonzero, _value, _vec
+from derivations.claims.section2._general_n import quadratic_problem
+from derivations.claims.section2._hamiltonians import (
+    _H,
+    REDUCED,
+    _Hstar,
+    _us,
+    _with_hamiltonians,
+    _xs,
+    _y,
+)
+from derivations.claims.section2._indexed import _define, _dot, _grad, _nonzero, _value, _vec
 from derivations.claims.section2._nonlinear_family import NonlinearFamily
 from derivations.claims.section2.d02_implicit_step import STEP
 from derivations.registry import Level, claim
@@ -179,6 +192,64 @@ def d3_printed_same_matrix() -> sp.Expr:
     return _d3_symbolic_defect(LINEARISED_PRINTED, _P, "reduced")
 
 
+@functools.cache
+def _d3_general_data(kind: str) -> tuple[Any, dict[Any, Any], dict[str, Any]]:
+    """On the quadratic problem in matrix symbols: the alphabet; the true differentials dp_k and
+    dx_{k+1} (the Jacobians of the displayed step and of x_{k+1} = f(x, u*(y, x)) by SymPy's
+    matrix calculus, applied to dx_k and dp_{k+1}); and the blocks xx, xy, yy of the displayed
+    H* (kind "reduced") or of H at frozen u* (kind "frozen"), the displayed Derivative objects in
+    x and y (computed once: SymPy's matrix calculus takes about a second)."""
+    fn, sym, w = quadratic_problem()
+    Y, X = sym["y"], sym["x"]
+    at = {"y": Y, "x": X}
+    us = fn["u^*"](Y, X)
+    pk, x1 = _value(STEP.rhs, at, fn), fn["f"](X, us)
+    true = {_dpk: _grad(pk, X) * _dxk + _grad(pk, Y) * _dp1,
+            _dx1: _grad(x1, X) * _dxk + _grad(x1, Y) * _dp1}  # fmt: skip
+    fun = _Hstar(_y, _xs) if kind == "reduced" else _H(_y, _xs, _us)
+    vals = at if kind == "reduced" else {**at, "u": us}
+    pairs = {"xx": (_xs, _xs), "xy": (_xs, _y), "yy": (_y, _y)}
+    return w, true, {k: _value(sp.Derivative(fun, *v), vals, fn) for k, v in pairs.items()}
+
+
+def _d3_general_n(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: str) -> sp.Expr:
+    """lhs - rhs of the displayed linearisation with the true differentials and the blocks of
+    :func:`_d3_general_data`, fewest words left over the index orders the mixed symbol admits."""
+    w, true, blocks = _d3_general_data(kind)
+    options = (False,) if names is _R else (False, True)
+    counts = []
+    for t in options:
+        sub = {names[k]: (b.T if t and k == "xy" else b) for k, b in blocks.items()}
+        sub.update(true)
+        counts.append(sum((w.is_zero(w.nc(lhs_minus_rhs(f).xreplace(sub))) for f in formulas),
+                          sp.Integer(0)))  # fmt: skip
+    return sp.Min(*counts)
+
+
+@D3.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d3_corrected_general_n() -> sp.Expr:
+    """Every n and m: f = A x + B u, g = x^T P x/2 + x^T S u + u^T R u/2 (matrix symbols, P and R
+    symmetric, R invertible): the displayed corrected equations with the blocks of H* (H*_xx =
+    S R^-1 S^T - P, H*_xy = A^T - S R^-1 B^T, H*_yy = B R^-1 B^T) reproduce the differentials
+    of the true maps (x_k, p_{k+1}) -> (p_k, x_{k+1}) (words left)."""
+    return _d3_general_n(LINEARISED, _R, "reduced")
+
+
+@D3.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def d3_printed_general_n() -> sp.Expr:
+    """The same problem: the printed equations with the second derivatives of Hhat at frozen u*
+    miss them for every n and m (its dp_{k+1} coefficient in dx_{k+1} is 0, not B R^-1 B^T), for
+    either index order of the mixed matrix (fewest words left)."""
+    return _d3_general_n(LINEARISED_PRINTED, _P, "frozen")
+
+
+@D3.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def d3_printed_same_matrix_general_n() -> sp.Expr:
+    """The same problem, printed equations with the blocks of H*: one mixed matrix in both lines
+    misses them for either index order (fewest words left; A^T - S R^-1 B^T is not symmetric)."""
+    return _d3_general_n(LINEARISED_PRINTED, _P, "reduced")
+
+
 def _true_maps(J: np.ndarray, dim: int) -> dict[str, sp.Matrix]:
     """From the Jacobian of (x_k, p_k) -> (x_{k+1}, p_{k+1}) the Jacobians of (x_k, p_{k+1}) ->
     (p_k, x_{k+1}): dp_k = D^-1 (dp_{k+1} - C dx_k), dx_{k+1} = A dx_k + B dp_k."""
@@ -224,3 +295,44 @@ def d3_nonlinear_printed() -> float:
     """Same family: the printed equations with blocks of Hhat at frozen u* miss that Jacobian for
     either index convention."""
     return _d3_float_defect(LINEARISED_PRINTED, _P, "frozen")
+
+
+# the paper's sentences (the hypothesis before the corollary, and the corollary)
+
+D3.sentence(
+    r"We assume that both $u^*_k$ and $\sigma$ are determined uniquely by equations (eq8.6).",
+    d3_corrected,
+    d3_nonlinear_corrected,
+)
+D3.sentence(
+    r"Also note that $u^*_k=u^*_k(p_{k+1},x_k)$, $\sigma=\sigma (p_{k+1},x_k)$.",
+    d3_nonlinear_corrected,
+    d3_printed_frozen_control,
+    d3_nonlinear_printed,
+    d3_printed_general_n,
+)
+D3.sentence(
+    r"Using this hypothesis, we have the following consequence.",
+    kind="prose",
+    reason="announces the corollary",
+)
+D3.sentence(
+    r"Corollary. Assume that the extremal equations (eq8.3) hold.",
+    d3_corrected,
+    d3_nonlinear_corrected,
+    d3_corrected_general_n,
+)
+D3.sentence(
+    r"Then $dp_k= \frac{\partial^2\hat{H}}{\partial x^2_k}(p_{k+1},x_k,u^*_k)dx_k+ "
+    r"\frac{\partial^2\hat{H}}{\partial p_{k+1}\partial x_k} (p_{k+1},x_k,u^*_k)dp_{k+1}\,, "
+    r"\quad dx_{k+1}= \frac{\partial^2\hat{H}}{\partial p_{k+1}\partial x_k} (p_{k+1},x_k,u^*_k) "
+    r"dx_k+ \frac{\partial^2\hat{H}}{\partial p^2_{k+1}}(p_{k+1},x_k,u^*_k) dp_{k+1}\,.$",
+    d3_corrected,
+    d3_printed_frozen_control,
+    d3_printed_same_matrix,
+    d3_nonlinear_corrected,
+    d3_nonlinear_printed,
+    d3_corrected_general_n,
+    d3_printed_general_n,
+    d3_printed_same_matrix_general_n,
+)

@@ -11,7 +11,10 @@ Emitted (``symrb/_generated/discrete_control.py``): the steps and adjoint steps 
 plain layers for tanh and the logistic function, built by :func:`._layers.layer`.  Evidence: the
 kernels against the displayed layer and the gradients of the displayed :math:`H`; exact networks
 with generic :math:`\sigma`; and symrb's ResNet against the independent NumPy network and
-complex-step derivatives of :mod:`._resnet_reference`.
+complex-step derivatives of :mod:`._resnet_reference`.  For every width (every n): the
+displayed layers, adjoint formulas, endpoint, costate, backprop and weights relations in matrix
+symbols of symbolic size, differentiated along directions by SymPy (:mod:`._general_n`), with
+the entrywise activation's derivative as a diagonal letter.
 """
 
 from __future__ import annotations
@@ -24,6 +27,13 @@ import numpy as np
 import sympy as sp
 from sympy.matrices.expressions.applyfunc import ElementwiseApplyFunction
 
+from derivations.claims.section2._general_n import (
+    Alphabet,
+    directional,
+    gradient,
+    pairing_defect,
+    substitute,
+)
 from derivations.claims.section2._hamiltonians import (
     H_DEF,
     _g,
@@ -53,10 +63,14 @@ from derivations.claims.section2._indexed import (
 from derivations.claims.section2._layers import (
     _SIGMA,
     ACTIVATIONS,
+    _bv,
     _hstep,
+    _Km,
     _layer_env,
     _layer_function,
+    _pv,
     _unflatten,
+    _xv,
     layer,
 )
 from derivations.claims.section2._resnet_reference import (
@@ -412,3 +426,213 @@ def d6_float64() -> float:
         for got, want in ((states, ref_states), (gK, cK), (gb, cb), (-p, cx)):
             errors.append(np.max(np.abs(got - want)) / np.max(np.abs(want)))
     return float(np.max(errors))
+
+
+# ---------------------------------------------------------------------------------------------
+# every n: the layers in matrix symbols of symbolic size
+
+
+def _layer_at(shown: sp.Basic, K: Any, x: Any, beta: Any, p: Any = None) -> Any:
+    """A displayed layer or adjoint formula with its K, x, beta (and p) replaced."""
+    sub = {_Km: K, _xv: x, _bv: beta}
+    return shown.xreplace({**sub, _pv: p} if p is not None else sub)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N)
+def d6_adjoint_formulas_general_n() -> sp.Expr:
+    """Every n: the displayed adjoint formulas of both layers (generic sigma, step h) are the
+    gradients of the displayed H with f the displayed layer and g = 0: the derivative of H along
+    dx, dK and dbeta (SymPy's differentiation in t of H(x + t dx, ...), sigma' entrywise) equals
+    <dH/dx, dx>, tr((dH/dK)^T dK) and <dH/dbeta, dbeta> from the displayed formulas (trace words
+    left; sigma'(z) o v is diag(sigma'(z)) v, a symmetric letter)."""
+    w = Alphabet(symmetric=[])
+    d = {"x": vector("dx"), "K": matrix("dK"), "beta": vector("dbeta")}
+    fn = {"f": lambda x, u: _layer_at(u[2], u[0], x, u[1]), "g": lambda x, u: sp.ZeroMatrix(1, 1)}
+    total = sp.Integer(0)
+    for shown, adjoint in ((RESIDUAL_LAYER, ADJOINT), (PLAIN_LAYER, ADJOINT_PLAIN)):
+        H = _define(H_DEF, fn)(_pv, _xv, (_Km, _bv, shown.rhs))
+        grads = {str(f.lhs.name): f.rhs for f in adjoint}
+        for var, name in ((_xv, r"\partial H/\partial x"), (_Km, r"\partial H/\partial K"),
+                          (_bv, r"\partial H/\partial \beta")):  # fmt: skip
+            dv = d[str(var.name)]
+            along = w.nc(directional(H, {var: dv}))
+            total += pairing_defect(
+                along, w.T(w.nc(grads[name])) * w(str(dv.name)), w(str(dv.name)), w
+            )
+    return total
+
+
+def _network_defect(shown: sp.Eq, adjoint: tuple[sp.Eq, ...], widths: Sequence[Any]) -> sp.Expr:
+    """Two displayed layers x_1 = f(x_0, u_0), x_2 = f(x_1, u_1) in matrix symbols (widths
+    n_0, n_1, n_2), phi(x) = G^T x (so G is the loss gradient at x_2; a gradient involves nothing
+    more of phi), costates from the displayed endpoint condition and the displayed adjoint
+    p_k = dH/dx: trace words left in the displayed backprop relation paired with dx (k = 0, 1) and
+    in the weights relation (one sample) paired with dK_k, dbeta_k, for s = 1 and s = -1."""
+    w = Alphabet(symmetric=[])
+    X = [sp.MatrixSymbol(f"x_{k}", widths[k], 1) for k in range(3)]
+    Ks = [sp.MatrixSymbol(f"K_{k}", widths[k + 1], widths[k]) for k in range(2)]
+    bs = [sp.MatrixSymbol(f"beta_{k}", widths[k + 1], 1) for k in range(2)]
+    G = sp.MatrixSymbol("G", widths[2], 1)
+    grads = {str(f.lhs.name): f.rhs for f in adjoint}
+    x1 = _layer_at(shown.rhs, Ks[0], X[0], bs[0])
+    states = [X[0], x1, _layer_at(shown.rhs, Ks[1], x1, bs[1])]
+    fn = {r"\phi": lambda x: G.T * x}
+    _lhs, end = _instance(ENDPOINT_S, {_a: 1, _N: 2})
+    p = {2: _value(end, {("x", 1, 2): X[2], "s": _s}, fn)}
+    for k in (1, 0):
+        p[k] = _layer_at(grads[r"\partial H/\partial x"], Ks[k], states[k], bs[k], p[k + 1])
+    total = sp.Integer(0)
+    for k in (0, 1):  # dC along dx_k, the later states recomputed from a free x_k
+        tail = X[k]
+        for j in range(k, 2):
+            tail = _layer_at(shown.rhs, Ks[j], tail, bs[j])
+        dx = sp.MatrixSymbol(f"dx_{k}", widths[k], 1)
+        dC = (G.T * directional(tail, {X[k]: dx})).xreplace({X[1]: x1})
+        vals = {
+            ("p", 1, k): w.T(w.nc(p[k])) * w(str(dx.name)),
+            (str(_dCdx.label), 1, k): w.nc(dC),
+            "s": _s,
+        }
+        lhs, rhs = _instance(BACKPROP, {_a: 1, _k: k})
+        total += pairing_defect(_value(lhs, vals, {}), _value(rhs, vals, {}), w(str(dx.name)), w)
+        for var, name in ((Ks[k], r"\partial H/\partial K"), (bs[k], r"\partial H/\partial \beta")):
+            dv = w(f"d{var.name}")
+            along = w.nc(G.T * directional(states[2], {var: sp.MatrixSymbol(str(dv), *var.shape)}))
+            dH = _layer_at(grads[name], Ks[k], states[k], bs[k], p[k + 1])
+            vals = {"dHdu": w.T(w.nc(dH)) * dv, "M": 1, "s": _s}
+            weights = WEIGHTS.rhs.xreplace({sp.Derivative(_H_ak, _u[_k]): _dHdu})
+            for sign in (1, -1):  # s^2 = 1: the weights relation needs s = +-1
+                total += pairing_defect(along, _value(weights, vals, {}).subs(_s, sign), dv, w)
+    return total
+
+
+_dHdu = sp.Symbol("dHdu")
+_n0, _n1, _n2 = sp.symbols("n_0 n_1 n_2", integer=True, positive=True)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N)
+def d6_backprop_general_n() -> sp.Expr:
+    """Every width: two displayed plain layers R^{n_0} -> R^{n_1} -> R^{n_2} (K_k of size
+    n_{k+1} x n_k) and two residual layers (width n), generic sigma, one sample, the loss
+    gradient at x_2 a vector symbol G: with the displayed endpoint condition p_2 = s G and the
+    displayed adjoint, p_k paired with dx_k equals s times the derivative of the loss along dx_k
+    (SymPy's differentiation of the composed layers), the displayed backprop relation; and the
+    derivatives along dK_k, dbeta_k equal s times the pairing with the displayed dH/dK, dH/dbeta,
+    the displayed weights relation (s = 1 and s = -1).  Any number of layers follows by induction:
+    each step is the chain rule through one layer (trace words left)."""
+    return _network_defect(PLAIN_LAYER, ADJOINT_PLAIN, (_n0, _n1, _n2)) + _network_defect(
+        RESIDUAL_LAYER, ADJOINT, (n, n, n)
+    )
+
+
+def _identity_general_n(shown: sp.Eq) -> sp.Expr:
+    """Words left in (J - displayed right side of the identity property) dx, J dx the derivative
+    of the displayed layer along dx at K = 0 (every n, generic sigma, symbolic beta and h)."""
+    w = Alphabet()
+    dx = vector("dx")
+    J_dx = directional(shown.rhs, {_xv: dx}).xreplace({_Km: sp.ZeroMatrix(n, n)})
+    return w.is_zero(w.nc(J_dx) - w.nc(IDENTITY.rhs * dx))
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def d6_printed_plain_is_not_residual_general_n() -> sp.Expr:
+    """Every n: the derivative of Remark 1's layer sigma(K x + beta) along dx at K = 0 is 0, not
+    the displayed I dx (words left)."""
+    return _identity_general_n(PLAIN_LAYER)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d6_residual_layer_is_residual_general_n() -> sp.Expr:
+    """Every n: the derivative of x + h sigma(K x + beta) along dx at K = 0 is the displayed
+    I dx, for every beta and h (words left)."""
+    return _identity_general_n(RESIDUAL_LAYER)
+
+
+def _running_cost_general_n(endpoint: sp.Eq, s: int) -> sp.Expr:
+    """Two displayed residual layers of width n (generic sigma, h), one sample, running cost
+    g(x, u) = x^T R x/2 (R a symmetric matrix symbol), phi(x) = G^T x: costates from the given
+    endpoint condition and the displayed costate equation p_k = dH/dx(p_{k+1}, x_k, u_k) (the
+    gradient of the displayed H along dx, p_{k+1} held as a letter and then substituted), against
+    s times the derivative of the displayed cost C along dx_k, the later states recomputed
+    (trace words left, k = 0, 1, 2)."""
+    w = Alphabet(symmetric=["R"])
+    X0, G, R, P = vector("x_0"), vector("G"), matrix("R"), vector("P")
+    us = [(matrix(f"K_{k}"), vector(f"beta_{k}")) for k in range(2)]
+    fn = _with_hamiltonians({
+        "f": lambda x, u: _layer_at(RESIDUAL_LAYER.rhs, u[0], x, u[1]),
+        "g": lambda x, u: x.T * R * x / 2,
+        "h": lambda u: sp.ZeroMatrix(1, 1),
+        r"\phi": lambda x: G.T * x,
+    })  # fmt: skip
+    states = [X0]
+    for k in range(2):
+        states.append(fn["f"](states[k], us[k]))
+    values = {"N": 2, "M": 1, **{("u", k): us[k] for k in range(2)}}
+    t, dx = sp.Symbol("t"), vector("dx")
+    lhs, rhs = _instance(endpoint, {_a: 1, _N: 2})
+    p = {2: w.nc(_value(rhs, {**values, ("x", 1, 2): states[2]}, fn))}
+    for k in (1, 0):
+        H = fn["H"](P, states[k] + t * dx, us[k])
+        along = w.nc(sp.diff(H, t).xreplace({t: 0}))
+        p[k] = substitute(gradient(along, w("dx"), w), w("P"), p[k + 1], w)
+    total = sp.Integer(0)
+    for k in range(3):
+        moved = {**values, **{("x", 1, j): states[j] for j in range(k)}}
+        moved[("x", 1, k)] = states[k] + t * dx
+        for j in range(k, 2):
+            moved[("x", 1, j + 1)] = fn["f"](moved[("x", 1, j)], us[j])
+        dC = w.nc(sp.diff(_value(COST5.rhs, moved, fn), t).xreplace({t: 0}))
+        total += pairing_defect(w.T(p[k]) * w("dx"), s * dC, w("dx"), w)
+    return total
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def d6_printed_m8_running_cost_general_n() -> sp.Expr:
+    """Every n, with a running cost g = x^T R x/2 (R a symmetric matrix symbol), two displayed
+    residual layers, phi = G^T x: with m8's endpoint condition the costates are not the gradients
+    of the displayed cost (s = 1), for every n (trace words left)."""
+    return _running_cost_general_n(M8, 1)
+
+
+@D6.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def d6_corrected_running_cost_general_n() -> sp.Expr:
+    """The same with D5's endpoint condition: the costates are minus the gradients of the
+    displayed cost (s = -1) at every layer, for every n."""
+    return _running_cost_general_n(ENDPOINT, -1)
+
+
+# the paper's sentences (the paragraph 'Remark' closing Section 2 before Section 2.1)
+
+D6.sentence(
+    r"Remark 1. As described in [BeCeEhOwSc2019], a common choice for $f$ is "
+    r"$f(x,u)=\sigma(Kx+\beta)$, where $u=(K,\beta)$ and $sigma$ is the sigmoid function.",
+    d6_sigmoid,
+    d6_kernels,
+    d6_adjoint_formulas,
+    d6_float64,
+    d6_adjoint_formulas_general_n,
+)
+D6.sentence(
+    r"This is the so-called ResNet framework.",
+    d6_printed_plain_is_not_residual,
+    d6_residual_layer_is_residual,
+    d6_printed_plain_is_not_residual_general_n,
+    d6_residual_layer_is_residual_general_n,
+)
+D6.sentence(
+    r"We can, of course, consider other problems of this type but here we are interested in a "
+    r"particular group theoretic form.",
+    kind="prose",
+    reason="motivation for Section 2.1",
+)
+D6.sentence(
+    r"2. The form of the solution in Proposition (gendiscpropm) is very close to that of "
+    r"[LeCun1988] and, at least on a superficial level, even more so in the rigid body case.",
+    d6_backprop_no_running_cost,
+    d6_printed_m8_running_cost,
+    d6_corrected_running_cost,
+    d6_float64,
+    d6_backprop_general_n,
+    d6_printed_m8_running_cost_general_n,
+    d6_corrected_running_cost_general_n,
+)

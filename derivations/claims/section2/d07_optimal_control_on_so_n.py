@@ -8,8 +8,9 @@ proof (discrbeq, discham, symequation, equ_final_th_2.7).
 Recorded outcome: holds after correction.  The necessary conditions and the sign change hold as
 printed for every :math:`n` (noncommutative symbols); the dynamics carry a frozen index, the
 multiplier is :math:`n\times n`, the costate in :math:`SO(n)` is a choice, the sign change
-multiplies the determinant by :math:`(-1)^n`, and :math:`U_k` is the solution on the branch
-through the identity.
+multiplies the determinant by :math:`(-1)^n`, and the discrete rigid body (:math:`U_k` on the
+branch through the identity, which symrb follows) is the global maximiser of the cost, while the
+global minimiser has every :math:`U_k` on another branch (:mod:`._so_extremals`).
 
 Emitted (``symrb/_generated/discrete_rigid_body.py``): ``jd``, the left side :math:`J_D(U)` of
 the equation for :math:`U_k`.  Evidence independent of symrb: symbolic and exact computations and
@@ -46,6 +47,13 @@ from derivations.claims.section2._matrix_formulas import (
     _numeric,
 )
 from derivations.claims.section2._reference_run import _H, _STEPS, _mp_run
+from derivations.claims.section2._so_extremals import (
+    _continued_to,
+    _global_optimum,
+    _margin,
+    _rot,
+    _states,
+)
 from derivations.registry import Level, claim
 from derivations.symbolic import (
     Words,
@@ -71,19 +79,30 @@ D7 = claim(
     printed="The dynamics of the problem read [[dynamics_printed]]; the multiplier $\\Sigma$ is an $N\\times N$ "
     "matrix; $P_k$ in $SO(n)$ is the discrete covector of the maximum principle (the theorem's "
     "$P_k$ is minus the covector of the proof, so both would be in $SO(n)$: [[flip_printed]]); "
-    "$U_k$ in $SO(n)$ is defined by the theorem's equation for $U_k$ (one solution).",
+    "$U_k$ in $SO(n)$ is defined by the theorem's equation for $U_k$ (one solution), and the "
+    "discrete rigid body so defined solves the minimisation problem.",
     corrected="The dynamics are [[dynamics]]; $\\Sigma$ is $n\\times n$ (the size of $U^TU-I$); the "
     "costate is a covector of $\\mathfrak{gl}(n)$, fixed only up to adding $Q_k$ times a symmetric "
     "matrix, so $SO(n)$ is a choice (an invariant set): [[P0_gl]] and [[P0_SO]] give the same "
     "extremal; the sign change gives [[flip_det]], so for odd $n$ at most one of $P_k$ and "
     "$-P_k$ is in $SO(n)$; the equation for $U_k$ has several solutions in $SO(n)$ (two for $n=2$, four for "
-    "$n=3$ and small momenta) and $U_k$ is the one on the branch through the identity (all "
-    "eigenvalues of $U_k\\Lambda$ in the open right half-plane), unique, and existing only up "
-    "to a fold (D10).",
+    "$n=3$ and small momenta), and the theorem's equations hold at every extremal, the minimiser "
+    "and the maximiser alike.  The discrete rigid body, the solution on the branch through the "
+    "identity (all eigenvalues of $U_k\\Lambda$ in the open right half-plane; unique, and existing "
+    "only up to a fold, D10) that symrb's flows follow, is the global maximiser of the cost (the "
+    "minimiser of minus the cost) in every case computed ($n=3$; $N$ from 2 to 4; $Q_0^TQ_N$ a "
+    "turn by less than $\\pi$, and half-turns for $N=3$); the global minimiser has for every "
+    "$U_k$ an eigenvalue of $U_k\\Lambda$ in the open left half-plane, each $U_k$ on the continuation "
+    "of the half-turn about the axis of the smallest $\\lambda_i$ for $Q_N$ near $Q_0$.",
     note="The dynamics carry a frozen index, the multiplier $\\Sigma$ is said to be $N \\times "
-    "N$, and the theorem leaves the choice of $P_k$ and of the branch of $U_k$ unstated. "
+    "N$, the theorem leaves the choice of $P_k$ and of the solution $U_k$ unstated, and the "
+    "discrete rigid body it leads to (the solution on the branch through the identity) is the "
+    "maximiser of the cost, not its minimiser. "
     "Corrected: $Q_{r+1} = Q_r U_r$, $\\Sigma$ is $n \\times n$, $P_k \\in \\mathrm{SO}(n)$ is a "
-    "choice of costate, and $U_k$ is the solution on the branch through the identity. The "
+    "choice of costate, and the discrete rigid body (every $U_k$ on the branch through the "
+    "identity) is the global maximiser of $\\sum_k \\operatorname{tr}(\\Lambda U_k)$ (the "
+    "minimiser of minus it) for $Q_N$ near $Q_0$, while the global minimiser is the extremal "
+    "with every $U_k$ off that branch. The "
     "necessary conditions (the stationarity equation of the proof, the costate equation, the "
     "equation for $U_k$ before the sign change, and the sign change itself) hold as printed, for "
     "every $n$. With the frozen index the proof's identity $\\sum_k \\operatorname{tr}(\\Lambda "
@@ -94,7 +113,19 @@ D7 = claim(
     "choice of representative that exists when $\\|M\\|_{\\mathrm{op}} < 2$ (S9, S10) and is kept "
     "by the equations; $P \\mapsto -P$ changes $\\det P$ by $(-1)^n$; and the equation for $U_k$ "
     "does not define $U_k$ without naming the branch: for $n = 3$ near $M = 0$ it has four "
-    "solutions in $\\mathrm{SO}(3)$, $I$ and the half-turns about the principal axes continued.",
+    "solutions in $\\mathrm{SO}(3)$, $I$ and the half-turns about the principal axes continued. "
+    "Both global optima satisfy the theorem's equations, so the equations alone cannot tell them "
+    "apart; the branch does.  Computed for $n = 3$, $\\Lambda = \\mathrm{diag}(0.7, 1.1, 1.6)$ "
+    "and $N = 2, 3, 4$ (multi-start BFGS over $\\mathrm{SO}(3)^{N-1}$, polished to an "
+    "extremal; for $N = 2$ 16 axes at turns from 2 to 3.13 and 6 other targets, for $N = 3$ 36 targets (10 "
+    "half-turns), for $N = 4$ 6 targets): "
+    "the maximiser has every eigenvalue of $U_k\\Lambda$ in the right half-plane whenever "
+    "$Q_0^T Q_N$ is a turn by less than $\\pi$ (for $N = 2$ the least real part tends to 0, the "
+    "fold, as the turn tends to $\\pi$, and at a half-turn the maximisers form a continuum, most "
+    "of them off the branch); the minimiser has for every $U_k$ an eigenvalue of $U_k\\Lambda$ in "
+    "the left half-plane (at $Q_N = Q_0$ "
+    "and even $N$ every $U_k$ is the half-turn about the axis of $\\lambda_1$), and symrb's "
+    "flow started from its $Q_0$ and $M_0$ leaves it.",
     expected="holds after correction",
     section="2.1",
     where="Section 2.1 (The discrete symmetric rigid body), the first definition (minimise "
@@ -404,3 +435,210 @@ def d7_symrb_flow_is_extremal() -> float:
             d -= _numeric(COST.function, {"U_k": xi @ Us[k]}, lam)
             worst.append(abs(d))
     return float(np.max(worst))
+
+
+_TARGET = np.array([1.0, -0.6, 0.8])  # rotation vector of Q_0^T Q_N: a turn by 1.41 rad
+
+
+def _optimum(sign: int) -> tuple[np.ndarray, float, float]:
+    """The global minimiser (``sign`` = 1) or maximiser (-1) of the displayed cost over SO(3)^3
+    with Q_0 (a random rotation) and Q_N = Q_0 exp(hat(_TARGET)) given (plain NumPy/SciPy, see
+    :mod:`._so_extremals`): its controls, the largest residual of the displayed Ukdef along the
+    displayed discrbopteqns from P_0 = Q_0 M_0/2 with M_0 = J_D(U_0), and the largest distance of
+    symrb.symmetric_flow's Q_k (h = 1, from that Q_0, P_0) from the optimum's Q_k."""
+    import symrb
+
+    Q0x = ref.random_rotation(3, np.random.default_rng(70))
+    Us = _global_optimum(_LAM3, _rot(_TARGET), 3, sign)
+    Qs = _states(Us, Q0x)
+    Ps = [_numeric(P0_GL.rhs, {"Q_0": Q0x, "M_0": ref.J_D(Us[0], _LAM3)})]
+    for Ux in Us:
+        Ps.append(_numeric(DISCRBOPTEQNS[1].rhs, {"P_k": Ps[-1], "U_k": Ux}))
+    ukdef = lhs_minus_rhs(UKDEF)
+    theorem = max(
+        float(np.abs(_numeric(ukdef, {"U_k": u, "Q_k": q, "P_k": p}, _LAM3)).max())
+        for u, q, p in zip(Us, Qs, Ps, strict=False)
+    )
+    flow = symrb.symmetric_flow(Q0x, Ps[0], _LAM3, 1.0, len(Us)).y.Q
+    gap = float(np.abs(flow - Qs).max()) if flow.shape == Qs.shape else np.inf
+    return Us, theorem, gap
+
+
+def _is_discrete_rigid_body(sign: int) -> float:
+    """Largest of: the optimum's Ukdef residual, its distance from symrb's flow, how far the
+    least real part of the eigenvalues of U_k Lambda is below 0 (off the branch through I), and
+    the number of U_k that do not continue to I along J_D(V) = tM_k, t from 1 to 0."""
+    Us, theorem, gap = _optimum(sign)
+    below = max(0.0, -min(_margin(u, _LAM3) for u in Us))
+    elsewhere = sum(_continued_to(u, _LAM3) != "I" for u in Us)
+    return max(theorem, gap, below, float(elsewhere))
+
+
+@D7.check(Level.FLOAT64, tol=1e-12, form="corrected")
+def d7_maximiser_is_discrete_rigid_body() -> float:
+    """The global maximiser of the displayed cost (best of 12 BFGS runs over rotation vectors,
+    polished to an extremal; n = 3, N = 3, Q_0^T Q_N a turn by 1.41 rad) solves the theorem's
+    equations with its costate, every U_k Lambda has its eigenvalues in the open right half-plane,
+    each U_k continues to I along J_D(V) = tM_k (t from 1 to 0), and symrb.symmetric_flow
+    started from its Q_0 and M_0 = J_D(U_0) reproduces its Q_k: the largest of the Ukdef
+    residual, max|Q_k - Q_k(symrb)|, the negative part of min Re eig and the number of U_k that
+    continue elsewhere."""
+    return _is_discrete_rigid_body(-1)
+
+
+@D7.check(Level.FLOAT64, tol=1e-12, form="printed")
+def d7_minimiser_is_discrete_rigid_body() -> float:
+    """The same residual for the global minimiser, which the problem as printed asks for and the
+    theorem's U_k is read as: it solves the theorem's equations, but symrb's flow from its data
+    leaves it and its U_k Lambda have eigenvalues in the left half-plane."""
+    return _is_discrete_rigid_body(1)
+
+
+@D7.check(Level.FLOAT64, tol=1e-12, form="corrected")
+def d7_minimiser_branch() -> float:
+    """The global minimiser of the same problem solves the theorem's equations with its costate,
+    and each of its U_k is off the branch through I and continues (Newton along J_D(V) = tM_k,
+    t from 1 to 0) to the half-turn about the axis of the smallest lambda_i (lambda_1 = 0.7):
+    the largest of the Ukdef residual, max_k max(0, min Re eig(U_k Lambda)) and the number of
+    U_k that continue elsewhere."""
+    Us, theorem, _gap = _optimum(1)
+    above = max(0.0, max(_margin(u, _LAM3) for u in Us))
+    elsewhere = sum(_continued_to(u, _LAM3) != "R1" for u in Us)
+    return max(theorem, above, float(elsewhere))
+
+
+# the paper's sentences (the definition, the theorem, the remark after it and the proof)
+
+D7.sentence(
+    r"We now derive the discrete symmetric rigid body equations by considering discrete optimal "
+    r"control on the special orthogonal group.",
+    kind="prose",
+    reason="announces the definition and theorem",
+)
+D7.sentence(
+    r"Let $\Lambda$ be a positive definite diagonal matrix.",
+    d7_ukdef_branch_n3,
+    d7_symrb_flow_is_extremal,
+)
+D7.sentence(
+    r"Let $\overline{Q}_0, \overline{Q}_N\in \operatorname{SO}(n)$ be given and fixed.",
+    d7_symrb_flow_is_extremal,
+)
+D7.sentence(
+    r"Let $\hat{V}(U_0, \ldots, U_{N-1}):=\sum_{k=0}^{N-1} \operatorname{trace}(\Lambda U_{k}), "
+    r"\quad U_k \in \operatorname{SO}(n).$",
+    d7_mv_functional_corrected,
+    d7_symrb_flow_is_extremal,
+)
+D7.sentence(
+    r"Define the optimal control problem $\mathop{\rm min}_{U_k\in\operatorname{SO}(n)}"
+    r"\hat{V}(U_0,\ldots, U_{N-1})= \mathop{\rm min}_{U_k\in\operatorname{SO}(n)} "
+    r"\sum_{k=0}^{N-1}\operatorname{trace}(\Lambda U_{k})$ subject to dynamics and initial and "
+    r"final data $Q_{r+1}=Q_kU_{r}, \qquad Q_0=\overline{Q}_0, \qquad Q_N =\overline{Q}_N$ for "
+    r"$Q_r, U_r\in \operatorname{SO}(n)$, $r=0,1, \ldots, N-1$.",
+    d7_mv_functional_corrected,
+    d7_mv_functional_printed,
+    d7_symrb_flow_is_extremal,
+    d7_maximiser_is_discrete_rigid_body,
+    d7_minimiser_is_discrete_rigid_body,
+    d7_minimiser_branch,
+)
+D7.sentence(
+    r"Theorem. A solution of the optimal control problem in Definition (mvoptprobm) satisfies "
+    r"the optimal evolution equations $Q_{k+1} = Q_kU_{k}\,, \qquad P_{k+1} = P_kU_{k}\,, \qquad "
+    r"k=0, \ldots, N-1,$ where $P_k\in \operatorname{SO}(n)$ is the discrete covector in the "
+    r"discrete maximum principle and $U_{k} \in \operatorname{SO}(n)$ is defined by "
+    r"$U_{k}\Lambda - \Lambda U^T_{k}=Q_k^TP_k-P_k^TQ_k\,.$",
+    d7_costate_gradients,
+    d7_final_and_flip,
+    d7_symrb_flow_is_extremal,
+    d7_costate_in_SO_is_a_choice,
+    d7_costate_in_SO_printed,
+    d7_ukdef_branch_n2,
+    d7_ukdef_unique_n2,
+    d7_ukdef_branch_n3,
+    d7_ukdef_unique_n3,
+    d7_maximiser_is_discrete_rigid_body,
+    d7_minimiser_is_discrete_rigid_body,
+    d7_minimiser_branch,
+)
+D7.sentence(
+    r"Equation (Ukdef) can be solved for $U_k$ under certain circumstances, as discussed in "
+    r"[MoVe1991] and [CaLe2001]; we discuss this issue further below.",
+    d7_ukdef_branch_n2,
+    d7_ukdef_branch_n3,
+    d7_minimiser_is_discrete_rigid_body,
+    d7_minimiser_branch,
+)
+D7.sentence(
+    r"Proof. Applying Proposition (gendiscprop), we get "
+    r"$H(P_{k+1},Q_k,U_{k})=\operatorname{trace}(P_{k+1}^TQ_kU_{k}) "
+    r"-\operatorname{trace}(\Lambda U_{k}) =\operatorname{trace}\left((P^T_{k+1}Q_k-\Lambda)"
+    r"U_{k}\right)\,.$",
+    d7_costate_gradients,
+    d7_symequation,
+)
+D7.sentence(
+    r"Note that $\hat{V}(U_0, \ldots, U_{N-1})= \sum_{k=0}^{N-1}\operatorname{trace}(\Lambda "
+    r"U_{k})= \sum_{k=0}^{N-1}\operatorname{trace}(U^T_{k} \Lambda)=\sum_{k=0}^{N-1}"
+    r"\operatorname{trace}(Q_k\Lambda Q_{k+1}^T)$ is the Moser-Veselov functional [MoVe1991] "
+    r"and that this functional is linear in the controls.",
+    d7_mv_functional_corrected,
+    d7_mv_functional_printed,
+)
+D7.sentence(
+    r"We need to find the critical points of $H(P_{k+1},Q_k,U_{k})$ where $U_k^TU_k=I$ since "
+    r"$U_k\in \operatorname{SO}(n)$.",
+    d7_critical_points,
+)
+D7.sentence(
+    r"Thus, we need to minimize a functional of the form $\operatorname{trace}(AU)$, $A$ fixed, "
+    r"subject to $U^TU=I$.",
+    d7_critical_points,
+)
+D7.sentence(
+    r"Set $\tilde{V}(U):=\operatorname{trace}(AU)+\tfrac{1}{2} \operatorname{trace}\left(\Sigma "
+    r"(U^TU-I)\right)\,,$ where $U \in \operatorname{SO}(n)$ and $\Sigma=\Sigma^T$ is a "
+    r"$N \times N$ matrix of Lagrange multipliers.",
+    d7_multiplier_derivative,
+    d7_multiplier_n_by_n,
+    d7_multiplier_N_by_N,
+)
+D7.sentence(
+    r"Then $\delta\tilde{V}(U) \cdot \delta U= \operatorname{trace}(A\delta U+\Sigma U^T\delta "
+    r"U)=0$ implies $A+\Sigma U^T=0$ where $U^TU=I$.",
+    d7_multiplier_derivative,
+    d7_critical_points,
+)
+D7.sentence(r"Hence $\Sigma=-AU$.", d7_critical_points)
+D7.sentence(
+    r"But since $\Sigma=\Sigma^T$ the extrema of our optimization problem are obtained when "
+    r"$AU=U^TA^T$.",
+    d7_critical_points,
+)
+D7.sentence(
+    r"Applying this observation to our case (see (discham)), we have $\nabla_{U_k}H = 0$ when "
+    r"$\left(P_{k+1}^TQ_k-\Lambda\right)U_{k} =U^T_{k}\left(Q_k^TP_{k+1}-\Lambda\right)\,,$ that "
+    r"is, $U^T_{k}\Lambda-\Lambda U_{k}= U^T_{k}Q^T_kP_{k+1}-P^T_{k+1}Q_kU_{k}$ or, "
+    r"equivalently, $U_{k}\Lambda-\Lambda U^T_{k}=-Q^T_kP_{k+1}U^T_{k}+ U_{k}P^T_{k+1}Q_k\,.$",
+    d7_symequation,
+    d7_critical_points,
+)
+D7.sentence(
+    r"Also, by (eq8.3), $P_k=\nabla_{Q_k}H=\left(U_{k}P^T_{k+1}\right)^T=P_{k+1}U^T_{k}\,, "
+    r"\qquad Q_{k+1} = \nabla_{P_{k+1}}H = Q_kU_k\,.$",
+    d7_costate_gradients,
+)
+D7.sentence(r"Hence we obtain equations (discrbopteqns).", d7_costate_gradients)
+D7.sentence(
+    r"Combining (discrbopteqns) with (symequation) we get "
+    r"$U_{k}\Lambda-\Lambda U^T_{k}=P_k^TQ_k-Q_k^TP_k$",
+    d7_final_and_flip,
+)
+D7.sentence(
+    r"Now replace $P_k$ by $-P_k$ and $P_{k+1}$ by $-P_{k+1}$; thus (discrbopteqns) remains "
+    r"unchanged but (equ_final_th_2.7) is transformed to (Ukdef) which yields the stated result.",
+    d7_final_and_flip,
+    d7_flip_determinant,
+    d7_flip_determinant_printed,
+)

@@ -35,7 +35,7 @@ from derivations.claims.section2._matrix_formulas import (
 )
 from derivations.claims.section2.d07_optimal_control_on_so_n import JD
 from derivations.registry import Level, claim
-from derivations.symbolic import Words, eq, explicit
+from derivations.symbolic import Words, eq, explicit, general_matrix, skew_matrix
 from derivations.vocabulary import Arg, Kernel, Lam, matrix
 
 D9 = claim(
@@ -45,18 +45,28 @@ D9 = claim(
     statement="Minimising [[cost]] subject to [[dynamics]] gives [[costate]], [[Ukdef2]] and "
     "[[endpoint]].",
     printed="The cost of the learning problem starts the running cost at one, [[cost_printed]], and writes "
-    "$\\phi(\\overline Q^a_N)$ for the free end point; the theorem's equation for $U_k$ typesets the sum's limits as "
+    "$\\phi(\\overline Q^a_N)$ for the free end point while the definition keeps "
+    "$\\overline Q^a_N$ given and fixed; the theorem's equation for $U_k$ typesets the sum's limits as "
     "`\\sum_{^Ma=1}`; the proof applies the multi-sample maximum principle, whose endpoint "
     "condition for the Hamiltonian of the proof, before the sign change, reads [[endpoint_m8]].",
     corrected="The running cost starts at zero, [[cost]], with $\\phi$ a function of the matrix "
-    "$Q^a_N$; the sum in the equation for $U_k$ runs over the samples one to M; for the Hamiltonian of the proof "
+    "$Q^a_N$, which is free; the sum in the equation for $U_k$ runs over the samples one to M; for the Hamiltonian of the proof "
     "the costate ends at [[endpoint_unflipped]], where [[final_unflipped]]; after the sign "
     "change used for the equation for $U_k$ this becomes the theorem's [[endpoint]] with [[Ukdef2]], so the "
-    "theorem's equations hold as stated.",
+    "theorem's equations hold as stated. The multiplier rule behind them needs no regularity "
+    "hypothesis here: with the endpoint free the dynamics constraints have full row rank at "
+    "every point (the next states enter with an identity block) and the orthogonality of the "
+    "controls is a regular constraint, so there is no abnormal case.",
     note="The running cost starts at $k = 1$ (so the equation for $U_0$ fails), the sum over the "
-    "samples is mistyped, and the endpoint sign rests on two slips that cancel. Corrected: the "
-    "running cost starts at $k = 0$, the sum runs over $a = 1, \\dots, M$, and the theorem's "
-    "$P^a_N = \\partial\\phi/\\partial Q^a_N$ is right after the sign change $P \\mapsto -P$. "
+    "samples is mistyped, the endpoint sign rests on two slips that cancel, and the definition "
+    "fixes $\\overline Q^a_N$ beside the terminal cost. Corrected: the running cost starts at "
+    "$k = 0$, the sum runs over $a = 1, \\dots, M$, the theorem's $P^a_N = "
+    "\\partial\\phi/\\partial Q^a_N$ is right after the sign change $P \\mapsto -P$, and $Q^a_N$ "
+    "is free. With $Q^a_N$ fixed, $\\phi(Q^a_N)$ is a constant and no endpoint condition follows "
+    "(the slip D5 corrects): for $N = 1$, $Q_0 = I$, a fixed rational rotation $Q_1 = R$ and "
+    "$\\phi(Q) = \\tfrac12\\|Q - R\\|_F^2$ either endpoint condition gives $P_1 = 0$, so the "
+    "equation for $U_0$ would need $J_D(R) = 0$, while the only admissible control is $U_0 = R$ "
+    "($\\|J_D(R)\\|_F^2 = 311052/75625$). "
     "With the sum starting at $k = 1$ the first control $U_0$ carries no running cost and the "
     "equation for $U_k$ fails at $k = 0$. The endpoint sign of the second proposition of Section "
     "2 is wrong for the Hamiltonian's sign (the maximum principle gives $p_N = "
@@ -66,7 +76,10 @@ D9 = claim(
     "differences of an independently written cost, $n = 3$, $N = 4$, two samples, $\\phi(Q) = "
     "\\tfrac12\\|Q - T\\|_F^2$) with $\\tfrac12 \\operatorname{tr}(U_k^T (J_D(U_k) - R_k) U_k "
     "\\xi)$, $R_k$ the right side of the variant of the equation for $U_k$, so it vanishes for "
-    "every $\\xi$ exactly when that variant holds.",
+    "every $\\xi$ exactly when that variant holds. Normality (the hypothesis of D1's multiplier "
+    "rule): with $Q^a_N$ free the Jacobian of the dynamics in the states and the control "
+    "directions $U_k(I + \\xi_k)$ has full row rank, computed as 54 of 54 on a rational network "
+    "($n = 3$, $N = 3$, $M = 2$), so no abnormal multiplier occurs.",
     expected="holds after correction",
     section="2.1",
     where="Section 2.1, the second definition (several samples $Q^a$ and a terminal cost $\\phi$) "
@@ -85,7 +98,7 @@ D9_COST_PRINTED = D9.formula(
     "cost_printed",
     sp.Sum(sp.Trace(Lam * Uk), (_k, 1, _N - 1)) + sp.Sum(_phi(QaN), (_a, 1, _Msamples)),
 )
-D9.formula("dynamics", eq(Qa1, Qa * Uk))
+D9_DYNAMICS = D9.formula("dynamics", eq(Qa1, Qa * Uk))
 D9.formula("costate", eq(Pa1, Pa * Uk))
 UKDEF2 = D9.formula("Ukdef2", eq(_JD(Uk), sp.Sum(Qa.T * Pa - Pa.T * Qa, (_a, 1, _Msamples))))
 FINAL_UNFLIPPED = D9.formula(
@@ -383,3 +396,119 @@ def d9_symrb_so_network_gradients() -> float:
             fd = (loss(up) - loss(um)) / (2 * h)
             worst = max(worst, abs(fd - float(np.sum(G[k] * xi))))
     return worst / float(np.max(np.abs(G)))
+
+
+@D9.check(Level.EXACT_RATIONAL, form="corrected")
+def d9_free_endpoint_is_normal() -> int:
+    """Normality on SO(n) with a free endpoint: on the rational network (n = 3, N = 3, M = 2) the
+    Jacobian of the displayed dynamics, Q^a_{k+1} - Q^a_k U_k in gl(3), in the free variables
+    (the entries of Q^a_1, ..., Q^a_N and xi_k, the control moved to U_k (I + xi_k) with xi_k in
+    so(3)) at the network has full row rank: rows minus rank (54 rows)."""
+    controls, starts, _targets, _lam, _alpha = _so_exact_network()
+    N, M = len(controls), len(starts)
+    states = {(a, k): general_matrix(f"q{a}{k}_", 3) for a in range(M) for k in range(1, N + 1)}
+    xis = [skew_matrix(f"xi{k}_", 3) for k in range(N)]
+    rows, point = [], {}
+    for a in range(M):
+        Q = starts[a]
+        for k in range(N):
+            prev = starts[a] if k == 0 else states[(a, k)]
+            env = {"Q^a_{k+1}": states[(a, k + 1)], "Q^a_k": prev,
+                   "U_k": controls[k] * (sp.eye(3) + xis[k])}  # fmt: skip
+            rows += list(explicit(D9_DYNAMICS.lhs, env) - explicit(D9_DYNAMICS.rhs, env))
+            Q = Q * controls[k]
+            point.update(zip(states[(a, k + 1)], Q, strict=True))
+    skew = [xi[i, j] for xi in xis for i, j in itertools.combinations(range(3), 2)]
+    free = [s for m in states.values() for s in m] + skew
+    point.update(dict.fromkeys(skew, 0))
+    jac = sp.Matrix(rows).jacobian(free).xreplace(point)
+    return jac.rows - jac.rank()
+
+
+def _d9_fixed_endpoint_gap(endpoint: sp.Eq) -> sp.Expr:
+    """One sample, N = 1, Q_0 = I, Q_1 fixed to a rational rotation R (Cayley, entries 1, 2, -1
+    over 7), phi(Q) = 1/2 ||Q - R||_F^2, Lambda = diag(7/10, 11/10, 8/5).  The only admissible
+    control is U_0 = R.  P_1 from the given endpoint formula (the entrywise derivative of phi by
+    SymPy, at Q_1 = R), P_0 from the displayed costate equation, then ||J_D(U_0) - (Q_0^T P_0 -
+    P_0^T Q_0)||_F^2, the defect of the displayed equation for U_k at the admissible control."""
+    R = _cayley_rational([1, 2, -1], 7)
+    lam = [sp.Rational(7, 10), sp.Rational(11, 10), sp.Rational(8, 5)]
+    Qs = general_matrix("q", 3)
+    phi = sum(((e - r) ** 2 for e, r in zip(Qs, R, strict=True)), sp.Integer(0)) / 2
+    G = Qs.applyfunc(lambda e: sp.diff(phi, e)).xreplace(dict(zip(Qs, R, strict=True)))
+    P1 = explicit(endpoint.rhs, {r"\partial\phi/\partial Q^a_N": G})
+    P0 = general_matrix("p", 3)
+    costate = D9.formulas["costate"]
+    env = {"P^a_{k+1}": P1, "P^a_k": P0, "U_k": R}
+    eqs = list(explicit(costate.lhs, env) - explicit(costate.rhs, env))
+    P0 = P0.xreplace(sp.solve(eqs, list(P0), dict=True)[0])
+    lhs = explicit(JD["JD"], {"U": R}, lam)
+    rhs = explicit(UKDEF2.rhs.function, {"Q^a_k": sp.eye(3), "P^a_k": P0})
+    return sp.nsimplify(sum(e**2 for e in lhs - rhs))
+
+
+@D9.check(Level.EXACT_RATIONAL, form="printed")
+def d9_printed_fixed_endpoint() -> sp.Expr:
+    """The definition keeps Q^a_N given and fixed beside the terminal cost phi(Q^a_N): with N = 1,
+    Q_0 = I, the fixed Q_1 = R (a rational rotation) and phi(Q) = 1/2 ||Q - R||^2, the admissible
+    control U_0 = R violates the equation for U_k with the costate of either displayed endpoint
+    condition (both give P_1 = 0): the smaller ||J_D(U_0) - (Q_0^T P_0 - P_0^T Q_0)||_F^2."""
+    return sp.Min(*(_d9_fixed_endpoint_gap(e) for e in (ENDPOINT, ENDPOINT_UNFLIPPED)))
+
+
+# the paper's sentences (the definition, the theorem and its proof)
+
+D9.sentence(
+    r"We can now obtain the machine learning generalization of the discrete rigid body equations.",
+    kind="prose",
+    reason="announces the definition and theorem",
+)
+D9.sentence(r"Let $\Lambda$ be a positive definite diagonal matrix.", d9_theorem)
+D9.sentence(
+    r"Let $\overline{Q}_0, \overline{Q}_N^a\in \operatorname{SO}(n)$, $a=1, \ldots, M$, be given "
+    r"and fixed.",
+    d9_printed_fixed_endpoint,
+    d9_theorem,
+)
+D9.sentence(
+    r"Let $\hat{V}(U_0, \ldots, U_{N-1}) :=\sum_{k=1}^{N-1}\operatorname{trace}(\Lambda U_{k}) "
+    r"+\sum_{a=1}^M\phi(\overline{Q}^a_N)$ and let "
+    r"$\phi:\mathbb{R}^n\times\mathbb{R}^n\rightarrow\mathbb{R}^+$ be a given smooth function.",
+    d9_theorem,
+    d9_printed_index,
+)
+D9.sentence(
+    r"Define the optimal control problem $\mathop{\rm min}_{U_k\in \operatorname{SO}(n)}"
+    r"\hat{V}(U_0, \ldots, U_{N-1})= \mathop{\rm min}_{U_k\in \operatorname{SO}(n)} "
+    r"\sum_{k=1}^{N-1}\operatorname{trace}(\Lambda U_{k}) +\sum_{a=1}^M\phi(\overline{Q}^a_N)$ "
+    r"subject to dynamics and initial data $Q^a_{r+1}=Q^a_rU_{r}, \qquad "
+    r"Q^a_0=\overline{Q}^a_0, \qquad r=0, \ldots, N-1,$ for $Q_k, U_k\in \operatorname{SO}(n)$.",
+    d9_theorem,
+    d9_printed_index,
+    d9_so_network_gradient_exact,
+)
+D9.sentence(
+    r"Theorem. A solution of the optimal control problem in Defintion (mvoptprobm1) satisfies the "
+    r"optimal evolution equations for each $a=1, \ldots, M$, $Q^a_{k+1} = Q^a_kU_{k} \qquad "
+    r"P^a_{k+1} = P^a_kU_{k}\,, \qquad k=0, \ldots, N-1, \qquad Q^a_0 = \overline{Q}^a_0,$ where "
+    r"$P^a_k$ is the discrete covector in the discrete maximum principle and $U_{k}$ is defined "
+    r"by $U_{k}\Lambda-\Lambda U^T_{k}=\sum_{^Ma=1}((Q^a_k)^TP^a_k-(P^a_k)^TQ^a_k)\,.$ with "
+    r"$P^a_N=\frac{\partial\phi(Q^a_N)}{\partial Q^a_N}\,.$",
+    d9_theorem,
+    d9_printed_index,
+    d9_so_network_gradient_is_ukdef2,
+    d9_so_network_gradient_exact,
+    d9_symrb_so_network_gradients,
+)
+D9.sentence(
+    r"Proof. We apply Proposition (gendiscpropm) with "
+    r"$H(P_{k+1},Q_k,U_{k})= \sum_{a=1}^M\operatorname{trace}((P^a_{k+1})^TQ^a_kU_{k})"
+    r"+\sum_{a=1}^M\phi(Q^a_N) -\operatorname{trace}(\Lambda U_{k})$",
+    d9_unflipped_endpoint,
+    d9_unflipped_endpoint_printed,
+)
+D9.sentence(
+    r"Then the computation is as above for the optimal control setting.",
+    d9_so_network_gradient_is_ukdef2,
+    d9_unflipped_endpoint,
+)

@@ -182,3 +182,66 @@ def d10_mv1_equals_symmetric_50_digits() -> float:
     reproduces the symmetric representation's Q_k (n = 3, 6 steps)."""
     run, mv = _mp_run(), _mp_mv_runs()
     return float(_mp_gap(mv["mv1_Q"], run["Qs"][: _MP_STEPS + 2]))
+
+
+@D10.check(Level.SYMBOLIC_GENERAL_N)
+def d10_quantities_in_their_spaces() -> sp.Expr:
+    """The displayed mv1 gives an orthogonal Omega_k when Q_k and Q_{k-1} are (Omega_k^T Omega_k
+    and Omega_k Omega_k^T reduce to 1), the emitted mv2 momentum is skew for every Omega (M + M^T
+    expands to 0, Omega not even orthogonal), and the emitted mv3 keeps a skew M skew
+    (noncommutative, every n)."""
+    w = Words(symmetric=["Lambda"], skew=["M"], orthogonal=["Q_k", "Q_{k-1}"])
+    om = w.of(MV1.rhs)
+    r = w.is_zero(w.T(om) * om - 1) + w.is_zero(om * w.T(om) - 1)
+    momentum = w.of(MV_MOMENTUM["M"])
+    r += w.is_zero(momentum + w.T(momentum))
+    nxt = w.of(MV_TRANSPORT["M_next"])
+    return r + w.is_zero(nxt + w.T(nxt))
+
+
+# the paper's sentences
+
+D10.sentence(
+    r"We briefly review the [MoVe1991] discrete rigid body equations.",
+    kind="prose",
+    reason="announces the review that follows",
+)
+D10.sentence(
+    r"Let $Q_k \in\operatorname{SO}(n)$ denote the rigid body configuration at time $k$, let "
+    r"$\Omega_k\in\operatorname{SO}(n)$ denote the body angular velocity at time $k$, and let "
+    r"$M_k$ denote the body angular momentum at time $k$.",
+    d10_quantities_in_their_spaces,
+)
+D10.sentence(
+    r"These quantities are related by the Moser-Veselov equations "
+    r"$\Omega_k= Q_k^TQ_{k-1}, \quad M_k= \Omega_k^T\Lambda-\Lambda\Omega_k, \quad "
+    r"M_{k+1}=\Omega_kM_k\Omega_k^T.$",
+    d10_mv3_conjugation,
+    d10_symrb_algorithms_against_50_digits,
+    d10_mv1_equals_symmetric_50_digits,
+)
+D10.sentence(
+    r"These equations may be viewed as defining two different algorithms.",
+    d10_symrb_algorithms_against_50_digits,
+)
+D10.sentence(
+    r"MV-Algorithm 1. Define the step ahead map "
+    r"$\left(Q_k, Q_{k+1}\right)\mapsto \left(Q_{k+1}, Q_{k+2}\right)$ as follows: compute "
+    r"$\Omega_{k+1}$ from (mv1), compute $M_{k+1}$ from (mv2), compute $M_{k+2}$ from (mv3), "
+    r"compute $\Omega_{k+2}$ from (mv2) and then compute $Q_{k+2}$ from (mv1).",
+    d10_symrb_algorithms_against_50_digits,
+    d10_mv1_equals_symmetric_50_digits,
+)
+D10.sentence(
+    r"Remark. Given $M_k$, conditions under which equation (mv2) is solvable for $\Omega_k$ are "
+    r"discussed in [MoVe1991] and [CaLe2001].",
+    d10_solvability_n2,
+    d10_fold_n2,
+    d10_fold_n3,
+)
+D10.sentence(
+    r"MV-Algorithm 2. Define the map: $\left(Q_k, M_{k}\right)\mapsto \left(Q_{k+1}, "
+    r"M_{k+1}\right)$ as follows: compute $\Omega_k$ from (mv2), compute $M_{k+1}$ from (mv3), "
+    r"compute $\Omega_{k+1}$ from (mv2) and compute $Q_{k+1}$ from (mv1).",
+    d10_symrb_algorithms_against_50_digits,
+)

@@ -94,3 +94,30 @@ def d11_symrb_sequences_stationary() -> float:
                 d += _numeric(S_TERM, {"Q_k": seq[k] @ xi, "Q_{k+1}": seq[k + 1]}, lam)
                 worst.append(abs(d))
     return float(np.max(worst))
+
+
+# the paper's sentences
+
+D11.sentence(
+    r"Discrete Variational Principle. The Moser-Veselov equations (mv1)-(mv3) can be obtained by "
+    r"a discrete variational principle, as was done in [MoVe1991].",
+    d11_euler_lagrange,
+)
+D11.sentence(
+    r"This variational principle has the general form described in discrete mechanics; see, "
+    r"e.g., [MaWe1997], [BoSu1999], and [MaWe2001].",
+    kind="prose",
+    reason="places the principle in the literature (citations)",
+)
+D11.sentence(
+    r"Namely, stationary points of the functional "
+    r"$\hat{S}= \sum_k \operatorname{trace}(Q_k \Lambda Q_{k+1}^T)$ on sequences of orthogonal "
+    r"$n\times n$ matrices yield the Moser-Veselov equations.",
+    d11_euler_lagrange,
+    d11_symrb_sequences_stationary,
+)
+D11.sentence(
+    r"This variational approach can be justified as in [MaPeSh1999].",
+    kind="prose",
+    reason="points to a justification in the literature (a citation)",
+)

@@ -156,3 +156,42 @@ def d12_symrb_momenta_against_50_digits() -> float:
     _Q1, _P1, Us = symrb.paper.symmetric_step(Qf[:-1], Pf[:-1], _LAM3, _H)  # a batch of 12 states
     errs = [np.abs(MB - Msf[:-1]).max(), np.abs(ref.J_D(Us, _LAM3) - Msf[:-1]).max()]
     return float(np.max(errs))
+
+
+# the paper's sentences (the first two are in Section 2.1, after the symmetric algorithm)
+
+D12.sentence(
+    r"As discussed in [BlCrMaRa2002] these equations are equivalent on a certain set to the "
+    r"discrete Moser-Veselov equations for the classical rigid body if we identify $U$ with the "
+    r"body angular momentum.",
+    d12_symmetric_gives_mv,
+    d12_identification,
+    d12_identification_printed,
+)
+D12.sentence(
+    r"We shall say more about Moser-Veselov as well as equivalence in the smooth setting below.",
+    kind="prose",
+    reason="points to later sections (the smooth equivalence is S6, S9-S11)",
+)
+D12.sentence(
+    r"As mentioned above we can prove that symmetric representation of the rigid body equations "
+    r"and the Moser-Veselov equations are equivalent when restricted to a suitable set.",
+    d12_symmetric_gives_mv,
+    d12_mv2_equals_symmetric_50_digits,
+)
+D12.sentence(
+    r"It is easy to see the following: suppose that we have a solution $(Q_k, P_k)$ to the "
+    r"symmetric discrete rigid body equations We can then produce a solution "
+    r"$(Q_{k + 1}, M_{k + 1})$ of the Moser-Veselov equations: "
+    r"$M_{k + 1}=Q_k^TP_k-P_k^TQ_k$ will give us the required $M_{k + 1}$ that does the job.",
+    d12_symmetric_gives_mv,
+    d12_mv2_equals_symmetric_50_digits,
+    d12_symrb_momenta_against_50_digits,
+)
+D12.sentence(
+    r"We refer to [BlCrMaRa2002] for the full proof of equivalence in the discrete setting and "
+    r"we shall discuss below equivalence of the symmetric and standard rigid body in the smooth "
+    r"setting.",
+    kind="prose",
+    reason="points to the literature for the proof and to Section 3 (S6) for the smooth setting",
+)

@@ -26,6 +26,7 @@ from derivations.registry import Level, claim
 from derivations.symbolic import (
     Bracket,
     Pair,
+    Words,
     eq,
     explicit,
     hat3,
@@ -33,9 +34,10 @@ from derivations.symbolic import (
     residual,
     skew_matrix,
     sym_vector,
+    trace_words_of,
     vee3,
 )
-from derivations.vocabulary import Arg, Jinv, Kernel, Lam, matrix
+from derivations.vocabulary import Arg, Jinv, Kernel, Lam, matrix, n
 
 Q, M, Om = matrix("Q"), matrix("M"), matrix("Omega")
 ARG_Q = Arg("Q", "(..., n, n)", "attitude, in SO(n)")
@@ -135,6 +137,47 @@ def s2_J_positive() -> sp.Expr:
     )
     quad = explicit(Pair(Om, J_DEF.rhs), {"Omega": Omega}, lam)
     return residual(quad - form)
+
+
+def _pair_trace(e: sp.Basic) -> sp.Basic:
+    """The displayed pairings <a, b> as -tr(a b)/2 (the pairing of S1)."""
+    return e.replace(lambda x: isinstance(x, Pair), lambda x: -sp.Trace(x.args[0] * x.args[1]) / 2)
+
+
+@S2.check(Level.SYMBOLIC_GENERAL_N)
+def s2_J_symmetric_general_n() -> sp.Expr:
+    """Every n: the displayed <J a, b> - <a, J b>, with a, b and the symmetric Lambda
+    noncommutative, is a sum of traces that cancels up to cyclic rotation (trace words left)."""
+    w = Words(symmetric=["Lambda"])
+    return sp.Integer(len(trace_words_of(w.trace_argument(
+        _pair_trace(lhs_minus_rhs(S2.formulas["J_symmetric"]))))))  # fmt: skip
+
+
+@S2.check(Level.SYMBOLIC_GENERAL_N)
+def s2_J_positive_general_n() -> sp.Expr:
+    """Every n, with symbolic indices: <Om, J Om> (the displayed J, Lambda = diag(lambda)) is
+    the double sum over 0 <= i, k <= n - 1 of SymPy's entries of the matrix product, whose
+    summand, with Om_ki = -Om_ik (skew), is (1/2) c_ik Om_ik^2 with c_ik the left side of the
+    displayed positivity condition at (lambda_i, lambda_k): positive definite when it holds for
+    i != k (Om_ii = 0).  Residual: 1 if the summands differ."""
+    lv = sp.MatrixSymbol("lambda", n, 1)
+    i = sp.Symbol("i", integer=True)
+    quad = _pair_trace(Pair(Om, J_DEF.rhs))  # -tr(Om J(Om))/2
+    coeff, tr = quad.as_coeff_Mul()
+    entry = tr.arg.xreplace({Lam: sp.DiagMatrix(lv)})[i, i]  # Sum over k of the (i, i) entry
+    (k,) = entry.variables
+
+    def in_range(e: sp.Piecewise) -> sp.Expr:  # the inner sums' range conditions hold for i, k
+        (value, cond), rest = e.args[0], e.args[1:]
+        if not any(cond == sp.And(v >= 0, v <= n - 1) for v in (i, k)) or rest[0][0] != 0:
+            raise ValueError(f"unexpected condition {cond}")
+        return value
+
+    summand = entry.function.replace(lambda e: isinstance(e, sp.Sum), lambda e: e.doit())
+    summand = coeff * summand.replace(lambda e: isinstance(e, sp.Piecewise), in_range)
+    summand = summand.xreplace({Om[k, i]: -Om[i, k]})
+    c = POSITIVE.lhs.xreplace({_li: lv[i, 0], _lj: lv[k, 0]})
+    return residual(sp.expand(summand - c * Om[i, k] ** 2 / 2))
 
 
 @S2.check(Level.SYMBOLIC_FIXED_N)
@@ -249,3 +292,48 @@ def s2_symrb_euler_pointwise() -> float:
     inertia = lam.sum(axis=-1, keepdims=True) - lam
     want = np.cross(m, m / inertia)
     return float(np.abs(symrb.rigid_body.euler_rhs_so3(m, lam) - want).max() / np.abs(want).max())
+
+
+# the paper's sentences
+S2.sentence(
+    r"Firstly we review the classical rigid body equations in $n$ dimensions for completeness.",
+    kind="prose",
+    reason="announces the review that follows",
+)
+S2.sentence(
+    r"Further details may be found in [BlCrMaRa2002].",
+    kind="prose",
+    reason="a citation",
+)
+S2.sentence(
+    r"We recall from [Manakov1976] and [Ratiu1980] that the left invariant generalized rigid body "
+    r"equations on $\operatorname{SO}(n)$ may be written as $\dot Q = Q\Omega ; \qquad \dot M = "
+    r"[M,\Omega]\,,$ where $Q\in \operatorname{SO}(n)$ denotes the configuration space variable "
+    r"(the attitude of the body), $\Omega=Q^{-1}\dot{Q} \in \mathfrak{so}(n)$ is the body angular "
+    r"velocity, and $M:=J(\Omega)=\Lambda\Omega +\Omega\Lambda \in \mathfrak{so}(n)$ is the "
+    r"body angular momentum.",
+    s2_emitted_field,
+    s2_symrb_field_pointwise,
+    s2_symrb_inertia_operators,
+    s2_flow_against_elliptic,
+)
+S2.sentence(
+    r"Here $J: \mathfrak{so}(n) \rightarrow \mathfrak{so}(n)$ is the symmetric (with respect to "
+    r"the inner product (killing.eqn)), positive definite, and hence invertible, operator defined "
+    r"by $J(\Omega)=\Lambda\Omega +\Omega\Lambda ,$ where $\Lambda$ is a diagonal matrix "
+    r"satisfying $\Lambda_i + \Lambda_j >0$ for all $i \neq j$.",
+    s2_J_symmetric,
+    s2_J_positive,
+    s2_symrb_inertia_operators,
+    s2_J_symmetric_general_n,
+    s2_J_positive_general_n,
+)
+S2.sentence(
+    r"For $n=3$ the elements of $\Lambda_i$ are related to the standard diagonal moment of "
+    r"inertia tensor $I$ by $I_1 = \Lambda_2 + \Lambda_3$, $I_2 = \Lambda_3 + \Lambda_1$, "
+    r"$I_3 = \Lambda_1 + \Lambda_2$.",
+    s2_moments_n3,
+    s2_euler_n3,
+    s2_symrb_euler_pointwise,
+    s2_flow_against_elliptic,
+)

@@ -27,8 +27,16 @@ from derivations.claims.section3._exact import count_nonzero
 from derivations.claims.section3._inertia import ARG_LAM, lam_symbols
 from derivations.claims.section3._symmetric import ARG_P, ARG_Q, MOMENTUM, P, Pdot, Q, Qdot, U
 from derivations.registry import Level, claim
-from derivations.symbolic import Pair, eq, explicit, general_matrix, skew_matrix
-from derivations.vocabulary import Jinv, Kernel, Lam, matrix
+from derivations.symbolic import (
+    Pair,
+    Words,
+    eq,
+    explicit,
+    general_matrix,
+    skew_matrix,
+    trace_words_of,
+)
+from derivations.vocabulary import Jinv, Kernel, Lam, W, matrix
 
 S5 = claim(
     "S5",
@@ -238,3 +246,135 @@ def s5_first_variation() -> float:
     PT, dQT = sol.y[size : 2 * size, -1].reshape(k, k), sol.y[2 * size :, -1].reshape(k, k)
     rhs = float(explicit(PAIRING.rhs, {"A": sp.Matrix(PT), "B": sp.Matrix(dQT)}))
     return abs(lhs - rhs) / abs(rhs)
+
+
+# ---------------------------------------------------------------------------------------------
+# every n: noncommutative letters, derivatives along a direction, traces compared as words
+
+_t_dir = sp.Symbol("t")
+
+
+def _traced(expr: sp.Expr, w: Words) -> sp.Expr:
+    """A scalar built from the displayed pairings and traces as the polynomial X with value
+    tr(X): the gl(n) pairing by its displayed definition, the so(n) pairing <a, b> =
+    -tr(a b)/2 of S1."""
+    e = unfold(expr).replace(
+        lambda x: isinstance(x, Pair), lambda x: -sp.Trace(x.args[0] * x.args[1]) / 2
+    )
+    return w.trace_argument(e)
+
+
+def _trace_gap(a: sp.Expr, b: sp.Expr, w: Words) -> int:
+    """Trace words left in tr(a) - tr(b), written as tr(d + d^T)/2 (a trace equals that of its
+    transpose, which brings skew and symmetric letters to one form): 0 when tr(a) = tr(b)."""
+    d = sp.expand(a - b)
+    return len(trace_words_of(d + w.T(d)))
+
+
+def _along(X: sp.Expr, var: sp.Symbol, dvar: sp.Symbol, w: Words, order: int = 1) -> sp.Expr:
+    """d^order/dt^order of the polynomial X with var -> var + t dvar (and its transpose letter
+    with it), at t = 0."""
+    moved = {var: var + _t_dir * dvar, w.T(var): w.T(var) + _t_dir * w.T(dvar)}
+    if w.T(var) == -var:  # a skew letter has no transpose letter of its own
+        moved = {var: var + _t_dir * dvar}
+    return sp.diff(sp.expand(X.xreplace(moved)), _t_dir, order).xreplace({_t_dir: 0})
+
+
+def _s5_general_n(form: str) -> sp.Integer:
+    """Every n, noncommutative Q, P (general), U, dU (skew), Lambda (symmetric): trace words by
+    which the displayed H_<form> fails (1) dH = <X - J(U), dU>/2 along skew dU, X the argument
+    of the displayed U = J^-1(X) (so dH = 0 exactly there, J invertible), (2) d^2H =
+    -<dU, J(dU)>/2 (negative definite by S2), (3) the displayed costate equations: dH along dP
+    and dQ equal the displayed pairing with Qdot/c and Pdot/c of the displayed srb1."""
+    w = Words(symmetric=["Lambda"], skew=["U", "dU"])
+    q, p, u, du, lam = w.letters("Q P U dU Lambda")
+    H = _traced(S5.formulas[f"H_{form}"].rhs, w)
+    # the displayed U = J^-1(X) is W o X (vocabulary.Jinv), which solves J(U) = X
+    (mom,) = (w.of(a) for a in OPTIMAL_U.rhs.args if a != W)
+    J = lambda x: lam * x + x * lam  # noqa: E731 - the displayed J of S2
+    pair = lambda a, b: -a * b / 2  # noqa: E731 - <a, b> = -tr(a b)/2, as a trace argument
+    total = _trace_gap(_along(H, u, du, w), pair(mom - J(u), du) / 2, w)
+    total += _trace_gap(_along(H, u, du, w, 2), -pair(du, J(du)) / 2, w)
+    for rel, costate in zip(SRB1, COSTATE, strict=True):
+        c, var = derivative_rule(costate)
+        X, dX = (p, w("dP")) if var == P_SYM else (q, w("dQ"))
+        rhs = w.of(rel.rhs)
+        shown = _traced(GlPair(_A, _B), w).xreplace({w("A"): rhs / c, w("B"): dX})
+        shown = shown.xreplace({w.T(w("A")): w.T(rhs) / c})
+        total += _trace_gap(_along(H, X, dX, w), shown, w)
+    return sp.Integer(total)
+
+
+@S5.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def s5_corrected_general_n() -> sp.Integer:
+    """Every n (noncommutative Q, P, skew U, symmetric Lambda, derivatives along a direction,
+    traces compared as words): the corrected Hamiltonian has dH = <M - J(U), dU>/2 along skew dU,
+    zero exactly at the displayed U = J^-1(Q^T P - P^T Q), second derivative -<dU, J(dU)>/2
+    (a maximum where J is positive definite, S2), and its gradients in P and Q in the displayed
+    pairing give the displayed Qdot = Q U, Pdot = P U through the displayed costate equations."""
+    return _s5_general_n("corrected")
+
+
+@S5.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def s5_printed_general_n() -> sp.Integer:
+    """The same for the printed Hamiltonian: dH = <M + J(U), dU>/2 and d^2H = +<dU, J(dU)>/2, so
+    it is convex in U for every n and its stationary point is -J^-1(M), not the displayed U
+    (trace words left)."""
+    return _s5_general_n("printed")
+
+
+# the paper's sentences
+S5.sentence(
+    r"Now we briefly review, see [BlCr1996] and [BlBrCr1997], two results which link the theory "
+    r"of optimal control with the rigid body equations.",
+    kind="prose",
+    reason="announces the two propositions that follow, with citations",
+)
+S5.sentence(
+    r"Let $T >0$, $Q_0, Q_T \in \operatorname{SO}(n)$ be given and fixed.",
+    s5_first_variation,
+)
+S5.sentence(
+    r"Let the rigid body optimal control problem be given by $\min_{U\in \mathfrak{so}(n)} "
+    r"\frac{1}{4}\int_0^T \langle U,J(U)\rangle dt$ subject to the constraint on $U$ that there "
+    r"be a curve $Q(t) \in \operatorname{SO}(n)$ such that $\dot Q=QU\qquad Q(0)=Q_0,\qquad "
+    r"Q(T)=Q_T.$",
+    s5_first_variation,
+)
+S5.sentence(
+    r"The rigid body optimal control problem has optimal evolution equations $\dot{Q}=QU\qquad "
+    r"\dot{P}=PU$ where $P$ is the costate vector given by the maximum principle.",
+    s5_corrected_hamiltonian,
+    s5_first_variation,
+    s5_corrected_general_n,
+)
+S5.sentence(
+    r"The optimal controls in this case are given by $U=J^{-1}(Q^TP-P^TQ).$",
+    s5_printed_hamiltonian,
+    s5_corrected_hamiltonian,
+    s5_first_variation,
+    s5_corrected_general_n,
+    s5_printed_general_n,
+)
+S5.sentence(
+    r"The proof (see [BlCr1996]) simply involves, as in the discrete analysis above, writing the "
+    r"Hamiltonian of the maximum principle as $H= \left\langle P,QU \right\rangle +\frac{1}{4} "
+    r"\left\langle U,J(U) \right\rangle,$ where the costate vector $P$ is a multiplier "
+    r"enforcing the dynamics, and then maximizing with respect to $U$ in the standard fashion "
+    r"(see, for example, Brockett [1973]).",
+    s5_printed_hamiltonian,
+    s5_corrected_hamiltonian,
+    s5_corrected_general_n,
+    s5_printed_general_n,
+)
+S5.sentence(
+    r"We refer to the equations (srb1) as the symmetric representation of the rigid body "
+    r"equations.",
+    kind="prose",
+    reason="names the equations",
+)
+S5.sentence(
+    r"We can now recover the classical rigid body equations:",
+    kind="prose",
+    reason="announces the next proposition (S6)",
+)

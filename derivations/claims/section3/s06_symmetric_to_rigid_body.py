@@ -139,3 +139,20 @@ def s6_flow_against_reference_rigid_body() -> float:
     Qw, Mw = (want.y[i * k * k : (i + 1) * k * k].T.reshape(-1, k, k) for i in range(2))
     err = np.max([np.abs(got.y.Q - Qw).max(), np.abs(got.y.M - Mw).max()])
     return float(err / np.abs(M0).max())
+
+
+# the paper's sentences
+S6.sentence(
+    r"If $(Q, P)$ is a solution of (srb1), then $(Q, M)$ where $M = J(\Omega)$, $\Omega=U$, and "
+    r"$\Omega = Q^{-1}\dot{Q}$ satisfies the rigid body equations (rbl).",
+    s6_rigid_body_general_n,
+    s6_momentum_skew,
+    s6_flow_against_elliptic,
+    s6_flow_against_reference_rigid_body,
+)
+S6.sentence(
+    r"Differentiating $M=Q^TP-P^TQ$ and using the equations (srb1) gives the second of the "
+    r"equations (rbl).",
+    s6_rigid_body_general_n,
+    s6_momentum_skew,
+)

@@ -21,7 +21,7 @@ from derivations.claims.section3._symmetric import ARG_B, ARG_Q, MOMENTUM, B, Bd
 from derivations.claims.section3._words import ddt, jinv_letters, reduce_words, rule
 from derivations.claims.section3.s05_maximum_principle import SYMMETRIC_RIGID_BODY_RHS
 from derivations.registry import Level, claim
-from derivations.symbolic import Words, eq
+from derivations.symbolic import Words, eq, explicit
 from derivations.vocabulary import Jinv, Kernel, matrix
 
 S7 = claim(
@@ -155,3 +155,79 @@ def s7_flow_against_elliptic() -> float:
         rtol=1e-12, atol=1e-12, t_eval=t,
     )  # fmt: skip
     return float(np.abs(ref.vee(sol.y.M) - m).max() / np.linalg.norm(m[0]))
+
+
+def _rational_rotation(k: int, rng: np.random.Generator) -> sp.Matrix:
+    """The Cayley transform (I - A)^-1 (I + A) of a random rational skew A: an exact rotation."""
+    A = sp.zeros(k, k)
+    for i in range(k):
+        for j in range(i + 1, k):
+            A[i, j] = sp.Rational(int(rng.integers(-9, 10)), int(rng.integers(1, 7)))
+            A[j, i] = -A[i, j]
+    return (sp.eye(k) - A).inv() * (sp.eye(k) + A)
+
+
+@S7.check(Level.EXACT_RATIONAL)
+def s7_restricts_to_SO_x_SO() -> sp.Integer:
+    """The symmetric rigid body system restricts to SO(n) x SO(n): at exact rational rotations
+    (Q, P) (Cayley transforms, 3 pairs each for n = 3, 4, rational Lambda) the emitted field is
+    tangent to SO(n) x SO(n), Q^T Qdot and P^T Pdot skew, so the closed set SO(n) x SO(n) is
+    invariant.  The number of entries of Q^T Qdot + Qdot^T Q and P^T Pdot + Pdot^T P that are
+    not 0."""
+    rng = np.random.default_rng(7)
+    bad = 0
+    for k in (3, 4):
+        lam = [sp.Rational(int(rng.integers(3, 30)), 10) for _ in range(k)]
+        for _ in range(3):
+            env = {"Q": _rational_rotation(k, rng), "P": _rational_rotation(k, rng)}
+            for name, rate in (("Q", "Qdot"), ("P", "Pdot")):
+                X, Xdot = env[name], explicit(SYMMETRIC_RIGID_BODY_RHS[rate], env, lam)
+                sym = X.T * Xdot + Xdot.T * X
+                bad += sum(1 for e in sym if sp.simplify(e) != 0)
+    return sp.Integer(bad)
+
+
+# the paper's sentences
+S7.sentence(
+    r"While in general there are no constraints on the costate vector $P\in\mathfrak{gl}(n)$ one "
+    r"can consider the restriction of the extremal flows to invariant submanifolds.",
+    kind="prose",
+    reason="introduces the restrictions that follow; each invariant set is checked in its own "
+    "sentence",
+)
+S7.sentence(
+    r"This limits possible extremal trajectories that can be recovered.",
+    kind="prose",
+    reason="a comment on the restrictions; it asserts nothing checkable",
+)
+S7.sentence(
+    r"For example this system restricts to a system on $\operatorname{SO}(n)\times "
+    r"\operatorname{SO}(n)$.",
+    s7_restricts_to_SO_x_SO,
+)
+S7.sentence(
+    r"One can make other assumptions on the costate vector.",
+    kind="prose",
+    reason="announces the next example",
+)
+S7.sentence(
+    r"For example, suppose we assume a costate vector $B$ such that $Q^TB$ is skew.",
+    s7_printed_extremals,
+    s7_corrected_extremals,
+    s7_skew_set_invariant,
+)
+S7.sentence(
+    r"Then it is easy to check that that the extremal evolution equations become $\dot Q = "
+    r"QJ^{-1}(Q^TB); \qquad \dot B = BJ^{-1}(Q^TB)\,,$ and that these equations restrict to an "
+    r"invariant submanifold defined by the condition that $Q^TB$ is skew symmetric.",
+    s7_printed_extremals,
+    s7_corrected_extremals,
+    s7_remark_maps_symmetric_flow,
+    s7_skew_set_invariant,
+    s7_flow_against_elliptic,
+)
+S7.sentence(
+    r"These are the McLachlan-Scovel equations ([McSc1995]).",
+    kind="prose",
+    reason="names the equations and cites their source",
+)

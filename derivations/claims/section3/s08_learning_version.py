@@ -3,8 +3,9 @@ sharing one control.
 
 For samples Qdot^a = Q^a U sharing one control, with the cost of S5 plus sum_a phi(Q^a_T), the
 extremals satisfy Qdot^a = Q^a U, Pdot^a = P^a U with U = sum_a J^-1((Q^a)^T P^a - (P^a)^T Q^a).
-Erratum: the endpoint condition is P^a_T = -2 dphi/dQ^a_T (minus the gradient in the pairing of
-S5), not +dphi/dQ^a_T.
+Erratum: the endpoints Q^a_T are free (the definition keeps Q_T fixed beside the terminal cost, the
+slip D5 corrects in Section 2), and the endpoint condition is P^a_T = -2 dphi/dQ^a_T (minus the
+gradient in the pairing of S5), not +dphi/dQ^a_T.
 
 Emitted to ``symrb/_generated/symmetric_rigid_body.py``: ``control_rhs``.
 """
@@ -30,8 +31,8 @@ from derivations.claims.section3.s05_maximum_principle import (
     unfold,
 )
 from derivations.registry import Level, claim
-from derivations.symbolic import eq, explicit, general_matrix, skew_matrix
-from derivations.vocabulary import Jinv, Kernel, matrix
+from derivations.symbolic import Words, eq, explicit, general_matrix, skew_matrix, trace_residual
+from derivations.vocabulary import Jinv, Kernel, W, matrix
 
 S8 = claim(
     "S8",
@@ -41,19 +42,32 @@ S8 = claim(
     "$\\sum_a\\phi(Q^a_T)$, the extremals satisfy [[costates]] with [[control]], the maximiser "
     "of [[H]], and an endpoint condition on $P^a_T$.",
     expected="holds after correction",
-    printed="[[endpoint_printed]] (with the printed $U$).",
-    corrected="[[endpoint_corrected]], where $\\partial\\phi/\\partial Q$ is the matrix of "
-    "entrywise partial derivatives: minus the gradient in the pairing of S5.",
-    note="The endpoint condition $P^a_T = \\partial\\phi/\\partial Q^a_T$ has the wrong sign and "
-    "factor for the printed control. Corrected: $P^a_T = -2\\,\\partial\\phi/\\partial Q^a_T$, "
-    "minus the gradient of $\\phi$ in the pairing of S5. With the running cost entering the "
+    printed="The definition keeps $Q_T$ given and fixed beside the terminal cost "
+    "$\\sum_a\\phi(Q^a_T)$; [[endpoint_printed]] (with the printed $U$).",
+    corrected="The endpoints $Q^a_T$ are free (fixed, they make the terminal cost a constant "
+    "and give no endpoint condition); [[endpoint_corrected]], where "
+    "$\\partial\\phi/\\partial Q$ is the matrix of entrywise partial derivatives: minus the "
+    "gradient in the pairing of S5.",
+    note="The definition keeps $Q_T$ given and fixed beside the terminal cost, and the endpoint "
+    "condition $P^a_T = \\partial\\phi/\\partial Q^a_T$ has the wrong sign and factor for the "
+    "printed control. Corrected: the endpoints $Q^a_T$ are free and $P^a_T = "
+    "-2\\,\\partial\\phi/\\partial Q^a_T$, minus the gradient of $\\phi$ in the pairing of S5. "
+    "The fixed endpoint is the slip D5 corrects in Section 2: with $Q_T$ fixed, "
+    "$\\phi(Q_T)$ is a constant and no endpoint condition follows; in an exact example ($Q_0 = "
+    "I$, the fixed $Q_T$ a rational rotation $R$, $\\phi(Q) = \\tfrac12\\|Q - R\\|_F^2$) either "
+    "endpoint condition gives $P_T = 0$, where the extremal equations are at rest, so the "
+    "extremal meeting it starts at $R$ instead of $Q_0$ ($\\|R - I\\|_F^2 = 48/55$). With the running cost entering the "
     "maximum principle with multiplier $-1$ (so that $U$ is the printed $+J^{-1}(\\cdots)$, see "
     "S5), transversality gives $P_T = -\\nabla\\phi$, and the gradient in the pairing "
     "$\\tfrac12\\operatorname{tr}(A^T B)$ is twice the entrywise derivative. Checked against a "
     "forward tangent-linear derivative of the cost: with the corrected endpoint the reduced "
     "gradient is $\\tfrac12 J(U - \\sum_a J^{-1}(M^a))$ and vanishes exactly at the printed $U$; "
     "with the printed one it does not match. Equivalently the printed sign is right after $P "
-    "\\mapsto -P$, $U \\mapsto -J^{-1}(\\cdots)$.",
+    "\\mapsto -P$, $U \\mapsto -J^{-1}(\\cdots)$. For every $n$ (noncommutative symbols): "
+    "along the extremal fields $\\tfrac{d}{dt}\\langle P^a, \\delta Q^a\\rangle$ is "
+    "$\\tfrac12\\langle M^a, \\delta U\\rangle$, so the two derivatives agree exactly when "
+    "$\\operatorname{tr}(G^T\\delta Q_T) + \\langle P_T, \\delta Q_T\\rangle$ vanishes for every "
+    "free $\\delta Q_T$, which the corrected condition gives and the printed one does not.",
     section="3.2",
     where="Section 3.2, the second definition (several samples $Q^a$ and a terminal cost "
     "$\\phi$), the third proposition ($U = \\sum_a J^{-1}((Q^a)^T P^a - (P^a)^T Q^a)$) and the "
@@ -217,3 +231,152 @@ def s8_printed_endpoint() -> float:
 def s8_corrected_endpoint() -> float:
     """The same with P integrated backward from the displayed corrected endpoint condition."""
     return _endpoint_mismatch("corrected")
+
+
+def _s8_endpoint_extremal_start(target: sp.Matrix, form: str) -> sp.Matrix:
+    """Where the extremal through the endpoint (Q_T, P_T) starts, one sample, n = 3, rational
+    Lambda: Q_T is the target R of phi(Q) = 1/2 ||Q - R||_F^2, P_T from the displayed endpoint
+    condition ``form`` (its coefficient times the entrywise derivative of phi, by SymPy), U from
+    the displayed control.  There the displayed fields Q U and P U vanish, so the extremal is
+    constant and starts at Q_T (anything else raises: the example would need an integration)."""
+    coeff, deriv = S8.formulas[f"endpoint_{form}"].rhs.as_coeff_Mul()
+    if not (isinstance(deriv, sp.Derivative) and deriv.variables == (_QT,)):
+        raise ValueError("the endpoint condition is not a multiple of d phi / d Q^a_T")
+    lam = [sp.Rational(7, 10), sp.Rational(11, 10), sp.Rational(8, 5)]
+    Qs = general_matrix("q", 3)
+    phi = sum(((e - r) ** 2 for e, r in zip(Qs, target, strict=True)), sp.Integer(0)) / 2
+    point = dict(zip(Qs, target, strict=True))
+    P_T = (coeff * Qs.applyfunc(lambda e: sp.diff(phi, e))).xreplace(point)
+    env = {"Q1": target, "P1": P_T}
+    Ux = explicit(_samples(CONTROL.rhs, 1), env, lam)
+    one = {"Q^a": target, "P^a": P_T, "U": Ux}
+    fields = [explicit(rel.rhs, one, lam) for rel in COSTATES]
+    if any(f != sp.zeros(3, 3) for f in fields):
+        raise ValueError("the extremal through the endpoint is not an equilibrium")
+    return target
+
+
+def _rational_rotation(a: int, b: int, c: int, d: int) -> sp.Matrix:
+    """The Cayley rotation (I - A)^{-1}(I + A) of the skew A with entries a, b, c over d."""
+    A = sp.Matrix([[0, a, b], [-a, 0, c], [-b, -c, 0]]) / d
+    return (sp.eye(3) - A).inv() * (sp.eye(3) + A)
+
+
+@S8.check(Level.EXACT_RATIONAL, form="printed")
+def s8_printed_fixed_endpoint() -> sp.Expr:
+    """The definition keeps Q_T given and fixed beside the terminal cost: with Q_0 = I, the fixed
+    Q_T a rational rotation R (Cayley, entries 1, 2, -1 over 7) and phi(Q) = 1/2 ||Q - R||^2, an
+    admissible control is not zero, yet either displayed endpoint condition gives P_T = 0, where
+    the displayed extremal equations are at rest, so the extremal meeting it starts at R, not at
+    Q_0: the smaller of ||Q(0) - Q_0||_F^2 over the printed and corrected conditions."""
+    R = _rational_rotation(1, 2, -1, 7)
+    gaps = [_s8_endpoint_extremal_start(R, form) - sp.eye(3) for form in ("printed", "corrected")]
+    return sp.Min(*(sp.nsimplify(sum(e**2 for e in g)) for g in gaps))
+
+
+@S8.check(Level.EXACT_RATIONAL, form="corrected")
+def s8_free_endpoint() -> sp.Expr:
+    """The same terminal cost with Q_T free and Q_0 = R: U = 0 is optimal (the cost, a sum of
+    non-negative terms, vanishes there), so Q_T = R, and the corrected endpoint condition with
+    the displayed extremal equations gives the extremal that starts at Q_0:
+    ||Q(0) - Q_0||_F^2."""
+    R = _rational_rotation(1, 2, -1, 7)
+    return sp.nsimplify(sum(e**2 for e in _s8_endpoint_extremal_start(R, "corrected") - R))
+
+
+def _s8_adjoint_defect(form: str) -> sp.Integer:
+    """Trace words left in the two identities behind the endpoint condition, every n (one
+    sample: the sum over samples is linear).  (A) Along the displayed fields, with dQ the
+    variation of the displayed dynamics in a direction dU (skew) and U skew: d/dt <P, dQ> minus
+    1/2 <M, dU>, M the displayed momentum in U, both in the displayed pairing of S5.  (B) At the
+    free endpoint, with P_T from the displayed endpoint condition (coefficient c times G, the
+    entrywise derivative of phi, so that dphi is tr(G^T dQ_T)): tr(G^T dQ_T) + <P_T, dQ_T>.
+    Traces vanish for all matrices when the words of (E + E^T)/2 cancel cyclically."""
+    w = Words(skew=["U", "dU"])
+    dQ, dU, G = matrix("dQ^a"), matrix("dU"), matrix("G^a")
+    eps = sp.Symbol("epsilon")
+    qdot, pdot = (rel.rhs for rel in COSTATES)
+    moved = w.of(qdot.xreplace({Qa: Qa + eps * dQ, U: U + eps * dU}))
+    dqdot = sp.expand(sp.diff(sp.expand(moved), eps)).subs(eps, 0)
+    # (A) the product rule on the displayed pairing, then the pairing unfolded into traces
+    pair = w.trace_argument(unfold(GlPair(Pa, dQ)))  # c * P^T dQ
+    c_pair = sp.expand(pair).coeff(w.T(w("P^a")) * w("dQ^a"))
+    rate = c_pair * (w.T(w.of(pdot)) * w("dQ^a") + w.T(w("P^a")) * dqdot)
+    (momentum,) = (x for x in CONTROL.rhs.function.args if x != W)
+    adjoint = w.trace_argument(unfold(GlPair(momentum, dU))) / 2
+    identity_a = sp.expand(rate - adjoint)
+    # (B) the endpoint condition with its displayed coefficient
+    coeff, deriv = S8.formulas[f"endpoint_{form}"].rhs.as_coeff_Mul()
+    if not (isinstance(deriv, sp.Derivative) and deriv.variables == (_QT,)):
+        raise ValueError("the endpoint condition is not a multiple of d phi / d Q^a_T")
+    identity_b = w.T(w("G^a")) * w("dQ^a") + w.trace_argument(unfold(GlPair(coeff * G, dQ)))
+    return sum(
+        (trace_residual(sp.expand((e + w.T(e)) / 2)) for e in (identity_a, identity_b)),
+        sp.Integer(0),
+    )
+
+
+@S8.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def s8_endpoint_any_n() -> sp.Integer:
+    """Why the corrected endpoint condition, for every n (noncommutative symbols): along the
+    displayed fields d/dt <P^a, dQ^a> equals 1/2 <M^a, dU> (dQ^a the variation of the
+    displayed dynamics, U and dU skew), so the cost's derivative, tr(G^T dQ_T) plus the running
+    part, equals the adjoint form int 1/2 <J(U - sum_a J^-1(M^a)), dU> dt exactly when
+    tr(G^T dQ_T) + <P_T, dQ_T> vanishes for every free dQ_T; with the displayed corrected P_T it
+    does (G the entrywise derivative of phi; count of trace words left)."""
+    return _s8_adjoint_defect("corrected")
+
+
+@S8.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def s8_printed_endpoint_any_n() -> sp.Integer:
+    """The same with the printed endpoint condition: tr(G^T dQ_T) + <P_T, dQ_T> does not vanish
+    (every n)."""
+    return _s8_adjoint_defect("printed")
+
+
+# the paper's sentences
+S8.sentence(
+    r"We can now generalize to the machine learning setting:",
+    kind="prose",
+    reason="announces the definition that follows",
+)
+S8.sentence(
+    r"Let $T >0$, $Q_0, Q_T \in \operatorname{SO}(n)$ be given and fixed.",
+    s8_printed_fixed_endpoint,
+    s8_free_endpoint,
+)
+S8.sentence(
+    r"Let the rigid body optimal control problem be given by $\min_{U\in \mathfrak{so}(n)} "
+    r"\frac{1}{4}\int_0^T \langle U,J(U)\rangle dt +\sum_{a=1}^M\phi(Q^a_T)$ subject to the "
+    r"constraint on $U$ that there be a curve $Q(t) \in \operatorname{SO}(n)$ such that $\dot "
+    r"Q^a=Q^aU\qquad Q^a(0)=Q^a_0,\, a=1\dots M.$",
+    s8_two_samples,
+    s8_printed_endpoint,
+    s8_corrected_endpoint,
+    s8_printed_fixed_endpoint,
+    s8_free_endpoint,
+    s8_endpoint_any_n,
+    s8_printed_endpoint_any_n,
+)
+S8.sentence(
+    r"The smooth machine learning symmetric rigid body flow has optimal evolution equations $\dot "
+    r"Q^a=Q^aU,\, \dot P^a=P^aU$ where $P$ is the costate vector given by the maximum principle",
+    s8_two_samples,
+    s8_symrb_multi_sample,
+)
+S8.sentence(
+    r"The optimal controls in this case are given by $U=\sum_aJ^{-1}((Q^a)^TP^a-(P^a)^TQ^a).$",
+    s8_two_samples,
+    s8_symrb_multi_sample,
+    s8_endpoint_any_n,
+    s8_printed_endpoint_any_n,
+)
+S8.sentence(
+    r"and we have the endpoint conditions $P^a_T=\frac{\partial\phi (Q^a_T)}{\partial Q^a_T}$",
+    s8_printed_endpoint,
+    s8_corrected_endpoint,
+    s8_printed_fixed_endpoint,
+    s8_free_endpoint,
+    s8_endpoint_any_n,
+    s8_printed_endpoint_any_n,
+)

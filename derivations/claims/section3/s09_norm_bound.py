@@ -121,3 +121,139 @@ def s9_skew_orthogonal_pairs() -> sp.Integer:
         bad += int(set((Mk.T * Mk).eigenvals()) != {BOUND.rhs**2})
     bad += sum(int(sp.expand(skew_matrix("a", k).det()) != 0) for k in (3, 5))
     return sp.Integer(bad)
+
+
+@S9.check(Level.FLOAT64, tol=1e-12)
+def s9_S_onto_S_M() -> float:
+    """S_M is the image of S: for random (Q, M) in S_M (Q a reference rotation, M skew with
+    ||M||_op = 0.5, 1.5, 1.99; n = 3..6), P = Q (M/2 + (I + M^2/4)^(1/2)) (square root by
+    numpy.linalg.eigh) is a rotation, and symrb.symmetric.symmetric_momentum(Q, P) is M.  Max of
+    |Q^T P - P^T Q - M|, |P^T P - I| and |det P - 1|."""
+    import symrb
+
+    rng = np.random.default_rng(91)
+    worst = 0.0
+    for k in range(3, 7):
+        for size in (0.5, 1.5, 1.99):
+            Qk, Mk = ref.random_rotation(k, rng), ref.random_skew(k, rng)
+            Mk *= size / np.linalg.norm(Mk, 2)
+            w, V = np.linalg.eigh(np.eye(k) + Mk @ Mk / 4)
+            Pk = Qk @ (Mk / 2 + V @ np.diag(np.sqrt(w)) @ V.T)
+            worst = max(
+                worst,
+                np.abs(symrb.symmetric.symmetric_momentum(Qk, Pk) - Mk).max(),
+                np.abs(Pk.T @ Pk - np.eye(k)).max(),
+                abs(np.linalg.det(Pk) - 1.0),
+            )
+    return float(worst)
+
+
+def _lagrangian(g: np.ndarray, gdot: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """S3's L(g, gdot) = 1/2 <g^-1 gdot, J(g^-1 gdot)> in NumPy (complex entries allowed)."""
+    xi = np.linalg.solve(g, gdot)
+    return 0.5 * ref.pairing(xi, ref.J(xi, lam))
+
+
+@S9.check(Level.FLOAT64, tol=1e-12)
+def s9_left_trivialisation() -> float:
+    """The trivialisation of the definition: the fibre derivative of the rigid body Lagrangian
+    L(g, gdot) = 1/2 <g^-1 gdot, J(g^-1 gdot)> (S3) at (Q, Q Omega), evaluated on the left
+    translates Q E_ij of the basis of so(n) (complex step), and identified with so(n) by the Gram
+    matrix of the pairing (killing.eqn), is M = J(Omega): the point (Q, M) of T*SO(n) in which
+    S_M is stated is the rigid body's attitude and momentum (n = 3..5, 5 random points each; max
+    difference relative to |M|)."""
+    rng = np.random.default_rng(92)
+    worst = 0.0
+    for k in range(3, 6):
+        pairs = [(i, j) for i in range(k) for j in range(i + 1, k)]
+        basis = []
+        for i, j in pairs:
+            e = np.zeros((k, k))
+            e[i, j], e[j, i] = 1.0, -1.0
+            basis.append(e)
+        gram = np.array([[ref.pairing(a, b) for b in basis] for a in basis])
+        lam = rng.uniform(0.3, 2.0, k)
+        for _ in range(5):
+            Qk, Om = ref.random_rotation(k, rng), ref.random_skew(k, rng)
+            h = 1e-30
+            mu = [np.imag(_lagrangian(Qk, Qk @ (Om + 1j * h * e), lam)) / h for e in basis]
+            coeffs = np.linalg.solve(gram, np.array(mu))
+            m = sum(c * e for c, e in zip(coeffs, basis, strict=True))
+            want = ref.J(Om, lam)
+            worst = max(worst, np.abs(m - want).max() / np.abs(want).max())
+    return float(worst)
+
+
+# the paper's sentences
+S9.sentence(
+    r"Above we saw that solutions of the symmetric rigid body equations can be mapped to solutions "
+    r"of the rigid body system.",
+    kind="prose",
+    reason="recalls S6, checked there",
+)
+S9.sentence(
+    r"As in [BlCrMaRa2002] we can consider the converse question.",
+    kind="prose",
+    reason="announces the question, with a citation",
+)
+S9.sentence(
+    r"Thus, suppose we have a solution $(Q, M)$ of the standard left invariant rigid body "
+    r"equations.",
+    kind="prose",
+    reason="sets up the question; the rigid body equations are S2",
+)
+S9.sentence(
+    r"We seek to solve for $P$ in the expression $M=Q^TP-P^TQ.$",
+    s9_no_bound_on_gl,
+)
+S9.sentence(
+    r"For the following discussion, it will be convenient to make use of the operator norm on "
+    r"matrices.",
+    kind="prose",
+    reason="announces the tool used next",
+)
+S9.sentence(
+    r"Recall that this norm is given by $\| A \|_{\mathrm{op}} = \sup \left\{ \| A x \| \mid \| x "
+    r"\| = 1 \right\}$, where the norms on the right hand side are the usual Euclidean space "
+    r"norms.",
+    s9_identity_general_n,
+)
+S9.sentence(
+    r"Since elements of $\operatorname{SO}(n)$ have operator norms bounded by $1$ and since the "
+    r"operator norm satisfies $\| A B \|_{\mathrm{op}} \leq \| A \|_{\mathrm{op}} \| B "
+    r"\|_{\mathrm{op}}$, we see that if $M$ satisfies $M=Q^TP-P^TQ$, then $\| M \|_{\mathrm{op}} "
+    r"\leq 2$.",
+    s9_identity_general_n,
+    s9_sampled_bound,
+    s9_bound_attained,
+)
+S9.sentence(
+    r"Therefore, $\| M \|_{\mathrm{op}} \leq 2$ is a necessary condition for solvability of "
+    r"(M_Q_P.eqn) for $P$.",
+    s9_identity_general_n,
+    s9_sampled_bound,
+    s9_no_bound_on_gl,
+)
+S9.sentence(
+    r"Let $C$ denote the set of $(Q,P)$ that map to $M$'s with operator norm equal to 2 and let "
+    r"$S$ denote the set of $(Q,P)$ that map to $M$'s with operator norm strictly less than 2.",
+    s9_bound_attained,
+    s9_skew_orthogonal_pairs,
+)
+S9.sentence(
+    r"Also denote by $S_M$ the set of points $(Q,M) \in T^*\operatorname{SO}(n)$ with $\| M "
+    r"\|_{\mathrm{op}} < 2$.",
+    s9_S_onto_S_M,
+)
+S9.sentence(
+    r"For the left invariant system we trivialize $T^*\operatorname{SO}(n) \cong "
+    r"\operatorname{SO}(n) \times \mathfrak{so}(n)^\ast$ by means of left translation to the "
+    r"identity and we identify $\mathfrak{so}(n)^\ast$ with $\mathfrak{so}(n)$ using the Killing "
+    r"metric (killing.eqn).",
+    s9_left_trivialisation,
+)
+S9.sentence(
+    r"Note that $C$ contains pairs $(Q,P)$ with the property that $Q^TP$ is both skew and "
+    r"orthogonal.",
+    s9_skew_orthogonal_pairs,
+)

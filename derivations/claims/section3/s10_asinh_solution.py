@@ -24,7 +24,7 @@ from derivations.claims.section3._display import MatFn, OpNorm
 from derivations.claims.section3._symmetric import M, P, Q
 from derivations.claims.section3.s06_symmetric_to_rigid_body import SYMMETRIC_MOMENTUM
 from derivations.registry import Level, claim
-from derivations.symbolic import eq
+from derivations.symbolic import Words, eq, lhs_minus_rhs
 from derivations.vocabulary import n
 
 S10 = claim(
@@ -157,6 +157,46 @@ def s10_corrected_scalar() -> sp.Integer:
     return _s10_scalar("corrected")
 
 
+def _s10_general_n(form: str) -> sp.Integer:
+    """Every n, in two steps.  (1) Noncommutative: the displayed M formula with P the displayed
+    Q F (F the displayed function of M, a letter) reduces, Q orthogonal, to F - F^T.  (2) F is a
+    real power series in the single matrix M, so F^T = F(M^T) = F(-M) (M skew), and power series
+    of one matrix form a commutative algebra on which M -> z is a homomorphism: F - F^T - M
+    vanishes for every n (with ||M||_op < 2) exactly when F(z) - F(-z) - z does as a function.
+    Returns the words left after step (1) other than F, F^T, M, plus 1 if step (2) fails."""
+    w = Words(skew=["M"], orthogonal=["Q"])
+    F = sp.MatrixSymbol("F", n, n)
+    inner = _after_Q(S10.formulas[form].rhs)
+    solved = eq(S10_M.lhs, S10_M.rhs.xreplace({P: Q * F}))
+    gap = w.reduce(w.of(lhs_minus_rhs(solved)))
+    f, fT, m = w("F"), w.T(w("F")), w("M")
+    left = sp.expand(
+        gap - sp.Add(*[t for t in sp.Add.make_args(gap) if t.free_symbols <= {f, fT, m}])
+    )
+    z = sp.Symbol("z", real=True)
+    Fz = _scalar(inner, z)
+    scalar = gap.xreplace({f: Fz, fT: Fz.xreplace({z: -z}), m: z})
+    total = sp.Integer(len(sp.Add.make_args(left)) if left != 0 else 0)
+    return total + (0 if sp.simplify(sp.expand(scalar).rewrite(sp.log)) == 0 else 1)
+
+
+@S10.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
+def s10_corrected_general_n() -> sp.Integer:
+    """Every n: Q^T P - P^T Q - M (the displayed M formula, noncommutative Q orthogonal, M skew)
+    with P = Q F, F the displayed corrected exp(asinh(M/2)), reduces to F - F^T - M; F^T = F(-M)
+    for a real power series of skew M, and functions of one matrix commute, so it vanishes for
+    every n when exp(asinh(z/2)) - exp(asinh(-z/2)) = z, which SymPy confirms."""
+    return _s10_general_n("corrected")
+
+
+@S10.check(Level.SYMBOLIC_GENERAL_N, form="printed")
+def s10_printed_general_n() -> sp.Integer:
+    """The same reduction for the printed reading F = exp(asinh(M)/2): F(z) - F(-z) - z does not
+    vanish, so the printed formula fails for every n (a nonzero function of M is nonzero on some
+    skew M of norm below 2, already for n = 2)."""
+    return _s10_general_n("printed")
+
+
 def _s10_equation(form: str) -> float:
     """max |Q^T P - P^T Q - M| (the displayed M formula) for P from the displayed formula."""
     rng = np.random.default_rng(10)
@@ -281,3 +321,103 @@ def s10_asinh_series_on_the_boundary() -> float:
         return float("inf")
     e100, e10k = (np.abs(_asinh_series(u, K) - limit).max() for K in (100, 10_000))
     return float(abs(np.log(e10k / e100) / np.log(100.0) + 0.5))
+
+
+_SERIES_TERMS = 8  # odd powers xi, xi^3, ..., xi^15 in the symbolic check
+
+
+@S10.check(Level.SYMBOLIC_GENERAL_N)
+def s10_sinh_is_skew_general_n() -> sp.Integer:
+    """Every n: with xi a noncommutative skew letter (xi^T = -xi), the displayed definition
+    (e^xi - e^-xi)/2, expanded to degree 15, is the odd series sum xi^(2k+1)/(2k+1)! (the even
+    powers cancel), and its transpose is minus itself, so sinh maps so(n) to so(n); a truncation
+    keeps it degree by degree, so the statement holds for the whole series.  Replacing -xi by
+    xi^T in e^-xi (a non-skew letter) leaves a nonzero residual."""
+    w = Words(skew=["xi"])
+    xi = w("xi")
+    exp_series = sum((xi**j / sp.factorial(j) for j in range(2 * _SERIES_TERMS)), sp.Integer(0))
+    definition = (exp_series - exp_series.subs(xi, -xi)) / 2
+    odd = sum(
+        (xi ** (2 * k + 1) / sp.factorial(2 * k + 1) for k in range(_SERIES_TERMS)), sp.Integer(0)
+    )
+    return w.is_zero(definition - odd) + w.is_zero(w.T(odd) + odd)
+
+
+@S10.check(Level.FLOAT64, tol=1e-13)
+def s10_sinh_and_its_inverse_on_so_n() -> float:
+    """sinh and sinh^-1 stay in so(n): for random skew xi (n = 2..6, ||xi||_op = 0.5, 2, 5) the
+    displayed (e^xi - e^-xi)/2 (scipy's expm) is skew and equals its odd power series (80 terms);
+    for random skew u with ||u||_op = 0.5, 0.9 the paper's series for sinh^-1 (400 terms) is
+    skew and sinh of it is u: the largest of these errors, relative to the norm of the matrix."""
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(12)
+    worst = 0.0
+    for k in range(2, 7):
+        for norm in (0.5, 2.0, 5.0):
+            xi = _skew_of_norm(k, norm, rng)
+            S = (expm(xi) - expm(-xi)) / 2
+            odd, power = np.zeros_like(xi), xi.copy()
+            for j in range(80):
+                odd += power / float(sp.factorial(2 * j + 1))
+                power = power @ xi @ xi
+            scale = np.abs(S).max()
+            worst = max(worst, np.abs(S + S.T).max() / scale, np.abs(odd - S).max() / scale)
+        for norm in (0.5, 0.9):
+            u = _skew_of_norm(k, norm, rng)
+            A = _asinh_series(u, 400)
+            worst = max(worst, np.abs(A + A.T).max() / norm, np.abs(_sinh(A) - u).max() / norm)
+    return float(worst)
+
+
+# the paper's sentences
+S10.sentence(
+    r"Recall that $\sinh : \mathfrak{so}(n) \rightarrow \mathfrak{so}(n)$ is defined by $\sinh \xi "
+    r"= \left( e^\xi - e^{- \xi} \right) /2$.",
+    s10_sinh_is_skew_general_n,
+    s10_sinh_and_its_inverse_on_so_n,
+)
+S10.sentence(
+    r"One sees that indeed $\sinh$ takes values in $\mathfrak{so}(n)$ by using, for example, its "
+    r"series expansion: $\sinh \xi = \xi + \frac{1}{3!}\xi^3 + \frac{1}{5!} \xi^5 + \ldots.$",
+    s10_sinh_is_skew_general_n,
+    s10_sinh_and_its_inverse_on_so_n,
+)
+S10.sentence(
+    r"Recall from calculus that the inverse function $\sinh^{-1} (u)$ has a convergent power "
+    r"series expansion for $| u | < 1$ that is given by integrating the power series expansion of "
+    r"the function $1/ \sqrt{1 + u^2}$ term by term.",
+    s10_asinh_series_inside,
+    s10_asinh_series_on_the_boundary,
+)
+S10.sentence(
+    r"This power series expansion shows that the map $\sinh : \mathfrak{so}(n) \rightarrow "
+    r"\mathfrak{so}(n)$ has an inverse on the set $U = \left\{ u \in \mathfrak{so}(n) \mid \| u "
+    r"\|_{\mathrm{op}} < 1 \right\}$.",
+    s10_asinh_series_inside,
+)
+S10.sentence(
+    r"We shall denote this inverse by $\sinh^{-1}$, so $\sinh^{-1}: U \rightarrow "
+    r"\mathfrak{so}(n)$.",
+    s10_sinh_and_its_inverse_on_so_n,
+)
+S10.sentence(
+    r"For $\| M \|_{\mathrm{op}} < 2$, the equation (M_Q_P.eqn) has the solution "
+    r"$P=Q\left( e^{\sinh^{-1}M/2}\right)$",
+    s10_printed_scalar,
+    s10_corrected_scalar,
+    s10_printed_matrix,
+    s10_corrected_matrix,
+    s10_high_precision_identity,
+    s10_corrected_general_n,
+    s10_printed_general_n,
+)
+S10.sentence(
+    r"Notice that $M=e^{\sinh^{-1}M/2}-e^{-\sinh^{-1}M/2}\,.$",
+    s10_printed_scalar,
+    s10_corrected_scalar,
+    s10_printed_matrix,
+    s10_corrected_matrix,
+    s10_corrected_general_n,
+    s10_printed_general_n,
+)

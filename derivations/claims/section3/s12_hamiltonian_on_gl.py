@@ -21,9 +21,20 @@ from derivations.claims.section3._exact import count_nonzero
 from derivations.claims.section3._inertia import ARG_LAM, lam_symbols
 from derivations.claims.section3._symmetric import ARG_P, ARG_Q, MOMENTUM, M, P, Q
 from derivations.claims.section3._words import ddt, jinv_letters
+from derivations.claims.section3.s02_rigid_body_equations import J_explicit
 from derivations.claims.section3.s05_maximum_principle import H_SYM, SYMMETRIC_RIGID_BODY_RHS
 from derivations.registry import Level, claim
-from derivations.symbolic import Pair, Words, eq, explicit, general_matrix, trace_residual
+from derivations.symbolic import (
+    Pair,
+    Words,
+    eq,
+    explicit,
+    general_matrix,
+    hat3,
+    pair,
+    trace_residual,
+    vee3,
+)
 from derivations.vocabulary import Jinv, Kernel, matrix
 
 S12 = claim(
@@ -180,3 +191,116 @@ def s12_symrb_pointwise() -> float:
         ):
             errs.append(np.abs(got - want).max() / np.abs(want).max())
     return float(np.max(errs))
+
+
+def _cayley_chart(q: sp.Matrix, d: sp.Matrix) -> tuple[tuple[sp.Matrix, sp.Matrix], list]:
+    """Q = (I - X)^-1 (I + X), X = hat(q)/2, and the columns a_k = vee(Q^T dQ/dq_k) of the map
+    qdot -> omega, each as (value at q, derivative along d) (exact, n = 3)."""
+    eye = sp.eye(3)
+    X0, X1 = hat3(q) / 2, hat3(d) / 2
+    R0 = (eye - X0).inv()
+    R1 = R0 * X1 * R0
+    Q0, Q1 = R0 * (eye + X0), R1 * (eye + X0) + R0 * X1
+    cols = []
+    for k in range(3):
+        E = hat3(sp.eye(3)[:, k]) / 2
+        D0, D1 = R0 * E * (eye + Q0), R1 * E * (eye + Q0) + R0 * E * Q1
+        cols.append((vee3(Q0.T * D0), vee3(Q1.T * D0 + Q0.T * D1)))
+    return (Q0, Q1), cols
+
+
+def _gram(A: sp.Matrix, B: sp.Matrix, lam: list[sp.Expr]) -> sp.Matrix:
+    """<hat(a_k), J hat(b_m)> for the columns of A and B (pairing of S1, displayed J)."""
+    return sp.Matrix(3, 3, lambda k, m: pair(hat3(A[:, k]), J_explicit(hat3(B[:, m]), lam)))
+
+
+def _canonical_rates(q: sp.Matrix, p: sp.Matrix, lam: list[sp.Expr]) -> sp.Matrix:
+    """In the Cayley chart of SO(3) with canonical momenta p, the Legendre transform of the
+    Lagrangian 1/2 <Omega, J Omega> gives H = 1/2 p^T G^-1 p; returns the residuals of Qdot =
+    Q Omega and Mdot = [M, Omega] along Hamilton's equations qdot = dH/dp, pdot = -dH/dq, with
+    Omega = hat(A G^-1 p) and M = J(Omega) (derivatives by first-order dual numbers)."""
+    parts = []
+    for j in range(3):
+        (Q0, Q1), cols = _cayley_chart(q, sp.eye(3)[:, j])
+        A0 = sp.Matrix.hstack(*[c[0] for c in cols])
+        A1 = sp.Matrix.hstack(*[c[1] for c in cols])
+        G0 = _gram(A0, A0, lam)
+        G1 = _gram(A1, A0, lam) + _gram(A0, A1, lam)
+        Gi0 = G0.inv()
+        Gi1 = -Gi0 * G1 * Gi0
+        parts.append((Q0, Q1, A0, A1, Gi0, Gi1))
+    Q0, _, A0, _, Gi0, _ = parts[0]
+    qdot = Gi0 * p
+    pdot = sp.Matrix([-(p.T * part[5] * p)[0] / 2 for part in parts])
+    Om = hat3(A0 * Gi0 * p)
+    M = J_explicit(Om, lam)
+    Mdot = J_explicit(hat3(A0 * Gi0 * pdot), lam)
+    Qdot = sp.zeros(3, 3)
+    for j, (_, Q1, _, A1, _, Gi1) in enumerate(parts):
+        Mdot += qdot[j] * J_explicit(hat3(A1 * Gi0 * p + A0 * Gi1 * p), lam)
+        Qdot += qdot[j] * Q1
+    return sp.Matrix.vstack(Qdot - Q0 * Om, Mdot - (M * Om - Om * M))
+
+
+def _rational(rng: np.random.Generator) -> sp.Rational:
+    return sp.Rational(int(rng.integers(-9, 10)), int(rng.integers(1, 7)))
+
+
+@S12.check(Level.EXACT_RATIONAL)
+def s12_classical_canonical() -> sp.Integer:
+    """The classical rigid body is Hamiltonian on T*SO(n) for the canonical symplectic
+    structure (n = 3, in a chart): with Q = (I - X)^-1 (I + X), X = hat(q)/2, canonical momenta p
+    conjugate to q and H(q, p) the Legendre transform of 1/2 <Omega, J Omega> (pairing of S1,
+    displayed J), Hamilton's equations qdot = dH/dp, pdot = -dH/dq give Qdot = Q Omega and
+    Mdot = [M, Omega] with M = J(Omega), at 3 random rational (q, p) and rational Lambda (exact).
+    The number of entries that are not 0."""
+    rng = np.random.default_rng(12)
+    lam = [sp.Rational(5, 10), sp.Rational(8, 10), sp.Rational(14, 10)]
+    bad = 0
+    for _ in range(3):
+        q, p = (sp.Matrix(3, 1, lambda i, _: _rational(rng)) for _ in range(2))
+        bad += sum(1 for e in _canonical_rates(q, p, lam) if e != 0)
+    return sp.Integer(bad)
+
+
+# the paper's sentences
+S12.sentence(
+    r"Recall that the classical rigid body equations are Hamiltonian on $T^*\operatorname{SO}(n)$ "
+    r"with respect to the canonical symplectic structure on the cotangent bundle of "
+    r"$\operatorname{SO}(n)$.",
+    s12_classical_canonical,
+)
+S12.sentence(
+    r"The following result gives the corresponding theorem for the symmetric case.",
+    kind="prose",
+    reason="announces the proposition",
+)
+S12.sentence(
+    r"The proof is given in [BlCrMaRa2002]",
+    kind="prose",
+    reason="a citation",
+)
+S12.sentence(
+    r"Consider the Hamiltonian system on the symplectic vector space $\mathfrak{gl}(n) \times "
+    r"\mathfrak{gl}(n)$ with the symplectic structure $\Omega_{\mathfrak{gl}(n)} (\xi_1, \eta_1, "
+    r"\xi_2, \eta_2 ) = \frac{1}{2} \operatorname{trace} ( \eta_2^T \xi_1 - \eta_1^T \xi_2 )$ "
+    r"where $(\xi_i,\eta_i)\,,i=1,2$ are elements of $\mathfrak{gl}(n) \times \mathfrak{gl}(n)$ "
+    r"and Hamiltonian $H ( \xi, \eta ) = - \frac{1}{8} \operatorname{trace} \left[ \left( "
+    r"J^{-1}(\xi^T \eta -\eta^T \xi ) \right) \left( \xi^T\eta - \eta^T \xi \right) \right] .$",
+    s12_hamilton_equations,
+    s12_symrb_pointwise,
+)
+S12.sentence(
+    r"The corresponding Hamiltonian system leaves $\operatorname{SO}(n) \times "
+    r"\operatorname{SO}(n)$ invariant and induces on it, the flow of the symmetric representation "
+    r"of the rigid body system.",
+    s12_hamilton_equations,
+    s12_SO_invariant_general_n,
+    s12_symrb_pointwise,
+)
+S12.sentence(
+    r"Note that the above Hamiltonian is equivalent to the standard rigid body Hamiltonian $H="
+    r"\frac{1}{4} \left\langle J^{-1}M,M\right\rangle$, as in [Ratiu1980].",
+    s12_quarter_energy_general_n,
+    s12_symrb_pointwise,
+)

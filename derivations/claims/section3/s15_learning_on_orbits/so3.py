@@ -54,6 +54,13 @@ from derivations.claims.section3.s15_learning_on_orbits import (
     _beta,
     _phi_0,
     _phi_T,
+    s15_corrected_endpoint,
+    s15_corrected_equations,
+    s15_emitted_shared_field,
+    s15_one_sample_exact,
+    s15_printed_endpoint,
+    s15_printed_equations,
+    s15_shared_control_invariant,
     x1T,
     x10,
     x20,
@@ -307,3 +314,54 @@ def s15_two_samples_above_bound() -> float:
     shortfall = np.maximum(shipped - second, 0.0) / shipped
     agree = max(abs(shipped - displayed), abs(emitted - displayed)) / displayed
     return float(np.max(shortfall + np.array([row["drift"] for row in rows])) + agree)
+
+
+# the paper's sentences (here, below the last of S15's evidence in this package)
+S15.sentence(
+    r"The smooth machine learning version of this problem considers for smooth functions "
+    r"$\phi^a:\mathbb{R}\times\mathbb{R}\rightarrow\mathbb{R}^+$, $a=1,\dots, M$ $\eta(x,u)="
+    r"\tfrac{1}{2} \int_0^{T}\|u\|^2-V(x)dt +\sum_{a=1}^M\phi(x^a_T)$ with $\dot{x^a}=[x^a,u],"
+    r"\,a=1\dots M$",
+    s15_corrected_endpoint,
+    s15_emitted_shared_field,
+    s15_printed_endpoint_gradient,
+    s15_corrected_endpoint_gradient,
+)
+S15.sentence(r"As before we now have", kind="prose", reason="introduces the corollary")
+S15.sentence(
+    r"The equations of the maximum principle for the variational problem subject to equations "
+    r"(orb) with $V(x)=-1/2||[x,n]||^2$ are $\begin{aligned} \dot x^a &= [x^a,[p^a,x^a]] \\ "
+    r"\dot p^a &= [p^a,[p^a,x]]-[n,[n,x^a]]\,. \end{aligned}$ with $p^a_T=\frac{\partial"
+    r"\phi(x^a_T)}{\partial x^a_T}$",
+    s15_printed_equations,
+    s15_corrected_equations,
+    s15_printed_endpoint,
+    s15_corrected_endpoint,
+    s15_emitted_shared_field,
+    s15_printed_endpoint_gradient,
+    s15_corrected_endpoint_gradient,
+)
+S15.sentence(
+    r"In particular we would like to consider $\phi(x^a_T)=< x^a_T,n >$.",
+    s15_one_sample_exact,
+    s15_one_sample_bvp,
+    s15_two_samples_above_bound,
+)
+S15.sentence(
+    r"Then we can see the final solution tends to the double bracket equation $\dot{x}=[x,[x,n]]$ "
+    r"and the second term in the costate equation goes to zero.",
+    s15_one_sample_exact,
+    s15_decay_exact_so3,
+    s15_one_sample_bvp,
+    s15_shared_control_invariant,
+    s15_bound_so3,
+    s15_two_samples_second_term,
+    s15_two_samples_above_bound,
+)
+S15.sentence(
+    r"One can then write a discrete version of these equations using an appropriate discrete "
+    r"algorithm and following our formalism above.",
+    kind="prose",
+    reason="points to future work",
+)
+S15.sentence(r"This will be considered in future work.", kind="prose", reason="future work")
