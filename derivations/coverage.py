@@ -28,7 +28,9 @@ a wrapper notes the evidence running (:data:`derivations.registry.CURRENT_EVIDEN
 option values of the call.  Only calls of the universe pay: the evidence of D1, S4, M7 and D9
 took 1.97 s plain, 2.02 s recorded this way and 4.91 s under a profile hook restricted to symrb
 code (``sys.setprofile``, which sees every Python call).  Nested calls count: the engine reached
-through ``simulate`` is reached.
+through ``simulate`` is reached.  Worker processes of ``verify --jobs N`` are forked with the
+wrappers in place and hand back what they noted; where processes are spawned instead (no fork),
+run the report with ``--jobs 1``.
 
 ``python -m derivations coverage`` prints the report; ``symrb verify --output`` stores it in its
 JSON (``"coverage"``), which the claims page and ``tests/test_coverage.py`` read.
