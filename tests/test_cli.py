@@ -338,17 +338,20 @@ def _table_row(out: str, cid: str) -> str:
 
 
 def test_verify_progress_and_table(capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, err = _call(capsys, "verify", "S1", "S11", "--jobs", "1")
+    code, out, err = _call(capsys, "verify", "S1", "D2", "--jobs", "1")
     assert code == 0
     progress = err.splitlines()
-    assert re.match(r"\[1/2\] S1 +holds +\(3 checks, .+\)$", progress[0]), progress
-    assert re.match(r"\[2/2\] S11 +holds +\(1 check, .+\)$", progress[1]), progress
+    for i, (cid, outcome) in enumerate((("S1", "holds"), ("D2", "holds after correction"))):
+        k = len(get_claim(cid).evidence)
+        checks = f"{k} check" + ("s" if k != 1 else "")
+        assert re.match(rf"\[{i + 1}/2\] {cid} +{outcome} +\({checks}, .+\)$", progress[i]), progress
     assert not _too_wide(out) and not _too_wide(err)
     s1 = get_claim("S1")
     worst = max((e for e in s1.evidence if e.form != "printed"), key=lambda e: e.tol)
     row = _table_row(out, "S1")
     assert re.match(rf"S1 +holds +yes +{len(s1.evidence)} +\S+ / {worst.tol:.0e} +float64", row)
-    assert re.match(r"S11 +holds +yes +1 +0 \(exact\) +symbolic", _table_row(out, "S11"))
+    d2 = rf"D2 +holds after correction +yes +{len(get_claim('D2').evidence)} +0 \(exact\) +symbolic"
+    assert re.match(d2, _table_row(out, "D2"))
     last = out.rstrip().splitlines()[-1]
     assert re.fullmatch(r"2 claims checked in \S+ m?s: every outcome as recorded", last), last
 
@@ -377,11 +380,11 @@ def test_verify_surprise_exits_1_and_names_it(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     ev = _break(monkeypatch, "S1", 0.5)
-    code, out, err = _call(capsys, "verify", "S1", "S11", "--jobs", "1")
+    code, out, err = _call(capsys, "verify", "S1", "D2", "--jobs", "1")
     assert code == 1
     assert "SURPRISE: recorded holds" in err
     assert re.match(r"S1 +fails +NO ", _table_row(out, "S1"))
-    assert re.match(r"S11 +holds +yes ", _table_row(out, "S11"))
+    assert re.match(r"D2 +holds after correction +yes ", _table_row(out, "D2"))
     assert "Evidence not as recorded:" in out
     assert f"residual 5.0e-01 > tolerance {ev.tol:.0e}: fails, NOT as expected" in out
     assert "differs from the record for S1" in out
