@@ -344,7 +344,9 @@ def test_verify_progress_and_table(capsys: pytest.CaptureFixture[str]) -> None:
     for i, (cid, outcome) in enumerate((("S1", "holds"), ("D2", "holds after correction"))):
         k = len(get_claim(cid).evidence)
         checks = f"{k} check" + ("s" if k != 1 else "")
-        assert re.match(rf"\[{i + 1}/2\] {cid} +{outcome} +\({checks}, .+\)$", progress[i]), progress
+        assert re.match(rf"\[{i + 1}/2\] {cid} +{outcome} +\({checks}, .+\)$", progress[i]), (
+            progress
+        )
     assert not _too_wide(out) and not _too_wide(err)
     s1 = get_claim("S1")
     worst = max((e for e in s1.evidence if e.form != "printed"), key=lambda e: e.tol)
