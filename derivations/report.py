@@ -507,15 +507,10 @@ def sentences_cell(cid: str) -> str:
     return f"{c['covered']}/{c['math']}"
 
 
-def _short(cid: str, name: str) -> str:
-    """An evidence function's name without the claim's prefix (``d8_jd_skew`` is ``jd_skew``)."""
-    return name.removeprefix(cid.lower() + "_")
-
-
 def sentences_markdown(cid: str) -> str:
     """A collapsed MyST dropdown with the map of claim ``cid``'s sentences in the paper: each
-    sentence (math typeset), whether evidence covers it, and the checks that do (their number in
-    the evidence table and short name); an uncovered sentence is marked and the dropdown turns
+    sentence (math typeset), whether evidence covers it, and the checks that do (their numbers
+    in the evidence table above it, so the table fits the column); an uncovered sentence is marked and the dropdown turns
     to the warning colour."""
     claim = get_claim(cid)
     number = {ev.name: k for k, ev in enumerate(claim.evidence, 1)}
@@ -529,7 +524,7 @@ def sentences_markdown(cid: str) -> str:
         f":::{{dropdown}} {title}",
         *([":color: warning"] if c["uncovered"] else []),
         "",
-        "| # | sentence of the paper | status | checked by (evidence #, name) |",
+        "| # | sentence of the paper | status | checked by (# in the evidence table) |",
         "|---|---|---|---|",
     ]
     for k, s in enumerate(claim.sentences, 1):
@@ -537,7 +532,7 @@ def sentences_markdown(cid: str) -> str:
             status, by = "prose", plain(s.reason)
         elif s.evidence:
             status = "covered"
-            by = ", ".join(f"{number[n]}\N{NO-BREAK SPACE}`{_short(cid, n)}`" for n in s.evidence)
+            by = ", ".join(str(number[n]) for n in s.evidence)
         else:
             status, by = "**⚠ uncovered**", "**no evidence yet**"
         text = prose(breakable(s.text, limit=30), cell=True)
