@@ -106,6 +106,57 @@ def test_bad_usage_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert code == 2 and "unrecognized arguments: --no-such-option" in err
 
 
+def _commands_section(help_text: str) -> dict[str, str]:
+    """The ``commands:`` section of the top-level help: command -> its text (lines joined)."""
+    section = help_text.split("\ncommands:\n", 1)[1].split("\n\n", 1)[0]
+    entries: dict[str, str] = {}
+    name = ""
+    for line in section.splitlines():
+        if line.startswith("  ") and not line.startswith("   "):
+            name = line.split()[0]
+            entries[name] = line
+        else:
+            entries[name] += " " + line.strip()
+    return entries
+
+
+def test_help_lists_every_command(capsys: pytest.CaptureFixture[str]) -> None:
+    """One ``commands:`` list names every command ``symrb`` dispatches, the derivations' own
+    subcommands included (a new one there must be added to the launcher's table)."""
+    from derivations.cli import build_parser
+
+    code, out, _ = _call(capsys, "--help")
+    assert code == 0
+    listed = _commands_section(out)
+    subparsers = build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+    expected = {"run", "sweep", "bench", *subparsers}
+    assert list(listed) == [c[0] for c in launcher.ALL_COMMANDS]
+    assert set(listed) == expected, set(listed) ^ expected
+    assert not any("not available" in entry for entry in listed.values()), listed
+    code, _, err = _call(capsys, "frobnicate")
+    assert code == 2 and all(f"'{name}'" in err for name in expected), err
+
+
+def test_help_marks_the_commands_of_a_source_checkout_when_unavailable() -> None:
+    """As from a wheel: no derivations and no benchmarks; their commands are still listed,
+    each marked as unavailable here, with why."""
+    code = (
+        "import sys, importlib.util\n"
+        "for m in ('derivations', 'derivations.cli', 'benchmarks'): sys.modules[m] = None\n"
+        "from symrb.cli import main; sys.exit(main(['--help']))"
+    )
+    proc = _run(code)
+    assert proc.returncode == 0, proc.stderr
+    listed = _commands_section(proc.stdout)
+    assert set(listed) == {c[0] for c in launcher.ALL_COMMANDS}
+    for name, entry in listed.items():
+        assert ("not available here" in entry) == (name not in ("run", "sweep")), entry
+    words = " ".join(proc.stdout.split())
+    assert "no derivations package next to symrb" in words
+    assert "no benchmarks/ next to symrb" in words
+    assert not _too_wide(proc.stdout)
+
+
 @pytest.mark.parametrize("argv", [["claims"], ["show", "S1"], ["verify", "S1"], ["derive"]])
 def test_without_sympy_every_command_exits_2_and_says_what_to_install(argv: list[str]) -> None:
     launchers = (
