@@ -189,7 +189,7 @@ def test_without_the_derivations_help_works_and_commands_exit_2() -> None:
 # claims
 
 
-def test_claims_lists_every_claim_on_one_line_within_100_columns(
+def test_claims_lists_every_claim_within_100_columns(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     def no_evidence(*args: Any, **kwargs: Any) -> None:
@@ -203,6 +203,39 @@ def test_claims_lists_every_claim_on_one_line_within_100_columns(
     for row, c in zip(rows, CLAIMS, strict=True):
         assert row[5:].startswith(c.expected + " "), row
     assert not _too_wide(out)
+
+
+@pytest.mark.parametrize("width", [80, 100, 120])
+def test_claims_table_wraps_its_cells_and_cuts_nothing(width: int) -> None:
+    """Every line fits ``width``; read back column by column, each claim's "in the paper" and
+    title cells hold its whole text (word for word, long words broken across lines)."""
+    lines = text.claims_lines(CLAIMS, width)
+    assert max(map(len, lines)) <= width
+    head = lines[0]
+    at_where, at_title = head.index("in the paper"), head.index("title")
+    cells: dict[str, list[list[str]]] = {}
+    current = ""
+    for line in lines[2:]:
+        if re.match(r"[DSM]\d+ ", line):
+            current = line.split()[0]
+            cells[current] = [[], []]
+        elif not line.startswith(" " * at_where):
+            current = ""  # a group heading or a blank line
+            continue
+        if current:
+            cells[current][0].append(line[at_where:at_title].strip())
+            cells[current][1].append(line[at_title:].strip())
+    assert list(cells) == IDS
+
+    def same(shown: list[str], full: str) -> bool:
+        return "".join(shown).replace(" ", "") == full.replace(" ", "")
+
+    for c in CLAIMS:
+        where = text.text_of(c.where or f"sec. {c.section}: {c.label}")
+        where = where.replace(text._DISPLAY, " ").replace(text._GLUE, " ")
+        title = text.claim_text(c, "title").replace(text._GLUE, " ")
+        assert same(cells[c.id][0], where), (c.id, cells[c.id][0], where)
+        assert same(cells[c.id][1], title), (c.id, cells[c.id][1], title)
 
 
 def test_claims_json(capsys: pytest.CaptureFixture[str]) -> None:
