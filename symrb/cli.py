@@ -6,6 +6,8 @@ The first four are development tools that run the SymPy derivations of a source 
 wheel; see ``derivations.cli`` for what each does), reached through ``derivations.cli.main``.
 This launcher imports none of symrb's numerics for them, so they work while ``symrb/_generated``
 is missing; ``symrb --version`` and ``symrb --help`` work without SymPy and without the derivations.
+The top-level help is written here (:func:`help_text`): one list of every command
+(:data:`ALL_COMMANDS`), each one that cannot run here marked, with why.
 ``symrb bench`` times the numerics (``benchmarks.harness``, also of a source checkout only) with
 NumPy and SciPy alone, so it is handled here, before the derivations are looked for; so are
 ``symrb run`` and ``symrb sweep`` (:mod:`symrb.scene_cli`, scenes of :mod:`symrb.scenes`).
