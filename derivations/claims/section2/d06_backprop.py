@@ -377,8 +377,7 @@ def d6_printed_m8_running_cost() -> int:
 
 @D6.check(Level.EXACT_RATIONAL, form="corrected")
 def d6_corrected_running_cost() -> int:
-    """The same with D5's endpoint condition: the backprop and weights relations with $s = -1$ hold.
-    """
+    """The same with D5's endpoint condition: the backprop and weights relations with $s = -1$ hold."""
     return _backprop_defect(ENDPOINT, (-1,), running_cost=True, layers=(RESIDUAL_LAYER,), M=1)
 
 
