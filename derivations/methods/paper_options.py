@@ -84,7 +84,7 @@ def m9_diagnostics_condition() -> float:
     r"""The condition numbers reported with diagnostics=True by symrb.symmetric_flow,
     symrb.discrete_rigid_body_flow ($h = 0.3$, 4 steps), symrb.mv_algorithm1 and symrb.mv_algorithm2
     (4 steps), $n = 3$, $hM$ at 0.8 of the fold of $J_D$ (where the condition number depends on the
-    order of $\Lambda$'s diagonal by 6 %), against $\max\lambda / \sigma_{\min}$ of the derivative
+    order of $\Lambda$'s diagonal by 6 %), against $\max \lambda / \sigma_{\min}$ of the derivative
     $\xi \mapsto U\xi\Lambda + \Lambda\xi U^T$ of $J_D$ at each step's $U = Q_k^T Q_{k+1}$,
     recomputed in NumPy from the returned states: the report is a lower bound from a power method
     (within 1e-4 here); max over the solves of the amount by which it leaves $[0.98, 1]$ times the

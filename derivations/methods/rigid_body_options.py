@@ -106,7 +106,7 @@ def m8_solver_reports() -> float:
     $\|M\|_{\mathrm{op}}$ from 0.2 to 1.9 for P_from_M), against the quantities recomputed in NumPy
     from the returned $U$ and $P$: residual $\|U\Lambda - \Lambda U^T - M\|_F$, $\|U^T U - I\|_F$,
     the margin $\min \operatorname{Re} \operatorname{spec}(U\Lambda)$, the condition number
-    $\max\lambda / \sigma_{\min}(L_U)$ (the report's estimate is a lower bound from a power method,
+    $\max \lambda / \sigma_{\min}(L_U)$ (the report's estimate is a lower bound from a power method,
     0.94 to 1 times it here: between 0.9 and 1), and for P_from_M $\|Q^T P - P^T Q - M\|_F$, $\|P^T
     P - I\|_F$, $\delta = 1 - \|M\|_{\mathrm{op}}/2$ and $1/\sqrt{1 - (\|M\|_{\mathrm{op}}/2)^2}$;
     max discrepancy over its allowance (1e-13 for residuals, 1e-10 relative for the rest)."""

@@ -242,9 +242,10 @@ def d7_multiplier_N_by_N() -> int:
 
 @D7.check(Level.SYMBOLIC_GENERAL_N)
 def d7_symequation() -> sp.Expr:
-    r"""With $A = P_{k+1}^T Q_k - \Lambda$ from the displayed $H$ and $U_k$ orthogonal, $U_k$
-    (displayed critical condition, lhs - rhs) $U_k^T$ + (displayed symequation, lhs - rhs) reduces
-    to 0 (noncommutative symbols, every $n$)."""
+    r"""With $A = P_{k+1}^T Q_k - \Lambda$ from the displayed $H$ and $U_k$ orthogonal, the
+    displayed critical condition (lhs - rhs) multiplied by $U_k$ on the left and by $U_k^T$ on the
+    right, plus the displayed symequation (lhs - rhs), reduces to 0 (noncommutative symbols, every
+    $n$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["U_k"])
     _c, factors = HAMILTONIAN.rhs.arg.as_coeff_matrices()  # H = tr(A U_k)
     if factors[-1] != Uk:  # pragma: no cover - the displayed H is fixed above

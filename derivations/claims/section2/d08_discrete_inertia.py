@@ -129,7 +129,7 @@ def d8_transport() -> sp.Expr:
 def d8_symrb_JD_pointwise() -> float:
     r"""symrb.algebra.J_D(U) and symrb.paper.jd_residual(U, 0) (the emitted kernel) against
     reference.J_D (explicit diagonal matrices), $n = 2, \dots, 6$, 20 general $U$ and 20 rotations
-    each: max difference over $\max|U| \max\lambda$."""
+    each: max difference over $\max|U| \max \lambda$."""
     import symrb
 
     rng = np.random.default_rng(81)

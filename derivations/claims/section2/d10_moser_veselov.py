@@ -112,7 +112,7 @@ def d10_mv3_conjugation() -> sp.Expr:
 @D10.check(Level.SYMBOLIC_FIXED_N)
 def d10_solvability_n2() -> sp.Expr:
     r"""$n = 2$: the emitted mv2 at $\Omega = R(\theta)^T$, i.e. $J_D(R(\theta))$, equals the
-    displayed $(\lambda_1 + \lambda_2) \sin\theta\, E$ with $E = \begin{pmatrix} 0 & -1 \\ 1 & 0
+    displayed $(\lambda_1 + \lambda_2) \sin \theta\, E$ with $E = \begin{pmatrix} 0 & -1 \\ 1 & 0
     \end{pmatrix}$ (symbolic): mv2 is solvable exactly when $|M_{21}| \le \lambda_1 + \lambda_2$."""
     R = sp.Matrix([[sp.cos(_theta), -sp.sin(_theta)], [sp.sin(_theta), sp.cos(_theta)]])
     got = explicit(MV_MOMENTUM["M"], {"Omega": R.T}, [_l1, _l2])

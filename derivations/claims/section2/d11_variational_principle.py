@@ -75,7 +75,7 @@ def d11_symrb_sequences_stationary() -> float:
     interior $Q_k$ along $Q_k(I + e\xi)$, $\xi$ a basis element of $\mathfrak{so}(4)$, is
     $\operatorname{tr}(Q_{k-1} \Lambda (Q_k \xi)^T) + \operatorname{tr}(Q_k \xi \Lambda Q_{k+1}^T)$
     (the displayed summand, linear in $Q_k$): largest absolute value (the terms are at most $4
-    \max\lambda$)."""
+    \max \lambda$)."""
     import symrb
 
     rng = np.random.default_rng(111)

@@ -131,7 +131,7 @@ ONE_SAMPLE_SECOND_TERM = Kernel(
 
 @S15.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def s15_decay_exact_so3() -> sp.Expr:
-    r"""$\mathfrak{so}(3)$, $N = s \hat e_3$, $x = r (\sin\phi\, e_1 - \cos\phi\, e_3)$ written in
+    r"""$\mathfrak{so}(3)$, $N = s \hat e_3$, $x = r (\sin \phi\, e_1 - \cos \phi\, e_3)$ written in
     $\tau = \tan(\phi/2)$: with $\tau(T)$ from the displayed phase, $d\tau/dT = -\|x_0\| \|N\|
     \tau$, $dx/dT$ equals the emitted double bracket field, the squared displayed $\|[N, [N, x]]\|$
     equals the square of the displayed decay, and the decay divided by $\tau$ tends to $2 s^2 r$ as
@@ -196,7 +196,7 @@ def s15_one_sample_bvp() -> float:
 @S15.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def s15_bound_so3() -> sp.Expr:
     r"""$\mathfrak{so}(3)$, $x^a = r_a \hat a_a$ with $a_1$, $a_2$ at the angles $+h$ and $-h$ from
-    $e_1$ ($0 < 2h \le \pi/2$), $N = s \hat c$, $c$ a unit vector: the displayed $\cos\beta$ is
+    $e_1$ ($0 < 2h \le \pi/2$), $N = s \hat c$, $c$ a unit vector: the displayed $\cos \beta$ is
     $\cos 2h$, and the mean over $a$ of the squared displayed $\|[N, [N, x^a]]\| / (s^2 r_a)^2$
     minus the squared displayed bound at unit norms equals $c_2^2 \cos 2h + c_3^2 \cos^2 h \ge 0$,
     so the larger of the two exceeds the bound (polynomials in $C = \cos h$, $S = \sin h$ and $c$
