@@ -218,10 +218,10 @@ MV3_CAYLEY_STEP = Kernel(
 @M1.check(Level.SYMBOLIC_FIXED_N)
 def m1_cayley_equation_n3() -> sp.Expr:
     r"""$n = 3$, Cayley coordinates (symbolic): the emitted update's $U$ is $\operatorname{cay}(X) =
-    (I + X)(I - X)^{-1}$ and in $\mathrm{SO}(3)$; $(I - X)(J_D(U) - \hat b)(I + X) = \widehat{G(x)}$
-    with the emitted $J_D$, so $G(x) = 0$ exactly when $J_D(U) = \hat b$; the emitted Newton step
-    solves $G'(x)\, dx = -G(x)$ with $G'$ the Jacobian computed by SymPy; the emitted momentum
-    update is the emitted mv3 at $\Omega = U^T$ and the attitude update is $QU$."""
+    (I + X)(I - X)^{-1}$ and in $\mathrm{SO}(3)$; $(I - X)(J_D(U) - \hat b)(I + X)$ is
+    $\widehat{G(x)}$ with the emitted $J_D$, so $G(x) = 0$ exactly when $J_D(U) = \hat b$; the
+    emitted Newton step solves $G'(x)\, dx = -G(x)$ with $G'$ the Jacobian computed by SymPy; the
+    emitted momentum update is the emitted mv3 at $\Omega = U^T$ and the attitude update is $QU$."""
     x, b, lam = _CX, _CB, list(_CL)
     X, eye = hat3(x), sp.eye(3)
     U = _cayley3_matrix(x)

@@ -70,9 +70,9 @@ def m10_double_bracket_flow_and_report() -> float:
     directions, lies between $1/\sqrt{\dim \mathfrak{so}(4)}$ and 1 times the exact one (largest
     singular value of the flow's derivative on $\mathfrak{so}(4)$, by central differences of the
     NumPy flow, times $\|x_0\|/\|x(t)\|$), the error estimate $e(t)$ is within a factor 10 of the
-    actual error, and the documented bound $\mathrm{error} \le 2e + 10 (\mathrm{rtol} +
-    \mathrm{atol}/\|x\|_{\mathrm{rms}}) \kappa$ holds; max over the quantities of the discrepancy
-    over its allowance."""
+    actual error, and the documented bound, error at most $2e + 10 \kappa r$ with $r = \mathrm{rtol}
+    + \mathrm{atol}/\|x\|_{\mathrm{rms}}$, holds; max over the quantities of the discrepancy over
+    its allowance."""
     import symrb
 
     rng = np.random.default_rng(101)

@@ -96,10 +96,10 @@ def _h_for(order: int, options: dict[str, str]) -> float:
 def m7_fixed_step_orders() -> float:
     r"""Every fixed-step method of simulate (mv at orders 2-10 and its backends, every composition
     kind of orders 2-8 with the MV and the midpoint base step, RKMK4, midpoint): the order observed
-    from the errors at $T = 1$ with steps $h$ and $h/2$ against the 20-digit reference; $\max
-    |\text{observed order} - \text{nominal order}|$ (an order or a base step not passed on, or the
-    momentum scale mixed up, moves it by 2 or more); inf when two compositions of one order (another
-    kind or base step) give the same result (a kind or a step not passed on)."""
+    from the errors at $T = 1$ with steps $h$ and $h/2$ against the 20-digit reference; the largest
+    distance of the observed order from the nominal one (an order or a base step not passed on, or
+    the momentum scale mixed up, moves it by 2 or more); inf when two compositions of one order
+    (another kind or base step) give the same result (a kind or a step not passed on)."""
     from symrb.rigid_body import simulate
 
     Q0, _ = _reference()

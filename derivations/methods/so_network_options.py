@@ -85,8 +85,9 @@ def m12_sweeps_and_gradient() -> float:
     r"""symrb.learning.so_network_forward, so_network_costates (with and without its report),
     so_network_gradients (with its report, $\alpha = 0.3$) and so_extremal_residual ($n = 3$, 4
     samples, 3 layers) against the NumPy sweeps, the loss, its complex-step derivative along $U_k
-    e^{t\xi}$ and $\|\alpha J_D(U_k) - \sum_a (Q_k^T P_k - P_k^T Q_k)\|_F$; the reports' condition
-    number is that of multiplying by rotations, 1: max relative difference."""
+    e^{t\xi}$ and $\|\alpha J_D(U_k) - \sum_a M^a_k\|_F$, $M^a_k = Q_k^T P_k - P_k^T Q_k$ of sample
+    $a$; the reports' condition number is that of multiplying by rotations, 1: max relative
+    difference."""
     import symrb.learning as sl
 
     Q0, T, U = _data()

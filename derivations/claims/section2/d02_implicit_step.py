@@ -161,8 +161,8 @@ def _d2_general_n() -> tuple[sp.MatrixExpr, dict[str, sp.MatrixExpr], Alphabet, 
 
 @D2.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d2_reduced_matrix_general_n() -> sp.Expr:
-    r"""Every $n$ and $m$: $f = A x + B u$, $g = x^T P x/2 + x^T S u + u^T R u/2$ with matrix
-    symbols (the second-order Taylor polynomials of any problem at a point, which is all the
+    r"""Every $n$ and $m$: $f = A x + B u$, $g = \frac12 x^T P x + x^T S u + \frac12 u^T R u$ with
+    matrix symbols (the second-order Taylor polynomials of any problem at a point, which is all the
     Jacobians involve), $u^* = R^{-1} (B^T y - S^T x)$ checked to make $\partial H/\partial u$
     vanish: the Jacobian in $y$ of the displayed step (SymPy's matrix calculus), $A^T - S R^{-1}
     B^T$, equals the transpose (the index order) of the displayed mixed derivative of the displayed

@@ -228,11 +228,11 @@ def _d3_general_n(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: st
 
 @D3.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d3_corrected_general_n() -> sp.Expr:
-    r"""Every $n$ and $m$: $f = A x + B u$, $g = x^T P x/2 + x^T S u + u^T R u/2$ (matrix symbols,
-    $P$ and $R$ symmetric, $R$ invertible): the displayed corrected equations with the blocks of
-    $H^*$ ($H^*_{xx} = S R^{-1} S^T - P$, $H^*_{xy} = A^T - S R^{-1} B^T$, $H^*_{yy} = B R^{-1}
-    B^T$) reproduce the differentials of the true maps $(x_k, p_{k+1}) \mapsto (p_k, x_{k+1})$
-    (words left)."""
+    r"""Every $n$ and $m$: $f = A x + B u$, $g = \frac12 x^T P x + x^T S u + \frac12 u^T R u$
+    (matrix symbols, $P$ and $R$ symmetric, $R$ invertible): the displayed corrected equations with
+    the blocks of $H^*$ ($H^*_{xx} = S R^{-1} S^T - P$, $H^*_{xy} = A^T - S R^{-1} B^T$, $H^*_{yy} =
+    B R^{-1} B^T$) reproduce the differentials of the true maps $(x_k, p_{k+1}) \mapsto (p_k,
+    x_{k+1})$ (words left)."""
     return _d3_general_n(LINEARISED, _R, "reduced")
 
 

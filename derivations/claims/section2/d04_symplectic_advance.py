@@ -85,11 +85,11 @@ def d4_symbolic() -> sp.Expr:
 @D4.check(Level.SYMBOLIC_GENERAL_N)
 def d4_general_n() -> sp.Expr:
     r"""Every $n$: with $H^*_{xx}$, $H^*_{yy}$ symmetric and $H^*_{xy}$ invertible as noncommutative
-    symbols, the blocks $D\Phi = \begin{pmatrix} H^{*T}_{xy} - H^*_{yy} H^{*-1}_{xy} H^*_{xx} &
-    H^*_{yy} H^{*-1}_{xy} \\ -H^{*-1}_{xy} H^*_{xx} & H^{*-1}_{xy} \end{pmatrix}$ solve D3's
-    displayed corrected equations (the unique solution: $H^*_{xy}$ is invertible), and the displayed
-    $D\Phi^T \Omega\, D\Phi - \Omega$, multiplied out in blocks with the displayed $\Omega$, reduces
-    to zero (number of words left)."""
+    symbols, the blocks of $D\Phi$, $(D\Phi)_{11} = H^{*T}_{xy} - H^*_{yy} H^{*-1}_{xy} H^*_{xx}$,
+    $(D\Phi)_{12} = H^*_{yy} H^{*-1}_{xy}$, $(D\Phi)_{21} = -H^{*-1}_{xy} H^*_{xx}$ and
+    $(D\Phi)_{22} = H^{*-1}_{xy}$, solve D3's displayed corrected equations (the unique solution:
+    $H^*_{xy}$ is invertible), and the displayed $D\Phi^T \Omega\, D\Phi - \Omega$, multiplied out
+    in blocks with the displayed $\Omega$, reduces to zero (number of words left)."""
     Hxx, Hxy, Hyy = _R["xx"], _R["xy"], _R["yy"]
     w = Alphabet(symmetric=[str(Hxx.name), str(Hyy.name)], invertible=[str(Hxy.name)])
     Hi = sp.Inverse(Hxy)

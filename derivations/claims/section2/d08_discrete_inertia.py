@@ -118,8 +118,8 @@ def d8_J_invertible() -> sp.Expr:
 @D8.check(Level.SYMBOLIC_GENERAL_N)
 def d8_transport() -> sp.Expr:
     """With $Q_{k+1} = Q_k U_k$, $P_{k+1} = P_k U_k$ (displayed) the momentum at $k + 1$ minus the
-    displayed $U_k^T (Q_k^T P_k - P_k^T Q_k) U_k$ expands to 0 (noncommutative, every $n$; $U_k$
-    need not even be orthogonal)."""
+    displayed $U_k^T M_k U_k$, $M_k = Q_k^T P_k - P_k^T Q_k$, expands to 0 (noncommutative, every
+    $n$; $U_k$ need not even be orthogonal)."""
     w = Words()
     step = {Qk1: Qk * Uk, Pk1: Pk * Uk}
     return w.is_zero(w.of(lhs_minus_rhs(TRANSPORT).xreplace(step)))

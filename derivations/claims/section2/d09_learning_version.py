@@ -322,9 +322,9 @@ def _so_emitted_gradients(
 def d9_so_network_gradient_exact() -> sp.Expr:
     r"""The emitted $\mathrm{SO}(n)$ network kernels (layer, endpoint $P_N = -\partial\phi/\partial
     Q_N$, costate $P_k = P_{k+1} U_k^T$ and skew gradient) against the directional derivative of an
-    independently written loss $\sum_a \frac12\|Q^a_N - T^a\|^2 + \alpha \sum_k
-    \operatorname{tr}(\Lambda(I - U_k))$ along $U_k \exp(t\xi)$ (which has the tangent $U_k \xi$ of
-    $U_k (I + t\xi)$ at $t = 0$): sum over $k$ and a basis $\xi$ of $\mathfrak{so}(3)$ of
+    independently written loss $L$, the sum over samples of $\frac12\|Q^a_N - T^a\|^2$ plus $\alpha
+    \sum_k \operatorname{tr}(\Lambda(I - U_k))$, along $U_k \exp(t\xi)$ (which has the tangent $U_k
+    \xi$ of $U_k (I + t\xi)$ at $t = 0$): sum over $k$ and a basis $\xi$ of $\mathfrak{so}(3)$ of
     $|\frac{d}{dt} L - \operatorname{tr}(G_k^T \xi)|$, exact rationals ($n = 3$, $N = 3$, $M = 2$
     samples)."""
     controls, starts, targets, lam, alpha = _so_exact_network()
@@ -346,10 +346,10 @@ def d9_so_network_gradient_exact() -> sp.Expr:
 @D9.check(Level.SYMBOLIC_GENERAL_N)
 def d9_so_network_gradient_is_ukdef2() -> sp.Expr:
     r"""The emitted costate step is the displayed costate equation solved for $P_k$ ($P_{k+1} = P_k
-    U_k$ with $U_k$ orthogonal), and with it the emitted gradient equals $U_k^T (\alpha J_D(U_k) -
-    (Q_k^T P_k - P_k^T Q_k)) U_k / 2$ (the emitted $J_D$; both with the inertia $\alpha\Lambda$), so
-    it vanishes exactly when Ukdef2 holds (one sample; the sum over samples is linear;
-    noncommutative symbols, every $n$)."""
+    U_k$ with $U_k$ orthogonal), and with it the emitted gradient equals $\frac12 U_k^T (\alpha
+    J_D(U_k) - M_k) U_k$, $M_k = Q_k^T P_k - P_k^T Q_k$ (the emitted $J_D$; both with the inertia
+    $\alpha\Lambda$), so it vanishes exactly when Ukdef2 holds (one sample; the sum over samples is
+    linear; noncommutative symbols, every $n$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["U"])
     q, p, u = w("Q"), w("P"), w("U")
     # costate: the displayed P^a_{k+1} = P^a_k U_k, then the emitted step must give back P_k
@@ -458,8 +458,8 @@ def d9_printed_fixed_endpoint() -> sp.Expr:
     r"""The definition keeps $Q^a_N$ given and fixed beside the terminal cost $\phi(Q^a_N)$: with $N
     = 1$, $Q_0 = I$, the fixed $Q_1 = R$ (a rational rotation) and $\phi(Q) = \frac12\|Q - R\|^2$,
     the admissible control $U_0 = R$ violates the equation for $U_k$ with the costate of either
-    displayed endpoint condition (both give $P_1 = 0$): the smaller $\|J_D(U_0) - (Q_0^T P_0 - P_0^T
-    Q_0)\|_F^2$."""
+    displayed endpoint condition (both give $P_1 = 0$): the smaller $\|J_D(U_0) - M_0\|_F^2$, $M_0 =
+    Q_0^T P_0 - P_0^T Q_0$."""
     return sp.Min(*(_d9_fixed_endpoint_gap(e) for e in (ENDPOINT, ENDPOINT_UNFLIPPED)))
 
 

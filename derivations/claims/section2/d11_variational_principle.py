@@ -73,9 +73,9 @@ def d11_symrb_sequences_stationary() -> float:
     r"""Along symrb.mv_algorithm1 from $(Q_0, Q_1)$ and symrb.mv_algorithm2 from $(Q_1, M_1)$ ($n =
     4$, 8 steps, $\lambda$ in $[0.6, 1.7]$) the first variation of the displayed $\hat S$ at every
     interior $Q_k$ along $Q_k(I + e\xi)$, $\xi$ a basis element of $\mathfrak{so}(4)$, is
-    $\operatorname{tr}(Q_{k-1} \Lambda (Q_k \xi)^T) + \operatorname{tr}(Q_k \xi \Lambda Q_{k+1}^T)$
-    (the displayed summand, linear in $Q_k$): largest absolute value (the terms are at most $4
-    \max \lambda$)."""
+    $\operatorname{tr}(Q_{k-1} \Lambda (Q_k \xi)^T)$ plus $\operatorname{tr}(Q_k \xi \Lambda
+    Q_{k+1}^T)$ (the displayed summand, linear in $Q_k$): largest absolute value (the terms are at
+    most $4 \max \lambda$)."""
     import symrb
 
     rng = np.random.default_rng(111)

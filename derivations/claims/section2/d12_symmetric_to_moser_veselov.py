@@ -138,8 +138,8 @@ def d12_identification_printed() -> float:
 
 @D12.check(Level.MPMATH, tol=1e-40)
 def d12_mv2_equals_symmetric_50_digits() -> float:
-    """50 digits: MV-Algorithm 2 (MPDiscrete.mv2) from $(Q_1, M_1 = h(Q_0^T P_0 - P_0^T Q_0))$
-    reproduces the symmetric representation's $Q_{k+1}$ ($n = 3$, 6 steps)."""
+    """50 digits: MV-Algorithm 2 (MPDiscrete.mv2) from $(Q_1, M_1)$, $M_1 = h(Q_0^T P_0 - P_0^T
+    Q_0)$, reproduces the symmetric representation's $Q_{k+1}$ ($n = 3$, 6 steps)."""
     run, mv = _mp_run(), _mp_mv_runs()
     return float(_mp_gap(mv["mv2_Q"], run["Qs"][1 : _MP_STEPS + 2]))
 

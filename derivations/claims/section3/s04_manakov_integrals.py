@@ -355,11 +355,11 @@ def s4_number_of_independent_integrals() -> sp.Integer:
 @S4.check(Level.SYMBOLIC_GENERAL_N)
 def s4_discrete_lax_pair() -> sp.Expr:
     r"""Moser and Veselov's Lax form with parameter of the discrete rigid body: the displayed
-    $(M_{k+1} + \lambda\Lambda^2)(\Omega_k - \lambda\Lambda) = (\Omega_k - \lambda\Lambda)(M_k +
-    \lambda\Lambda^2)$ with $M_k$ the emitted mv2 momentum and $M_{k+1}$ the emitted mv3 transport
-    of it, $\Omega_k$ orthogonal and $\Lambda$ symmetric (noncommutative, every $n$): left minus
-    right reduces to 0 (so $\operatorname{tr}((M_k + \lambda\Lambda^2)^p)$ does not depend on $k$).
-    """
+    $(M_{k+1} + \lambda\Lambda^2)(\Omega_k - \lambda\Lambda)$ equals $(\Omega_k -
+    \lambda\Lambda)(M_k + \lambda\Lambda^2)$ with $M_k$ the emitted mv2 momentum and $M_{k+1}$ the
+    emitted mv3 transport of it, $\Omega_k$ orthogonal and $\Lambda$ symmetric (noncommutative,
+    every $n$): left minus right reduces to 0 (so $\operatorname{tr}((M_k + \lambda\Lambda^2)^p)$
+    does not depend on $k$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["Omega"])
     Mk_v = MV_MOMENTUM["M"]
     env = {Mk: Mk_v, Mk1: MV_TRANSPORT["M_next"].xreplace({M: Mk_v}), Omk: Om}

@@ -137,10 +137,10 @@ def s8_two_samples() -> sp.Integer:
 
 @S8.check(Level.FLOAT64, tol=1e-13)
 def s8_symrb_multi_sample() -> float:
-    r"""symrb.symmetric.multi_sample_control against $\sum_a J^{-1}((Q^a)^T P^a - (P^a)^T Q^a)$ with
-    $J^{-1}$ from the reference linear solve, and symrb.symmetric.multi_sample_rhs against $(Q^a U,
-    P^a U)$, for $m = 1, 2, 5$ samples, $n = 3, 4$, batches of 3: max difference relative to the
-    size of the reference $U$."""
+    r"""symrb.symmetric.multi_sample_control against $\sum_a J^{-1}(M^a)$, $M^a = (Q^a)^T P^a -
+    (P^a)^T Q^a$, with $J^{-1}$ from the reference linear solve, and
+    symrb.symmetric.multi_sample_rhs against $(Q^a U, P^a U)$, for $m = 1, 2, 5$ samples, $n = 3,
+    4$, batches of 3: max difference relative to the size of the reference $U$."""
     import symrb
 
     rng = np.random.default_rng(81)

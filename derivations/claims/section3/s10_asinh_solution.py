@@ -185,8 +185,8 @@ def s10_corrected_general_n() -> sp.Integer:
     r"""Every $n$: $Q^T P - P^T Q - M$ (the displayed $M$ formula, noncommutative $Q$ orthogonal,
     $M$ skew) with $P = Q F$, $F$ the displayed corrected $\exp(\operatorname{asinh}(M/2))$, reduces
     to $F - F^T - M$; $F^T = F(-M)$ for a real power series of skew $M$, and functions of one matrix
-    commute, so it vanishes for every $n$ when $\exp(\operatorname{asinh}(z/2)) -
-    \exp(\operatorname{asinh}(-z/2)) = z$, which SymPy confirms."""
+    commute, so it vanishes for every $n$ when $\exp(\operatorname{asinh}(z/2))$ minus
+    $\exp(\operatorname{asinh}(-z/2))$ is $z$, which SymPy confirms."""
     return _s10_general_n("corrected")
 
 

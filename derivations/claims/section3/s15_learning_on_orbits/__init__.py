@@ -266,9 +266,9 @@ def s15_printed_endpoint() -> sp.Expr:
 def s15_corrected_endpoint() -> sp.Expr:
     r"""First variation of the displayed cost (one sample, $dx_0 = 0$): along the linearised state
     and the displayed costate equation $dL - \frac{d}{dt} \langle p, dx\rangle = \langle u - u^*,
-    du\rangle$, so $dJ = \int \langle u - u^*, du\rangle\, dt + d\phi[dx_T] + \langle p_T,
-    dx_T\rangle$; with the displayed corrected endpoint condition the boundary term vanishes for
-    every $dx_T$ (trace words, every $n$)."""
+    du\rangle$, so $dJ$ is $\int \langle u - u^*, du\rangle\, dt$ plus the boundary term
+    $d\phi[dx_T] + \langle p_T, dx_T\rangle$; with the displayed corrected endpoint condition the
+    boundary term vanishes for every $dx_T$ (trace words, every $n$)."""
     return _endpoint_first_variation("corrected")
 
 
