@@ -256,12 +256,17 @@ _GREEK = (
     "alpha|beta|gamma|delta|epsilon|zeta|eta|theta|kappa|lambda|Lambda|mu|nu|xi|pi|rho|sigma"
     "|Sigma|tau|phi|Phi|psi|Psi|omega|Omega|Gamma|Delta|Theta|chi"
 )
-#: ASCII stand-ins for mathematics that a description must write in ``$...$`` instead (they are
-#: shown typeset in the book's evidence tables and through pylatexenc in ``show``).  Outside
-#: ``$...$`` the test accepts: words; numbers, decimals and ``1e-12``; names of code, dotted or
-#: snake_case with at least four letters before the underscore (``symrb.learning.resnet_forward``,
-#: ``solve_ivp``, ``reference.J_D``, ``equ_final_th_2.7``); the paper's labels (``Ukdef2``,
-#: ``mv1``, ``m8``); ranges of counts (``n = 3..6`` is not accepted: it is an equation).
+#: ASCII stand-ins for mathematics that a description must write in ``$...$`` instead (the book
+#: typesets ``$...$`` in its evidence tables and ``show`` turns it into text with pylatexenc):
+#: scripts in braces, ``^T``/``^2``/``^-1``, one- to three-letter names with an index (``p_k``,
+#: ``H*_xx``), Greek letters spelled out, ``d/dt``-style derivatives, ``||``, functions written as
+#: calls (``sqrt(``, ``tr(``), ASCII relations and arrows (``<=``, ``->``), ``Hhat``/``Qdot``, and
+#: equations between short names (``f = x + u``, ``n = 3``).  Accepted outside ``$...$``: words,
+#: numbers (``1e-12``), names of code, dotted or snake_case with at least four letters before the
+#: underscore (``symrb.learning.resnet_forward``, ``solve_ivp``, ``reference.J_D``,
+#: ``equ_final_th_2.7``), keyword arguments written as code (``return_info=True``) and the paper's
+#: labels (``Ukdef2``, ``mv1``, ``m8``).  A bare single letter or ``x + u`` without an equals sign
+#: cannot be told from words here; the terminal test below and the book's rendering catch the rest.
 _PSEUDO_TEX = re.compile(
     r"[_^]\{"  # p_{k+1}, R^{n_0}
     r"|(?<=[\w)\]])\^[\w(+-]"  # Q^T, u^2, R^-1, (...)^(1/2)
@@ -289,6 +294,7 @@ def test_pseudo_tex_is_recognised() -> None:
     for fine in ("symrb.learning.resnet_forward", "solve_ivp", "reference.J_D", "Ukdef2", "1e-12",
                  "$p_{k+1} = Q^T \\sigma$", "rigid_body", "sigmoid", "equ_final_th_2.7"):  # fmt: skip
         assert not _pseudo_tex(f"the {fine} here"), fine
+    assert not _pseudo_tex("with return_info=True, condition=True")
 
 
 def test_evidence_descriptions_write_their_math_in_latex() -> None:
