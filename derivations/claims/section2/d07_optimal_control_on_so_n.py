@@ -507,8 +507,9 @@ def d7_minimiser_branch() -> float:
     r"""The global minimiser of the same problem solves the theorem's equations with its costate,
     and each of its $U_k$ is off the branch through $I$ and continues (Newton along $J_D(V) = tM_k$,
     $t$ from 1 to 0) to the half-turn about the axis of the smallest $\lambda_i$ ($\lambda_1 =
-    0.7$): the largest of the Ukdef residual, $\max_k \max(0, \min \operatorname{Re}
-    \operatorname{eig}(U_k \Lambda))$ and the number of $U_k$ that continue elsewhere."""
+    0.7$): the largest of the Ukdef residual, the largest over $k$ of $\max(0, \min
+    \operatorname{Re} \operatorname{eig}(U_k \Lambda))$ and the number of $U_k$ that continue
+    elsewhere."""
     Us, theorem, _gap = _optimum(1)
     above = max(0.0, max(_margin(u, _LAM3) for u in Us))
     elsewhere = sum(_continued_to(u, _LAM3) != "R1" for u in Us)
