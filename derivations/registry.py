@@ -7,11 +7,13 @@ A claim is declared in a module of its own (derivations/claims/section*/), above
 
     @S6.check(Level.SYMBOLIC_GENERAL_N)
     def s6_momentum_general_n():
-        '''d/dt(Q^T P - P^T Q) - [M, U] vanishes on the emitted field (noncommutative, any n).'''
+        '''$d(Q^T P - P^T Q)/dt - [M, U]$ vanishes on the emitted field (noncommutative, any $n$).'''
         ...
 
 The first paragraph of an evidence function's docstring is its description (a check is described
-once).  An evidence function returns a non-negative *residual* that is zero (up to ``tol``) exactly
+once): plain words with every formula in ``$...$`` LaTeX (``$p_{k+1}$``, ``$Q^T$``), typeset in the
+book's evidence tables and turned into text by ``show``; ``tests/test_registry.py`` rejects ASCII
+stand-ins for mathematics outside ``$...$``.  An evidence function returns a non-negative *residual* that is zero (up to ``tol``) exactly
 when what it checks is true, at one :class:`Level`.
 
 Formulas shown in the book come from the objects the evidence evaluates: ``[[key]]`` in a claim's

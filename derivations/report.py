@@ -60,8 +60,9 @@ __all__ = [
 def plain(text: str) -> str:
     """Escape Markdown in plain-text descriptions and notes, leaving ``$...$`` math alone.
 
-    Descriptions are written in ASCII (``u*_k``, ``||M||_op``, ``sum_b[p^b, x^b]``); without
-    escaping, ``*``/``_`` become emphasis and ``|`` splits table cells.
+    Descriptions keep their mathematics in ``$...$``; the words around it may still hold
+    Markdown characters (``symrb.learning.resnet_forward``, ``lhs - rhs``, ``|``), and without
+    escaping ``*``/``_`` become emphasis and ``|`` splits table cells.
     """
     pieces = re.split(r"(\$[^$]+\$)", " ".join(text.split()))
     out = []

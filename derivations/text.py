@@ -73,6 +73,7 @@ _SPACED = {
 #: Macros pylatexenc does not know, with their arguments.
 _ARGUMENTS = {
     "operatorname": "{", "substack": "{", "tfrac": "{{", "dfrac": "{{", "overline": "{",
+    "widehat": "{",
 }  # fmt: skip
 _WALKER = _walker_context().filter_context()
 _WALKER.add_context_category(
@@ -90,6 +91,9 @@ _TEXT.add_context_category(
         MacroTextSpec("tfrac", "%(1)s/%(2)s"),
         MacroTextSpec("dfrac", "%(1)s/%(2)s"),
         MacroTextSpec("overline", "%(1)s\N{COMBINING OVERLINE}"),
+        MacroTextSpec("widehat", "(%(1)s)^\N{LOGICAL AND}"),
+        MacroTextSpec("det", "det"),
+        MacroTextSpec("dim", "dim"),
         *(MacroTextSpec(name, f" {sym} ") for name, sym in _SPACED.items()),
     ],
     prepend=True,
@@ -108,13 +112,22 @@ class _ProseText(LatexNodes2Text):
 
 _TO_TEXT = _ProseText(latex_context=_TEXT, math_mode="text")
 _NULL_DELIMITER = re.compile(r"\\(left|right)\s*\.")
+#: A macro without arguments followed by a space (``\\phi = 0``, ``\\sin \\theta``): pylatexenc
+#: drops that space (``ϕ= 0``, ``sinθ``) unless an empty group ends the macro.  Accents, fonts
+#: and fractions take the next token as their argument and are left alone.
+_SPACE_AFTER_MACRO = re.compile(
+    r"(\\(?!(?:left|right|rm|bf|it|sf|tt|cal|partial|nabla|hat|widehat|dot|ddot|tilde|widetilde|bar|vec|check"
+    r"|breve|overline|underline|frac|tfrac|dfrac|sqrt|text|mathrm|mathbf|mathfrak|mathbb|mathcal"
+    r"|operatorname|begin|end|substack)\b)[A-Za-z]+)(?= )"
+)
 
 
 def latex_text(tex: str) -> str:
     """Hand-written LaTeX (the inside of ``$...$``) as text: ``\\Lambda`` is ``Λ``, ``\\hat H``
     is ``Ĥ``, ``\\frac{a}{b}`` is ``a/b``, ``\\left\\|M\\right\\|`` is ``‖M‖``; one-character
     scripts lose their braces (``Q^{T}`` is ``Q^T``), longer ones keep them (``p_{k+1}``)."""
-    walker = LatexWalker(_NULL_DELIMITER.sub("", tex), latex_context=_WALKER, tolerant_parsing=True)
+    tex = _SPACE_AFTER_MACRO.sub(r"\1{}", _NULL_DELIMITER.sub("", tex))
+    walker = LatexWalker(tex, latex_context=_WALKER, tolerant_parsing=True)
     nodes, _pos, _len = walker.get_latex_nodes()
     text = " ".join(_TO_TEXT.nodelist_to_text(nodes).split())
     return re.sub(r"(?<=[(\[⟨]) | (?=[)\]⟩,;])", "", text)

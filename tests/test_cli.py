@@ -334,6 +334,10 @@ def test_a_tall_formula_is_set_apart_and_a_flat_one_stays_in_the_sentence() -> N
         (r"\operatorname{tr}(A)", "tr(A)"),
         (r"\tfrac{1}{2} M", "1/2 M"),
         (r"\left.\partial f/\partial x\right|_{K=0}", "∂f/∂x|_{K=0}"),
+        (r"\phi = \alpha \sum_k x_k", "ϕ = α ∑_k x_k"),  # the space after a symbol stays
+        (r"\sin \theta\, E + \hat H", "sin θ E + Ĥ"),
+        (r"|\det P_k - 1|, \dim V", "|det P_k - 1|, dim V"),
+        (r"\widehat{G(x)} = \hat b", "(G(x))^∧ = b̂"),
     ],
 )
 def test_latex_text(latex: str, shown: str) -> None:
