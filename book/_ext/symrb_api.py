@@ -124,7 +124,7 @@ class SymrbApiIndex(SphinxDirective):
         lines = [
             ".. list-table::",
             "   :header-rows: 1",
-            "   :widths: 22 38 40",
+            "   :widths: 20 36 44",
             "   :class: symrb-api-index",
             "",
             "   * - module",

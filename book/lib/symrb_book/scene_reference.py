@@ -69,8 +69,13 @@ def _value(k: SchemaKey) -> str:
 
 
 def _items(keys: Iterable[SchemaKey]) -> list[tuple[str, str]]:
-    """(key, TOML value) of the keys that have a value (their default, else a sample)."""
-    return [(k.key, _value(k)) for k in keys if k.default != "(not set)"]
+    """(key, TOML value) of the keys: the default, else a sample; a key that is not set by
+    default is shown with its first allowed value, or left out when it has no list of them."""
+    return [
+        (k.key, k.allowed[0] if k.default == "(not set)" else _value(k))
+        for k in keys
+        if k.default != "(not set)" or k.allowed
+    ]
 
 
 def inline_table(keys: Iterable[SchemaKey]) -> str:
