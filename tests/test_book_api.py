@@ -63,4 +63,11 @@ def test_a_name_is_documented_on_exactly_one_page():
 
 def test_purpose_is_the_first_sentence():
     assert symrb_api.purpose("symrb.errors") == "Exceptions raised by symrb."
-    assert symrb_api.purpose("symrb.algebra").endswith("of the paper.")
+    assert symrb_api.purpose("symrb.algebra") == (
+        "The Lie algebra so(n), the group SO(n) and the inertia operators of the paper."
+    )  # SO(n) kept: no space before its parenthesis
+    assert symrb_api.purpose("symrb.scenes.sweeps") == (
+        "Sweeps: :func:`expand_grid` and :func:`sweep`."
+    )  # the remarks in parentheses left for the module's page
+    exact = symrb_api.purpose("symrb.exact")
+    assert exact.endswith("an elliptic integral of the third kind."), exact

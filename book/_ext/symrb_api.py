@@ -98,11 +98,21 @@ def home(module: str, name: str) -> str:
 
 
 def purpose(module: str) -> str:
-    """The first sentence of a module's docstring (reST, one line)."""
+    """The first sentence of a module's docstring (reST, one line), without its remarks in
+    parentheses (the module's page has them)."""
     doc = inspect.getdoc(importlib.import_module(module)) or ""
     first = " ".join(doc.split("\n\n", 1)[0].split())
     match = re.search(r"(?<![.:e]\.g)\.(\s|$)", first)
-    return first[: match.start() + 1] if match else first
+    first = first[: match.start() + 1] if match else first
+    if first.count("(") > first.count(")"):  # a period inside a remark ("SIAM J.") ended it
+        first = first[: first.rindex(" (")] + "."
+    text = _REMARK.sub("", first)
+    return text if len(text.split()) >= 4 else first
+
+
+#: a remark in parentheses after a space (not the argument of SO(n)); code spans and one level of
+#: nested parentheses inside it are allowed
+_REMARK = re.compile(r" \((?:[^()`]|`[^`]*`|\([^()]*\))*\)")
 
 
 def _parse(directive: SphinxDirective, lines: list[str]) -> list[nodes.Node]:
@@ -124,7 +134,7 @@ class SymrbApiIndex(SphinxDirective):
         lines = [
             ".. list-table::",
             "   :header-rows: 1",
-            "   :widths: 20 36 44",
+            "   :widths: 25 47 28",
             "   :class: symrb-api-index",
             "",
             "   * - module",
