@@ -191,3 +191,19 @@ def test_scene_reference_table_marks_required_keys_and_escapes_pipes():
     assert ref.myst(":func:`symrb.simulate` at ``h``, :math:`x^2`") == (
         "{py:func}`symrb.simulate` at `h`, $x^2$"
     )
+
+
+def test_evidence_summary_shows_each_check_and_whether_it_is_as_recorded():
+    from types import SimpleNamespace
+
+    from symrb_book.start import evidence_summary
+
+    checks = [
+        SimpleNamespace(level="float64", form="claim", residual=3e-15, tol=1e-12, as_expected=True),
+        SimpleNamespace(
+            level="float64", form="printed", residual=None, tol=1e-12, as_expected=False
+        ),  # fmt: skip
+    ]
+    text = evidence_summary(SimpleNamespace(evidence=checks))
+    assert "| 1 | float64 | claim | 3.0e-15 | 1e-12 | yes |" in text
+    assert "| 2 | float64 | printed | error | 1e-12 | no |" in text

@@ -9,7 +9,8 @@ from typing import Any
 def evidence_summary(result: Any) -> str:
     """A Markdown table of a claim's checks (a ``ClaimResult`` of ``derivations``): number,
     level, the form checked (``claim``, ``printed`` or ``corrected``), residual, tolerance and
-    whether the check came out as the registry records."""
+    whether the check came out as the registry records; in the ``symrb-fit`` container, whose
+    table fits a phone's column (the book's CSS)."""
     rows = [
         "| check | level | form | residual | tolerance | as recorded |",
         "|---|---|---|---|---|---|",
@@ -20,4 +21,4 @@ def evidence_summary(result: Any) -> str:
             f"| {k} | {e.level} | {e.form} | {residual} | {e.tol:.0e} | "
             f"{'yes' if e.as_expected else 'no'} |"
         )
-    return "\n".join(rows)
+    return ":::{container} symrb-fit\n" + "\n".join(rows) + "\n:::\n"
