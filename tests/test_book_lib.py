@@ -145,3 +145,65 @@ def test_boundary_accuracy_is_as_conditioned() -> None:
     # the forward error is set by the conditioning of the problem, eps / sqrt(delta)
     assert np.all(run.forward_error <= 10 * run.eps_over_sqrt_delta), run.forward_error
     assert run.forward_error[-1] > 100 * run.forward_error[0]  # and does grow near the boundary
+
+
+# ---------------------------------------------------------------------------------------------
+# the scene reference (book/lib/symrb_book/scene_reference.py)
+
+
+def test_scene_reference_examples_parse_and_show_every_integrator_key():
+    from symrb_book import scene_reference as ref
+
+    from symrb.scenes import describe_schema, load_scene
+
+    for system in ref.PAGES["scene_reference"] + ref.PAGES["scene_reference_learning"]:
+        load_scene(ref.example(system))
+        forms = ref.integrator_examples(system)
+        variants = {k.variant for k in describe_schema(system) if k.table == "integrator"}
+        assert set(forms) == variants
+        for form, line in forms.items():
+            keys = [k for k in describe_schema(system) if k.variant == form]
+            shown = [k.key for k in keys if k.default != "(not set)" or k.allowed]
+            assert all(f"{key} = " in line for key in shown), (form, line)
+
+
+def test_scene_reference_pages_list_every_system_once(monkeypatch):
+    from symrb_book import scene_reference as ref
+
+    text = ref.page("scene_reference_bodies")
+    assert "## `symmetric_rigid_body`" in text and "## `mclachlan_scovel`" in text
+    monkeypatch.setitem(ref.PAGES, "scene_reference_orbits", ("double_bracket", "orbit_extremal"))
+    with pytest.raises(AssertionError, match="exactly one page"):
+        ref.page("scene_reference")  # toda is on no page
+    monkeypatch.setitem(ref.PAGES, "scene_reference_orbits", ("double_bracket", "toda", "toda"))
+    with pytest.raises(AssertionError, match="exactly one page"):
+        ref.page("scene_reference")
+
+
+def test_scene_reference_table_marks_required_keys_and_escapes_pipes():
+    from symrb_book import scene_reference as ref
+
+    from symrb.scenes import describe_schema
+
+    rows = ref.table(k for k in describe_schema("rigid_body") if k.variant == 'method = "mv"')
+    assert "| `integrator.h` | float > 0 | required |  |" in rows
+    assert "| `integrator.order` | integer | `2` | `2`, `4`, `6`, `8`, `10` |" in rows
+    assert ref.myst(":func:`symrb.simulate` at ``h``, :math:`x^2`") == (
+        "{py:func}`symrb.simulate` at `h`, $x^2$"
+    )
+
+
+def test_evidence_summary_shows_each_check_and_whether_it_is_as_recorded():
+    from types import SimpleNamespace
+
+    from symrb_book.start import evidence_summary
+
+    checks = [
+        SimpleNamespace(level="float64", form="claim", residual=3e-15, tol=1e-12, as_expected=True),
+        SimpleNamespace(
+            level="float64", form="printed", residual=None, tol=1e-12, as_expected=False
+        ),  # fmt: skip
+    ]
+    text = evidence_summary(SimpleNamespace(evidence=checks))
+    assert "| 1 | float64 | claim | 3.0e-15 | 1e-12 | yes |" in text
+    assert "| 2 | float64 | printed | error | 1e-12 | no |" in text
