@@ -439,22 +439,22 @@ def _outcome_cell(r: Mapping[str, Any]) -> str:
 
 def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
     """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID
-    (a link to the claim's check, :func:`claim_link`), title, where in the paper (for a method
-    check: the symrb function it backs), outcome (an erratum's links to its page of the errata),
-    for the paper's claims the sentences covered (:func:`sentences_cell`), and the evidence:
-    checks by level, the closest call and the time."""
+    (a link to the claim's check, :func:`claim_link`), title with where it is in the paper (for
+    a method check: the symrb function it backs), outcome (an erratum's links to its page of the
+    errata), for the paper's claims the sentences covered (:func:`sentences_cell`), and the
+    evidence: checks by level, the closest call and the time."""
     paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
     where = "where in the paper" if paper else "what it backs in symrb"
-    sentences = " sentences covered |" if paper else ""
+    sentences = " sentences |" if paper else ""
     rows = [
-        f"| ID | claim | {where} | outcome |{sentences} evidence: checks; closest call "
+        f"| ID | claim ({where}) | outcome |{sentences} evidence: checks; closest call "
         "(residual ≤ tolerance); time |",
-        "|---|---|---|---|---|" + "---|" * paper,
+        "|---|---|---|---|" + "---|" * paper,
     ]
     for r in results:
         covered = f" {sentences_cell(r['id'])} |" if paper else ""
         rows.append(
-            f"| {claim_link(r['id'])} | {prose(r['title'], cell=True)} | {_where_cell(r['id'])} "
+            f"| {claim_link(r['id'])} | {prose(r['title'], cell=True)} ({_where_cell(r['id'])}) "
             f"| {_outcome_cell(r)} |{covered} {_levels_cell(r['evidence'])}; closest "
             f"{_margin_cell(r['evidence'])}; {_seconds_cell(r['seconds'])} |"
         )
