@@ -17,7 +17,7 @@ For each HTML page of the built book (served from 127.0.0.1 by a local HTTP serv
   rendered table has a row of raw pipes or a separator row shown as data.
 
 The errata page must have a summary table listing every erratum, each linking to the erratum's
-own page (``errata/d07.html``: its heading starts with the ID, with an evidence table); the
+own page (``errata/d07.html``: its heading is "Erratum D7", with an evidence table); the
 errata are the claims whose outcome in
 ``verify.json`` beside the built book (else the outcome recorded in the registry) is *holds after
 correction* or *fails*.  The claims and errata pages are also looked at as a reader would, at
@@ -523,7 +523,7 @@ def test_errata_page_has_a_summary_and_one_page_per_erratum(server: str, browser
             )
         finally:
             context.close()
-        assert found["h1"].startswith(f"{r['id']}:"), f"{page}: heading {found['h1']!r}"
+        assert found["h1"].startswith(f"Erratum {r['id']}"), f"{page}: heading {found['h1']!r}"
         assert found["target"] and found["tables"], f"{page}: no #{anchor} or no evidence table"
 
 

@@ -184,7 +184,9 @@ def erratum_page(r: Mapping[str, Any]) -> list[str]:
     shown = f" The claim with its check: {claim_link(claim.id, 'on its page')}." if home else ""
     return [
         f"(erratum-{claim.id.lower()})=",
-        f"# {claim.id}: {prose(claim.title)}",
+        f"# Erratum {claim.id}",  # no math: the title is also the sidebar's and the tab's
+        "",
+        f"**{claim.id}: {prose(claim.title)}**",
         "",
         f"**Where in the paper.** {prose(claim.where)} (LaTeX labels in the source: {labels}).",
         "",
