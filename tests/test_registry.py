@@ -85,6 +85,8 @@ def test_declarations_are_validated() -> None:
         claim("S1", label="", title="", statement="", expected="holds", printed="p")
     with pytest.raises(ValueError, match="printed and corrected"):
         _with(_claim(), 0.5, "printed")
+    with pytest.raises(ValueError, match="headline states a correction"):
+        _claim(headline="[[x]]")
     c = _claim()
     with pytest.raises(ValueError, match="docstring"):
         c.check(Level.FLOAT64)(lambda: 0.0)
@@ -109,7 +111,7 @@ def test_registry_ids_are_those_of_claims_md() -> None:
 
 @pytest.mark.parametrize("c", CLAIMS, ids=[c.id for c in CLAIMS])
 def test_every_placeholder_has_a_formula_and_renders(c: Claim) -> None:
-    for which in ("statement", "printed", "corrected"):
+    for which in ("statement", "printed", "corrected", "headline"):
         text = c.render(which)
         assert "[[" not in text, (c.id, which)
     unused = set(c.formulas) - c.placeholders()
@@ -124,7 +126,7 @@ _PARAMETER = re.compile(r"^\s*[A-Za-z]\w*\s*=\s*[-\d.,\s]+$")
 def test_hand_written_math_states_no_relation(c: Claim) -> None:
     """Relations shown for a claim come from [[formulas]] its evidence evaluates; math typed into
     the texts may only name objects or give a parameter value such as n=3."""
-    for which in ("statement", "printed", "corrected"):
+    for which in ("statement", "printed", "corrected", "headline"):
         text = getattr(c, which) or ""
         for math in re.findall(r"\$([^$]+)\$", text):
             if _PARAMETER.match(math):

@@ -88,6 +88,7 @@ D1 = claim(
     "point of [[V_lambda]] for a cost multiplier $\\lambda_0$ equal to one or zero, the "
     "multipliers not all zero; with $\\lambda_0$ zero (abnormal) the cost drops out.",
     expected="holds after correction",
+    headline="[[costate]], one multiplier $\\sigma_k$ per step",
     section="2",
     where="Section 2, the first definition (the problem with fixed endpoints $x_0$, $x_N$ and the "
     "constraint $h(u_k) = 0$) and the first proposition (the extremal equations with $H = "

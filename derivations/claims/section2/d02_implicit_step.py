@@ -61,6 +61,7 @@ D2 = claim(
     "[[reduced]] (envelope theorem), [[step_jacobian]], so the implicit function theorem needs "
     "that matrix invertible; it equals the printed matrix only when $u^*$ does not depend on $y$.",
     expected="holds after correction",
+    headline="[[step_jacobian]] invertible",
     section="2",
     where="Section 2, the paragraph after the proof of the first proposition: the step is "
     "implicit in $p_{k+1}$ and needs the matrix $\\partial^2 H/\\partial y_i\\,\\partial x_j$ "

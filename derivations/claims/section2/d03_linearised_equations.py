@@ -48,6 +48,7 @@ D3 = claim(
     corrected="[[corrected]] with the second derivatives of the reduced Hamiltonian [[reduced]]; "
     "the entry $(i, j)$ of $H^*_{xy}$ is the derivative in $x_i$ and $y_j$.",
     expected="holds after correction",
+    headline="[[corrected]]",
     section="2",
     where="Section 2, the corollary (its only one): the differentials $dp_k$ and $dx_{k+1}$ of "
     "the extremal equations",

@@ -75,6 +75,7 @@ D5 = claim(
     "free and $h$ a submersion the constraints are always regular, so these hold with the cost "
     "multiplier one at every solution (no abnormal case, unlike the fixed endpoint of D1).",
     expected="holds after correction",
+    headline="[[endpoint]], the endpoint free",
     section="2",
     where="Section 2, the second definition (several samples $a = 1, \\dots, M$ and an endpoint "
     "cost $\\phi$) and the second proposition (extremal equations and the endpoint condition "

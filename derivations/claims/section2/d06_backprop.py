@@ -112,6 +112,7 @@ D6 = claim(
     "cost only D5's endpoint condition [[endpoint_minus]] gives the gradients of the cost, "
     "[[backprop]] and [[weights]] with $s=-1$.",
     expected="holds after correction",
+    headline="the ResNet layer is [[residual_layer]]",
     section="2",
     where="Section 2, the paragraph 'Remark' that closes the section before Section 2.1: item 1 "
     "(the ResNet layer $f(x, u) = \\sigma(Kx + \\beta)$) and item 2 (the link with "

@@ -127,6 +127,7 @@ D7 = claim(
     "and even $N$ every $U_k$ is the half-turn about the axis of $\\lambda_1$), and symrb's "
     "flow started from its $Q_0$ and $M_0$ leaves it.",
     expected="holds after correction",
+    headline="[[dynamics]]; the discrete rigid body maximises [[cost]]",
     section="2.1",
     where="Section 2.1 (The discrete symmetric rigid body), the first definition (minimise "
     "$\\sum_k \\operatorname{tr}(\\Lambda U_k)$ subject to $Q_{k+1} = Q_k U_k$) and the first "

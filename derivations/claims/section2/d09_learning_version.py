@@ -81,6 +81,7 @@ D9 = claim(
     "directions $U_k(I + \\xi_k)$ has full row rank, computed as 54 of 54 on a rational network "
     "($n = 3$, $N = 3$, $M = 2$), so no abnormal multiplier occurs.",
     expected="holds after correction",
+    headline="[[cost]], with $Q^a_N$ free",
     section="2.1",
     where="Section 2.1, the second definition (several samples $Q^a$ and a terminal cost $\\phi$) "
     "and the second theorem (with $P^a_N = \\partial\\phi/\\partial Q^a_N$), with its proof",

@@ -67,6 +67,7 @@ D12 = claim(
     "- \\Lambda U_k^T = J_D(U_k)$, and the third transports it as the symmetric algorithm does. "
     "With a time step $h$ the momenta are $h$ times the continuous ones (`symrb.paper`).",
     expected="holds after correction",
+    headline="[[ident_omega]], [[ident_momentum]]",
     section="2.2",
     where="Section 2.2, the last paragraph: a solution $(Q_k, P_k)$ of the symmetric equations "
     "gives the Moser-Veselov momentum $M_{k+1} = Q_k^T P_k - P_k^T Q_k$ (and Section 2.1, 'if we "

@@ -46,6 +46,7 @@ S5 = claim(
     "subject to [[eqnr]] with $Q(0)$ and $Q(T)$ given satisfy [[srb1]] with [[optimal_U]], where "
     "$P\\in\\mathfrak{gl}(n)$ is the costate of the maximum principle.",
     expected="holds after correction",
+    headline="[[H_corrected]]",
     printed="The Hamiltonian [[H_printed]], maximised with respect to $U$, gives [[optimal_U]].",
     corrected="With the costate paired with $\\dot Q$ by [[pairing]] on $\\mathfrak{gl}(n)$ "
     "(which extends the pairing of S1 on $\\mathfrak{so}(n)$), the Hamiltonian [[H_corrected]] "

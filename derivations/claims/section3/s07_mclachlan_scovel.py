@@ -32,6 +32,7 @@ S7 = claim(
     "these equations leave the set where $Q^TB$ is skew invariant, and on it $Q^TB$ follows the "
     "rigid body equations (the McLachlan-Scovel equations).",
     expected="holds after correction",
+    headline="[[extremal_B]]",
     printed="The extremal equations for a costate $B$ with [[skew]] are [[rbnlms]].",
     corrected="The extremal equations for a costate $B$ with [[skew]] are [[extremal_B]]: "
     "the McLachlan-Scovel equations hold for the rescaled costate [[rescaled]], which on this set is "

@@ -42,6 +42,7 @@ S8 = claim(
     "$\\sum_a\\phi(Q^a_T)$, the extremals satisfy [[costates]] with [[control]], the maximiser "
     "of [[H]], and an endpoint condition on $P^a_T$.",
     expected="holds after correction",
+    headline="[[endpoint_corrected]], with $Q^a_T$ free",
     printed="The definition keeps $Q_T$ given and fixed beside the terminal cost "
     "$\\sum_a\\phi(Q^a_T)$; [[endpoint_printed]] (with the printed $U$).",
     corrected="The endpoints $Q^a_T$ are free (fixed, they make the terminal cost a constant "

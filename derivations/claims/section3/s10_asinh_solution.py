@@ -37,6 +37,7 @@ S10 = claim(
     "$1/\\sqrt{1 + u^2}$, converges on the skew $u$ of operator norm below 1 and there inverts "
     "$\\sinh$; it still converges on the boundary, as slowly as the scalar series.",
     expected="holds after correction",
+    headline="[[corrected]]",
     printed="[[printed]], the exponent read as half of $\\sinh^{-1}M$.",
     corrected="[[corrected]], which on skew matrices is [[closed]].",
     note="The printed exponent $\\sinh^{-1} M/2$ is ambiguous, and read as $\\tfrac12\\sinh^{-1} "

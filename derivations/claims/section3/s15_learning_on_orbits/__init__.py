@@ -81,6 +81,7 @@ S15 = claim(
     "[[invariant]], and on so(3) this gives [[bound]] for every $T$, where [[beta]]: the second "
     "term does not go to zero unless the samples start on one line.",
     expected="holds after correction",
+    headline="[[endpoint_corrected]], [[shared_control]]",
     section="3.4",
     where="Section 3.4, the second corollary (several samples $x^a$ with a terminal cost, $p^a_T "
     "= \\partial\\phi/\\partial x^a_T$) and the last paragraph of the section (with $\\phi(x^a_T) "
