@@ -21,7 +21,7 @@ def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
     if not wps:
         return None
     # one panel under another, so that each stays legible at a page's width
-    fig, axes = plt.subplots(len(wps), 1, figsize=(7.5, 5.2 * len(wps)), squeeze=False)
+    fig, axes = plt.subplots(len(wps), 1, figsize=(10, 5.2 * len(wps)), squeeze=False)
     for ax, w in zip(axes[:, 0], wps, strict=True):
         for i, (m, e) in enumerate(w["methods"].items()):
             if not e.get("available"):
@@ -33,18 +33,21 @@ def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
                 "ls": "--" if m in ("RK45", "DOP853", "LSODA", "integrate") else "-",
             }
             pts = sorted(e["points"], key=lambda q: q["error"])
-            err = [max(q["error"], 1e-17) for q in pts]
+            # no point below the reference's own error: such errors are drawn at that floor
+            err = [max(q["error"], w["reference_error_estimate"]) for q in pts]
             med = [q["cpu"]["median"] for q in pts]
             lo = [q["cpu"]["median"] - q["cpu"]["min"] for q in pts]
             hi = [q["cpu"]["max"] - q["cpu"]["median"] for q in pts]
             ax.errorbar(err, med, yerr=[lo, hi], ms=5, capsize=2, label=m, **style)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        floor = w["reference_error_estimate"]
+        ax.axvspan(floor / 30, floor, color="0.85", lw=0, label="below the reference's error")
         ax.set_xlabel("error: largest entry of M(T) and Q(T) minus the reference")
         ax.set_ylabel("CPU time per run [s] (median, min-max)")
         ax.set_title(f"work-precision, n = {w['n']}, T = {w['T']:g}")
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=8, ncol=2)
+        ax.legend(fontsize=8, ncol=2, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return fig
 
 

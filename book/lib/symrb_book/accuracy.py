@@ -61,7 +61,9 @@ def cheapest(w: dict[str, Any], error: float, among: Iterable[str] | None = None
         if name not in names or not e.get("available"):
             continue
         for p in e["points"]:
-            if p["error"] <= error and (best is None or p["cpu"]["median"] < best[1]["cpu"]["median"]):
+            if p["error"] <= error and (
+                best is None or p["cpu"]["median"] < best[1]["cpu"]["median"]
+            ):
                 best = (name, p)
     return best
 
@@ -80,8 +82,7 @@ def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str) -> in
         low = [(e, c) for q, e, c in zip(pts, err, med, strict=True) if q["error"] < floor]
         clipped += len(low)
         if low:
-            ax.plot(*zip(*low, strict=True), ls="none", ms=11, mfc="white",
-                    **{**method_style(m), "ls": "none"})  # fmt: skip
+            ax.plot(*zip(*low, strict=True), ms=11, mfc="white", **method_style(m, ls="none"))
     ax.set_xscale("log")
     ax.set_yscale("log")
     left = floor / 30
