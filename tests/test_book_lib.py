@@ -208,11 +208,12 @@ def test_work_precision_panels_use_the_style_and_stay_above_the_floor():
         for ax, ((n, T), _group) in zip(fig.axes, chosen, strict=False):
             assert ax.get_legend() is None
             floor = accuracy.setting(full, n, T)["reference_error_estimate"]
-            lines = [ln for ln in ax.get_lines() if ln.get_label() in METHOD_STYLE]
-            assert 0 < len({ln.get_label() for ln in lines}) <= accuracy.MAX_SERIES
-            for ln in lines:
-                assert to_hex(ln.get_color()) == to_hex(METHOD_STYLE[ln.get_label()]["color"])
-                assert min(ln.get_xdata()) >= floor  # nothing drawn below the reference's error
+            series = {c.get_label(): c.lines[0] for c in ax.containers}  # errorbar: data line
+            assert 0 < len(series) <= accuracy.MAX_SERIES and set(series) <= set(METHOD_STYLE)
+            for name, line in series.items():
+                assert to_hex(line.get_color()) == to_hex(METHOD_STYLE[name]["color"]), name
+                assert line.get_marker() == METHOD_STYLE[name]["marker"], name
+                assert min(line.get_xdata()) >= floor  # nothing below the reference's error
         plt.close(fig)
     with pytest.raises(InputError, match="at most 6"):
         accuracy.work_precision(full, [((3, 10.0), tuple(METHOD_STYLE)[:7])])
@@ -220,7 +221,7 @@ def test_work_precision_panels_use_the_style_and_stay_above_the_floor():
 
 #: Words that make a plotted series a method's.
 _METHOD_WORDS = ("DOP853", "RK45", "LSODA", "Radau", "BDF", "mv_flow", "mv_algorithm", "MV-",
-                 "RKMK4", "rkmk4", "symmetric vs", "label=method")  # fmt: skip
+                 "RKMK4", "rkmk4", "symmetric vs")  # fmt: skip
 
 
 def test_book_figures_of_methods_take_their_style_from_the_table():
@@ -237,7 +238,9 @@ def test_book_figures_of_methods_take_their_style_from_the_table():
         cells = re.findall(r"```\{code-cell\}.*?\n(.*?)```", page.read_text(), flags=re.S)
         for cell in cells:
             labels = re.findall(r"label=([^,)\n]*(?:\n[^,)\n]*)?)", cell)
-            if any(word in label for label in labels for word in _METHOD_WORDS):
+            if any(word in label for label in labels for word in _METHOD_WORDS) or any(
+                label.strip() == "method" for label in labels
+            ):
                 assert "method_style(" in cell, (page.name, cell[:200])
                 checked.append(page.name)
             if "work_precision(" in cell:
