@@ -56,18 +56,19 @@ def _long_time_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
     lts = ms.get("long-time", [])
     if not lts:
         return None
-    fig, axes = plt.subplots(len(lts), 1, figsize=(7.5, 4.6 * len(lts)), squeeze=False)
-    for ax, d in zip(axes[:, 0], lts, strict=True):
+    # the panels side by side, one per n, on a shared error axis
+    fig, axes = plt.subplots(1, len(lts), figsize=(5.0 * len(lts), 4.2), squeeze=False, sharey=True)
+    for ax, d in zip(axes[0], lts, strict=True):
         N = np.asarray(d["N"], dtype=float)
         for key, vals in d["errors"].items():
             s = d["slope"][key]
             lab = f"{key} (slope {s:.2f})" if s is not None else key
             ax.loglog(N, np.maximum(vals, 1e-18), marker=".", label=lab)
-        ax.loglog(N, EPS * np.sqrt(N), "k--", label="eps sqrt(N)")
-        ax.loglog(N, 10 * EPS * np.sqrt(N), "k:", label="10 eps sqrt(N)")
+        ax.loglog(N, EPS * np.sqrt(N), "k--", label=r"$\varepsilon\sqrt{N}$")
+        ax.loglog(N, 10 * EPS * np.sqrt(N), "k:", label=r"$10\,\varepsilon\sqrt{N}$")
         ax.set_xlabel("step number N")
         ax.set_ylabel("largest relative error up to step N")
-        ax.set_title(f"long-time invariants, n = {d['n']}, h = {d['h']:g} ({d['flow']})")
+        ax.set_title(f"n = {d['n']}, h = {d['h']:g} ({d['flow']})", fontsize=10)
         ax.legend(fontsize=8)
     return fig
 

@@ -88,7 +88,7 @@ def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str) -> in
     left = floor / 30
     ax.axvspan(left, floor, color="0.85", lw=0, label="below the reference's own error")
     ax.set_xlim(left, 1.0)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title)
     ax.grid(True, which="major", alpha=0.3)
     return clipped
 
@@ -105,6 +105,12 @@ def work_precision(result: Any, panels: Sequence[tuple[tuple[int, float], Sequen
     """
     import matplotlib.pyplot as plt
 
+    with plt.rc_context({"font.size": 11, "axes.titlesize": 11, "legend.fontsize": 10}):
+        return _work_precision(plt, result, panels, ncols, titles)
+
+
+def _work_precision(plt: Any, result: Any, panels: Sequence[tuple[tuple[int, float], Sequence[str]]],
+                    ncols: int, titles: Sequence[str] | None) -> tuple[Any, int]:  # fmt: skip
     nrows = -(-len(panels) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(3.9 * ncols + 0.4, 3.1 * nrows + 1.0),
                              squeeze=False, sharex=True)  # fmt: skip
@@ -125,8 +131,7 @@ def work_precision(result: Any, panels: Sequence[tuple[tuple[int, float], Sequen
     for ax in axes.flat:
         for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(label, h)
-    fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=4, fontsize=8.5,
-               frameon=False)  # fmt: skip
+    fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=4, frameon=False)
     rows = -(-len(handles) // 4)
-    fig.tight_layout(rect=(0, (0.1 + 0.2 * rows) / fig.get_figheight(), 1, 1))
+    fig.tight_layout(rect=(0, (0.1 + 0.25 * rows) / fig.get_figheight(), 1, 1))
     return fig, clipped
