@@ -16,6 +16,9 @@ from symrb.errors import InputError
 
 from .style import method_style
 
+#: The width of the book's content column at 1280 px, in CSS pixels.
+COLUMN_PX = 680
+
 #: The largest number of methods in one panel.
 MAX_SERIES = 6
 
@@ -31,6 +34,14 @@ APPENDIX_GROUPS = (
     ("orders 2 and 4", ("MV", "MV-fast", "midpoint", "MV-comp4", "MV-pre4", "RKMK4")),
     ("orders 6 to 10, exact", ("MV-comp6", "MV-comp8", "MV-pre6", "MV-pre8", "MV-pre10", "exact")),
 )
+
+
+def fit_column(fig: Any, width_px: int = COLUMN_PX) -> Any:
+    """``fig`` with its dpi lowered so that it is drawn at most ``width_px`` CSS pixels wide: the
+    notebook shows a figure at its size in pixels, and the theme narrows a wider image without
+    lowering its height (the figure comes out squeezed)."""
+    fig.set_dpi(min(fig.dpi, width_px / fig.get_figwidth()))
+    return fig
 
 
 def settings(result: Any) -> list[dict[str, Any]]:
@@ -88,7 +99,7 @@ def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str) -> in
     left = floor / 30
     ax.axvspan(left, floor, color="0.85", lw=0, label="below the reference's own error")
     ax.set_xlim(left, 1.0)
-    ax.set_title(title)
+    ax.set_title(title, fontsize=11)
     ax.grid(True, which="major", alpha=0.3)
     return clipped
 
@@ -105,19 +116,16 @@ def work_precision(result: Any, panels: Sequence[tuple[tuple[int, float], Sequen
     """
     import matplotlib.pyplot as plt
 
-    with plt.rc_context({"font.size": 11, "axes.titlesize": 11, "legend.fontsize": 10}):
-        return _work_precision(plt, result, panels, ncols, titles)
-
-
-def _work_precision(plt: Any, result: Any, panels: Sequence[tuple[tuple[int, float], Sequence[str]]],
-                    ncols: int, titles: Sequence[str] | None) -> tuple[Any, int]:  # fmt: skip
     nrows = -(-len(panels) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(3.9 * ncols + 0.4, 3.1 * nrows + 1.0),
                              squeeze=False, sharex=True)  # fmt: skip
+    # sizes set here, not through rc_context (whose exit resets the notebook's backend)
+    for ax in axes.flat:
+        ax.tick_params(labelsize=10)
     for ax in axes[-1]:
-        ax.set_xlabel("error of $M(T)$, $Q(T)$")
+        ax.set_xlabel("error of $M(T)$, $Q(T)$", fontsize=11)
     for ax in axes[:, 0]:
-        ax.set_ylabel("CPU seconds per run")
+        ax.set_ylabel("CPU seconds per run", fontsize=11)
     clipped = 0
     for i, ((n, T), methods) in enumerate(panels):
         if len(methods) > MAX_SERIES:
@@ -131,7 +139,8 @@ def _work_precision(plt: Any, result: Any, panels: Sequence[tuple[tuple[int, flo
     for ax in axes.flat:
         for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(label, h)
-    fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=4, frameon=False)
+    fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=4, frameon=False,
+               fontsize=10)  # fmt: skip
     rows = -(-len(handles) // 4)
     fig.tight_layout(rect=(0, (0.1 + 0.25 * rows) / fig.get_figheight(), 1, 1))
-    return fig, clipped
+    return fit_column(fig), clipped
