@@ -79,7 +79,7 @@ def cheapest(w: dict[str, Any], error: float, among: Iterable[str] | None = None
     return best
 
 
-def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str) -> int:
+def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str, left: float) -> int:
     """One work-precision panel; returns how many points were drawn at the floor."""
     floor = w["reference_error_estimate"]
     clipped = 0
@@ -96,7 +96,6 @@ def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str) -> in
             ax.plot(*zip(*low, strict=True), ms=11, mfc="white", **method_style(m, ls="none"))
     ax.set_xscale("log")
     ax.set_yscale("log")
-    left = floor / 30
     ax.axvspan(left, floor, color="0.85", lw=0, label="below the reference's own error")
     ax.set_xlim(left, 1.0)
     ax.set_title(title, fontsize=11)
@@ -119,20 +118,25 @@ def work_precision(result: Any, panels: Sequence[tuple[tuple[int, float], Sequen
     nrows = -(-len(panels) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(3.9 * ncols + 0.4, 3.1 * nrows + 1.0),
                              squeeze=False, sharex=True)  # fmt: skip
-    # sizes set here, not through rc_context (whose exit resets the notebook's backend)
+    # sizes set here, not through rc_context (whose exit resets the notebook's backend); a
+    # wider figure is drawn smaller (fit_column), so its type is larger
+    size = 11 * (1 + 0.2 * max(0, ncols - 2))
     for ax in axes.flat:
-        ax.tick_params(labelsize=10)
+        ax.tick_params(labelsize=size - 1)
     for ax in axes[-1]:
-        ax.set_xlabel("error of $M(T)$, $Q(T)$", fontsize=11)
+        ax.set_xlabel("error of $M(T)$, $Q(T)$", fontsize=size)
     for ax in axes[:, 0]:
-        ax.set_ylabel("CPU seconds per run", fontsize=11)
+        ax.set_ylabel("CPU seconds per run", fontsize=size)
     clipped = 0
+    # one error axis for all panels, from below the smallest floor
+    left = min(setting(result, n, T)["reference_error_estimate"] for (n, T), _m in panels) / 30
     for i, ((n, T), methods) in enumerate(panels):
         if len(methods) > MAX_SERIES:
             raise InputError(f"work_precision: at most {MAX_SERIES} methods a panel, got {methods}")
         w = setting(result, n, T)
         title = titles[i] if titles else f"n = {n}, T = {T:g}"
-        clipped += _panel(axes.flat[i], w, available(w, methods), title)
+        clipped += _panel(axes.flat[i], w, available(w, methods), title, left)
+        axes.flat[i].title.set_fontsize(size)
     for ax in list(axes.flat)[len(panels) :]:
         ax.set_visible(False)
     handles: dict[str, Any] = {}
@@ -140,7 +144,7 @@ def work_precision(result: Any, panels: Sequence[tuple[tuple[int, float], Sequen
         for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(label, h)
     fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=4, frameon=False,
-               fontsize=10)  # fmt: skip
+               fontsize=size - 1)  # fmt: skip
     rows = -(-len(handles) // 4)
-    fig.tight_layout(rect=(0, (0.1 + 0.25 * rows) / fig.get_figheight(), 1, 1))
+    fig.tight_layout(rect=(0, (0.1 + 0.025 * size * rows) / fig.get_figheight(), 1, 1))
     return fit_column(fig), clipped
