@@ -14,6 +14,8 @@ implementation instead of agreeing with it:
 * the discrete symmetric representation and both Moser-Veselov algorithms in 50-digit arithmetic
   (``mpmath``), :math:`J_D(U) = M` solved by Newton's method on the Cayley parameters of
   :math:`U` (``mpmath.findroot``) started from the identity's branch;
+* the rigid body for any n by Gragg-Bulirsch-Stoer extrapolation in extended precision
+  (``np.longdouble``), the reference of the benchmark's work-precision diagrams;
 * the Toda lattice by Symes' QR formula in ``mpmath`` (no differential equation is solved), and
   the extremal equations of the adjoint-orbit problem on :math:`\mathfrak{so}(3)` written with
   cross products and solved by ``mpmath.odefun``.
