@@ -6,6 +6,7 @@ minus as a binary operator); :func:`tex_sci` writes it as :math:`3.2\\times10^{-
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Sequence
 
 __all__ = ["tex_sci", "md_table"]
@@ -32,7 +33,7 @@ def tex_sci(x: float, digits: int = 1) -> str:
 
 
 def md_table(header: Sequence[object], rows: Iterable[Sequence[object]]) -> str:
-    """A Markdown table; a ``|`` inside a cell (a norm, a message) is escaped.
+    """A Markdown table; a ``|`` inside a cell (a norm, a message) is escaped (once).
 
     Parameters
     ----------
@@ -48,7 +49,7 @@ def md_table(header: Sequence[object], rows: Iterable[Sequence[object]]) -> str:
     """
 
     def cell(c: object) -> str:
-        return str(c).replace("|", "\\|")
+        return re.sub(r"(?<!\\)\|", r"\\|", str(c))
 
     lines = ["| " + " | ".join(cell(h) for h in header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(cell(c) for c in row) + " |" for row in rows]
