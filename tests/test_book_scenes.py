@@ -20,7 +20,7 @@ SCENES = sorted((BOOK / "scenes").glob("*.toml"))
 PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
     "rigid_body.md": ("manakov_drift", ("manakov_drift(",)),
     "section2/02_backprop.md": ("toy_training", ("train_toy_classifier(",)),
-    "section2/04_moser_veselov.md": (
+    "section2/04_moser_veselov_runs.md": (
         (
             "mv_invariants",
             "agreement_symmetric",
