@@ -50,20 +50,12 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
         ("symrb.engine.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),
     ),
     "learning.md": (
-        (
-            "so_training_gradient",
-            "so_training_msa",
-            "so_training_shooting",
-            "resnet_digits_gd",
-            "resnet_digits_msa",
-        ),
-        (
-            "train_so_gradient(",
-            "train_so_msa(",
-            "train_so_shooting(",
-            "learning.train(",
-            "train_msa(",
-        ),
+        ("so_training_gradient", "so_training_msa", "so_training_shooting"),
+        ("train_so_gradient(", "train_so_msa(", "train_so_shooting("),
+    ),
+    "learning_resnet.md": (
+        ("resnet_digits_gd", "resnet_digits_msa"),
+        ("learning.train(", "train_msa("),
     ),
 }
 

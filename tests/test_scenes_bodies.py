@@ -61,7 +61,7 @@ MV1 = {"method": "mv_algorithm1", "h": 1.0}
 
 
 # ---------------------------------------------------------------------------------------------
-# the agreement of the three algorithms (book/section2/04_moser_veselov.md)
+# the agreement of the three algorithms (book/section2/04_moser_veselov_runs.md)
 
 
 def test_three_second_runs_equal_hand_written_calls() -> None:
@@ -240,7 +240,7 @@ def test_discretisation_scene_equals_hand_written_calls() -> None:
 
 
 # ---------------------------------------------------------------------------------------------
-# an adaptive run against a fixed-step one (book/section2/04_moser_veselov.md, second order)
+# an adaptive run against a fixed-step one (book/section2/04_moser_veselov_runs.md, second order)
 
 
 def test_second_order_sweep_equals_hand_written_runs() -> None:
