@@ -145,3 +145,19 @@ def test_boundary_accuracy_is_as_conditioned() -> None:
     # the forward error is set by the conditioning of the problem, eps / sqrt(delta)
     assert np.all(run.forward_error <= 10 * run.eps_over_sqrt_delta), run.forward_error
     assert run.forward_error[-1] > 100 * run.forward_error[0]  # and does grow near the boundary
+
+
+def test_tex_sci_writes_powers_of_ten_that_typeset_as_one_number() -> None:
+    from symrb_book.display import tex_sci
+
+    assert tex_sci(3.2e-16) == r"3.2\times10^{-16}"
+    assert tex_sci(-1.25e7, 2) == r"-1.25\times10^{7}"
+    assert tex_sci(4.0) == "4.0"  # no factor 10^0
+    assert "e" not in tex_sci(9.99e-300).replace("times", "")  # never the e-notation of Python
+
+
+def test_md_table_escapes_each_pipe_once() -> None:
+    from symrb_book.display import md_table
+
+    text = md_table(["a", "b"], [("|x|", r"already \| escaped")])
+    assert text.splitlines() == ["| a | b |", "|---|---|", r"| \|x\| | already \| escaped |"]
