@@ -288,7 +288,7 @@ def test_adaptive_and_fixed_step_runs_compare_at_common_times() -> None:
 
 
 # ---------------------------------------------------------------------------------------------
-# the operator norm of the symmetric rigid body (book/section3/02_local_equivalence.md, S11)
+# the operator norm of the symmetric rigid body (book/section3/02c_norm_casimir.md, S11)
 
 
 def test_norm_conservation_scenes_equal_the_experiment() -> None:
