@@ -40,7 +40,7 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
         ("hamiltonian_on_so", "hamiltonian_on_gl"),
         ("hamiltonian_drift(",),
     ),
-    "section3/04b_brockett_toda.md": ("toda_lattice", ("toda_lattice(",)),
+    "section3/04c_toda_lattice.md": ("toda_lattice", ("toda_lattice(",)),
     "section3/05b_orbit_experiments.md": (
         ("orbit_one_sample", "orbit_two_samples_shared"),
         ("one_sample_learning(", "two_sample_learning("),
