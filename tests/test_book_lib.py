@@ -307,3 +307,19 @@ def test_book_figures_of_methods_take_their_style_from_the_table():
             if "work_precision(" in cell:
                 checked.append(page.name)
     assert {"hard_cases.md", "04_moser_veselov.md", "accuracy.md"} <= set(checked), checked
+
+
+def test_tex_sci_writes_powers_of_ten_that_typeset_as_one_number() -> None:
+    from symrb_book.display import tex_sci
+
+    assert tex_sci(3.2e-16) == r"3.2\times10^{-16}"
+    assert tex_sci(-1.25e7, 2) == r"-1.25\times10^{7}"
+    assert tex_sci(4.0) == "4.0"  # no factor 10^0
+    assert "e" not in tex_sci(9.99e-300).replace("times", "")  # never the e-notation of Python
+
+
+def test_md_table_escapes_each_pipe_once() -> None:
+    from symrb_book.display import md_table
+
+    text = md_table(["a", "b"], [("|x|", r"already \| escaped")])
+    assert text.splitlines() == ["| a | b |", "|---|---|", r"| \|x\| | already \| escaped |"]
