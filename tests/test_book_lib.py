@@ -306,7 +306,7 @@ def test_book_figures_of_methods_take_their_style_from_the_table():
                 checked.append(page.name)
             if "work_precision(" in cell:
                 checked.append(page.name)
-    assert {"hard_cases.md", "04_moser_veselov.md", "accuracy.md"} <= set(checked), checked
+    assert {"hard_cases.md", "04_moser_veselov_runs.md", "accuracy.md"} <= set(checked), checked
 
 
 def test_tex_sci_writes_powers_of_ten_that_typeset_as_one_number() -> None:
