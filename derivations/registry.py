@@ -7,11 +7,13 @@ A claim is declared in a module of its own (derivations/claims/section*/), above
 
     @S6.check(Level.SYMBOLIC_GENERAL_N)
     def s6_momentum_general_n():
-        '''d/dt(Q^T P - P^T Q) - [M, U] vanishes on the emitted field (noncommutative, any n).'''
+        '''$d(Q^T P - P^T Q)/dt - [M, U]$ vanishes on the emitted field (noncommutative, any $n$).'''
         ...
 
 The first paragraph of an evidence function's docstring is its description (a check is described
-once).  An evidence function returns a non-negative *residual* that is zero (up to ``tol``) exactly
+once): plain words with every formula in ``$...$`` LaTeX (``$p_{k+1}$``, ``$Q^T$``), typeset in the
+book's evidence tables and turned into text by ``show``; ``tests/test_registry.py`` rejects ASCII
+stand-ins for mathematics outside ``$...$``.  An evidence function returns a non-negative *residual* that is zero (up to ``tol``) exactly
 when what it checks is true, at one :class:`Level`.
 
 Formulas shown in the book come from the objects the evidence evaluates: ``[[key]]`` in a claim's
@@ -153,7 +155,9 @@ class Claim:
     ``statement`` is the statement in our words; for an erratum ``printed`` is the form printed in
     the paper and ``corrected`` the form that holds; ``note`` says what was found.  ``label`` is
     the paper's LaTeX label; ``where`` says where a reader of the paper finds the statement
-    (section and the numbered item or equation).  ``expected`` is
+    (section and the numbered item or equation).  ``headline`` states an erratum's correction in
+    one line, for the verdict table of the book's first page: its ``[[key]]`` formulas, joined
+    by a few words (empty: the table shows the note's ``Corrected:`` sentence).  ``expected`` is
     the outcome recorded for the claim: :func:`verify` reports a mismatch as a failure.
     """
 
@@ -167,6 +171,7 @@ class Claim:
     note: str = ""
     section: str = ""
     where: str = ""
+    headline: str = ""
     evidence: list[Evidence] = field(default_factory=list)
     formulas: dict[str, Any] = field(default_factory=dict)
     sentences: list[Sentence] = field(default_factory=list)
@@ -181,6 +186,8 @@ class Claim:
             )
         if bool(self.printed) != bool(self.corrected):
             raise ValueError(f"claim {self.id}: give both the printed and the corrected text")
+        if self.headline and not self.corrected:
+            raise ValueError(f"claim {self.id}: a headline states a correction; give one")
 
     @property
     def group(self) -> str:
@@ -260,11 +267,11 @@ class Claim:
     # -- rendering --------------------------------------------------------------------------
 
     def placeholders(self) -> set[str]:
-        texts = [self.statement, self.printed or "", self.corrected or ""]
+        texts = [self.statement, self.printed or "", self.corrected or "", self.headline]
         return {m for t in texts for m in _PLACEHOLDER.findall(t)}
 
     def render(self, which: str = "statement") -> str:
-        """The text ``which`` (statement, printed, corrected) with every ``[[key]]`` replaced by
+        """The text ``which`` (statement, printed, corrected, headline) with every ``[[key]]`` replaced by
         ``$latex$`` of the registered formula."""
         text = getattr(self, which) or ""
 
@@ -289,6 +296,7 @@ def claim(
     note: str = "",
     section: str = "",
     where: str = "",
+    headline: str = "",
 ) -> Claim:
     """Declare a claim in the calling module (see the module docstring)."""
     frame = inspect.currentframe()
@@ -304,6 +312,7 @@ def claim(
         note=" ".join(note.split()),
         section=section,
         where=where,
+        headline=headline,
         module=module,
     )
 

@@ -5,10 +5,13 @@ note, a table of its evidence and, in a collapsed dropdown, the map of the paper
 evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the build makes
 (``symrb verify --output book/_build/verify.json``, reused when it was written for the current
 code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
-which fails the book build.  :func:`claims_table` and :func:`claims_summary` are the claims
-page, one table per claim group (:func:`by_group`: the paper's claims, then symrb's own methods),
-with :func:`sentences_summary` counting the sentences of the paper's statements that evidence
-covers.
+which fails the book build; it also places the label ``claim-s4`` (:func:`anchor_of`) there, the
+target of every link to the claim's check (:func:`claim_link`).  :func:`claims_table` and
+:func:`claims_summary` are the claims page, one table per claim group (:func:`by_group`: the
+paper's claims, then symrb's own methods), with :func:`sentences_summary` counting the sentences of
+the paper's statements that evidence covers; :func:`verdict_table` is the book's first page: every
+claim of the paper, its outcome and, for an erratum, the correction in one line
+(:func:`correction_line`).
 """
 
 from __future__ import annotations
@@ -54,14 +57,22 @@ __all__ = [
     "sentences_cell",
     "source_hash",
     "verify_json_path",
+    "sentences",
+    "summary_of",
+    "anchor_of",
+    "check_pages",
+    "claim_link",
+    "correction_line",
+    "verdict_table",
 ]
 
 
 def plain(text: str) -> str:
     """Escape Markdown in plain-text descriptions and notes, leaving ``$...$`` math alone.
 
-    Descriptions are written in ASCII (``u*_k``, ``||M||_op``, ``sum_b[p^b, x^b]``); without
-    escaping, ``*``/``_`` become emphasis and ``|`` splits table cells.
+    Descriptions keep their mathematics in ``$...$``; the words around it may still hold
+    Markdown characters (``symrb.learning.resnet_forward``, ``lhs - rhs``, ``|``), and without
+    escaping ``*``/``_`` become emphasis and ``|`` splits table cells.
     """
     pieces = re.split(r"(\$[^$]+\$)", " ".join(text.split()))
     out = []
@@ -344,14 +355,20 @@ def result_from_dict(r: Mapping[str, Any]) -> ClaimResult:
     )  # fmt: skip
 
 
-def check(cid: str, show: bool = True) -> ClaimResult:
+def check(cid: str, show: bool = True, anchor: bool = True) -> ClaimResult:
     """Show claim ``cid`` (statement, printed and corrected forms, note, evidence) from the run of
-    :func:`load_results` and assert its recorded outcome (which fails the book build)."""
+    :func:`load_results` and assert its recorded outcome (which fails the book build).
+
+    With ``anchor`` (the default) the display starts with the label :func:`anchor_of` that the
+    claims and verdict tables link to; a claim is shown so on exactly one page of the book (its
+    home, :func:`check_pages`), so pass ``anchor=False`` to show it a second time elsewhere.
+    """
     result = result_of(cid)
     if show:
         from IPython.display import Markdown, display
 
-        display(Markdown(claim_markdown(result)))
+        label = f"({anchor_of(cid)})=\n\n" if anchor else ""
+        display(Markdown(label + claim_markdown(result)))
     failing = [
         f"[{e.form}] {e.description}: residual {e.residual:.3e} (tol {e.tol:.0e}) {e.error or ''}"
         for e in result.evidence
@@ -411,35 +428,36 @@ def _where_cell(cid: str) -> str:
     return prose(short_where(text) if text else "(not recorded)", cell=True)
 
 
-def _id_cell(r: Mapping[str, Any]) -> str:
-    """The claim's ID; for an erratum, a link to its section on the errata page."""
-    if r["outcome"] in ("holds after correction", "fails"):
-        return f"{{ref}}`{r['id']} <erratum-{r['id'].lower()}>`"
-    return str(r["id"])
+def _outcome_cell(r: Mapping[str, Any]) -> str:
+    """The outcome; for an erratum, a link to its page of the errata."""
+    outcome = str(r["outcome"])
+    if outcome in ERRATA:
+        outcome = f"{{ref}}`{outcome} <erratum-{r['id'].lower()}>`"
+    if r["outcome"] != r["expected"]:
+        outcome += f" (recorded {r['expected']})"
+    return outcome
 
 
 def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
-    """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID,
-    title, where in the paper (for a method check: the symrb function it backs), outcome, checks
-    by level, for the paper's claims the sentences covered (:func:`sentences_cell`), closest
-    call, time."""
+    """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID
+    (a link to the claim's check, :func:`claim_link`), title with where it is in the paper (for
+    a method check: the symrb function it backs), outcome (an erratum's links to its page of the
+    errata), for the paper's claims the sentences covered (:func:`sentences_cell`), and the
+    evidence: checks by level, the closest call and the time."""
     paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
     where = "where in the paper" if paper else "what it backs in symrb"
-    sentences = " sentences covered |" if paper else ""
+    sentences = " sentences |" if paper else ""
     rows = [
-        f"| ID | claim | {where} | outcome | checks |{sentences} closest call (residual ≤ "
-        "tolerance) | time |",
-        "|---|---|---|---|---|---|---|" + "---|" * paper,
+        f"| ID | claim ({where}) | outcome |{sentences} evidence: checks; closest call "
+        "(residual ≤ tolerance); time |",
+        "|---|---|---|---|" + "---|" * paper,
     ]
     for r in results:
-        outcome = r["outcome"]
-        if outcome != r["expected"]:
-            outcome += f" (recorded {r['expected']})"
         covered = f" {sentences_cell(r['id'])} |" if paper else ""
         rows.append(
-            f"| {_id_cell(r)} | {prose(r['title'], cell=True)} | {_where_cell(r['id'])} "
-            f"| {outcome} | {_levels_cell(r['evidence'])} |{covered} "
-            f"{_margin_cell(r['evidence'])} | {_seconds_cell(r['seconds'])} |"
+            f"| {claim_link(r['id'])} | {prose(r['title'], cell=True)} ({_where_cell(r['id'])}) "
+            f"| {_outcome_cell(r)} |{covered} {_levels_cell(r['evidence'])}; closest "
+            f"{_margin_cell(r['evidence'])}; {_seconds_cell(r['seconds'])} |"
         )
     return "\n".join(rows)
 
@@ -456,6 +474,109 @@ def claims_summary(results: Sequence[Mapping[str, Any]]) -> str:
         f"{len(results)} {'claims' if paper else 'method checks'} ({summary}); every computed "
         f"outcome equals the recorded one. {nchecks} checks ran in {total:.1f} s"
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# the verdict: every claim's check is linked from the tables; an erratum's correction in one line
+
+#: The outcomes listed in the errata.
+ERRATA = ("holds after correction", "fails")
+
+_MATH = re.compile(r"(\$[^$]+\$)")
+_CHECK_CALL = re.compile(r"""\bcheck\(\s*["']([DSM]\d+)["']\s*(,[^)]*)?\)""")
+
+
+def sentences(text: str) -> list[str]:
+    """The sentences of ``text``: cut after ``.``, ``!`` or ``?`` followed by a space and a
+    capital letter, a digit, a bracket, a quote or a formula, never inside ``$...$``."""
+    masked = "".join(p[0] + "x" * (len(p) - 1) if m else p for m, p in _math_pieces(text))
+    cuts = [m.end() for m in re.finditer(r"(?<=[.!?])\s+(?=[A-Z0-9(\[`'$])", masked)]
+    bounds = [0, *cuts, len(text)]
+    return [
+        text[a:b].strip() for a, b in zip(bounds, bounds[1:], strict=False) if text[a:b].strip()
+    ]
+
+
+def summary_of(note: str) -> tuple[str, str]:
+    """What is wrong (the note's first sentence) and the corrected form (its sentence starting
+    with ``Corrected:``, without that word); empty strings when the note lacks them."""
+    parts = sentences(note)
+    wrong = parts[0] if parts and not parts[0].startswith("Corrected:") else ""
+    fixed = next(
+        (p.removeprefix("Corrected:").strip() for p in parts if p.startswith("Corrected:")), ""
+    )
+    return wrong, fixed
+
+
+def anchor_of(cid: str) -> str:
+    """``claim-d7``: the label :func:`check` places where claim ``cid``'s check is shown."""
+    return f"claim-{cid.lower()}"
+
+
+def book_dir() -> Path:
+    """The book's sources, ``book/`` beside ``derivations/``."""
+    return verify_json_path().parent.parent
+
+
+@functools.cache
+def check_pages() -> dict[str, str]:
+    """``{"D7": "section2/03_discrete_rigid_body", ...}``: the page of the book that shows each
+    claim's check, found as the one ``check("D7")`` call (without ``anchor=False``) in the
+    pages' sources.  A claim checked with an anchor on two pages is an error (its label would
+    be defined twice)."""
+    pages: dict[str, str] = {}
+    root = book_dir()
+    for path in sorted(root.rglob("*.md")):
+        if "_build" in path.parts:
+            continue
+        doc = path.relative_to(root).with_suffix("").as_posix()
+        for m in _CHECK_CALL.finditer(path.read_text(encoding="utf-8")):
+            if re.search(r"anchor\s*=\s*False", m.group(2) or ""):
+                continue
+            cid = m.group(1)
+            if cid in pages and pages[cid] != doc:
+                raise ValueError(f"check({cid!r}) is anchored on {pages[cid]} and on {doc}")
+            pages[cid] = doc
+    return pages
+
+
+def claim_link(cid: str, text: str | None = None) -> str:
+    """MyST for a link to where claim ``cid``'s check is shown (``text``, default the ID); the
+    plain text when no page of the book shows it."""
+    text = text or cid
+    if cid not in check_pages():
+        return text
+    return f"{{ref}}`{text} <{anchor_of(cid)}>`"
+
+
+def correction_line(cid: str) -> str:
+    """An erratum's correction in one line: its ``headline`` (registered formulas and a few
+    words), else the ``Corrected:`` sentence of its note; ``""`` for a claim that holds."""
+    claim = get_claim(cid)
+    if not claim.corrected:
+        return ""
+    if claim.headline:
+        return claim.render("headline")
+    return summary_of(prose(claim.note))[1]
+
+
+def verdict_table(results: Sequence[Mapping[str, Any]]) -> str:
+    """The Markdown table of the book's first page: for each claim of the paper in ``results``
+    (dicts of ``verify --json``), its ID linked to its check, its title, the computed outcome
+    (an erratum's linked to its page of the errata) and the correction in one line."""
+    rows = [
+        "| claim | what the paper states | outcome | corrected form |",
+        "|---|---|---|---|",
+    ]
+    for r in results:
+        if GROUPS[r["id"][0]] != "paper":
+            continue
+        fixed = prose(breakable(correction_line(r["id"]), limit=20), cell=True)
+        rows.append(
+            f"| {claim_link(r['id'])} | {prose(r['title'], cell=True)} | {_outcome_cell(r)} "
+            f"| {fixed} |"
+        )
+    return "\n".join(rows)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -46,7 +46,7 @@ __all__ = [
     "text_of",
     "claim_text",
     "terminal_width",
-    "fit",
+    "cell",
     "paragraph",
     "claims_lines",
     "statement_lines",
@@ -73,6 +73,7 @@ _SPACED = {
 #: Macros pylatexenc does not know, with their arguments.
 _ARGUMENTS = {
     "operatorname": "{", "substack": "{", "tfrac": "{{", "dfrac": "{{", "overline": "{",
+    "widehat": "{",
 }  # fmt: skip
 _WALKER = _walker_context().filter_context()
 _WALKER.add_context_category(
@@ -90,6 +91,9 @@ _TEXT.add_context_category(
         MacroTextSpec("tfrac", "%(1)s/%(2)s"),
         MacroTextSpec("dfrac", "%(1)s/%(2)s"),
         MacroTextSpec("overline", "%(1)s\N{COMBINING OVERLINE}"),
+        MacroTextSpec("widehat", "(%(1)s)^\N{LOGICAL AND}"),
+        MacroTextSpec("det", "det"),
+        MacroTextSpec("dim", "dim"),
         *(MacroTextSpec(name, f" {sym} ") for name, sym in _SPACED.items()),
     ],
     prepend=True,
@@ -108,13 +112,22 @@ class _ProseText(LatexNodes2Text):
 
 _TO_TEXT = _ProseText(latex_context=_TEXT, math_mode="text")
 _NULL_DELIMITER = re.compile(r"\\(left|right)\s*\.")
+#: A macro without arguments followed by a space (``\\phi = 0``, ``\\sin \\theta``): pylatexenc
+#: drops that space (``ϕ= 0``, ``sinθ``) unless an empty group ends the macro.  Accents, fonts
+#: and fractions take the next token as their argument and are left alone.
+_SPACE_AFTER_MACRO = re.compile(
+    r"(\\(?!(?:left|right|rm|bf|it|sf|tt|cal|partial|nabla|hat|widehat|dot|ddot|tilde|widetilde|bar|vec|check"
+    r"|breve|overline|underline|frac|tfrac|dfrac|sqrt|text|mathrm|mathbf|mathfrak|mathbb|mathcal"
+    r"|operatorname|begin|end|substack)\b)[A-Za-z]+)(?= )"
+)
 
 
 def latex_text(tex: str) -> str:
     """Hand-written LaTeX (the inside of ``$...$``) as text: ``\\Lambda`` is ``Λ``, ``\\hat H``
     is ``Ĥ``, ``\\frac{a}{b}`` is ``a/b``, ``\\left\\|M\\right\\|`` is ``‖M‖``; one-character
     scripts lose their braces (``Q^{T}`` is ``Q^T``), longer ones keep them (``p_{k+1}``)."""
-    walker = LatexWalker(_NULL_DELIMITER.sub("", tex), latex_context=_WALKER, tolerant_parsing=True)
+    tex = _SPACE_AFTER_MACRO.sub(r"\1{}", _NULL_DELIMITER.sub("", tex))
+    walker = LatexWalker(tex, latex_context=_WALKER, tolerant_parsing=True)
     nodes, _pos, _len = walker.get_latex_nodes()
     text = " ".join(_TO_TEXT.nodelist_to_text(nodes).split())
     return re.sub(r"(?<=[(\[⟨]) | (?=[)\]⟩,;])", "", text)
@@ -282,12 +295,6 @@ def terminal_width() -> int:
     return WIDTH
 
 
-def fit(text: str, width: int) -> str:
-    """``text`` (one line) cut to ``width`` characters, with ``...`` when it was longer."""
-    text = text.replace(_DISPLAY, " ")
-    return text if len(text) <= width else text[: max(width - 3, 0)].rstrip() + "..."
-
-
 def paragraph(text: str, indent: str = "  ", width: int | None = None) -> str:
     """``text`` wrapped and indented; words joined by :data:`_GLUE` stay on one line, and a
     display block of :func:`text_of` is set on lines of its own, indented deeper."""
@@ -317,23 +324,36 @@ def _id(item: Claim | ClaimResult) -> str:
     return item.id
 
 
+def cell(text: str, width: int) -> list[str]:
+    """``text`` (one line of :func:`text_of`) wrapped into lines of at most ``width`` characters:
+    nothing is cut, a word longer than the cell is broken across lines."""
+    text = " ".join(text.replace(_DISPLAY, " ").split())
+    lines = textwrap.wrap(text, width=max(width, 1), break_on_hyphens=False)
+    return [line.replace(_GLUE, " ") for line in lines] or [""]
+
+
 def claims_lines(claims: Sequence[Claim], width: int = WIDTH) -> list[str]:
-    """One line per claim: ID, recorded outcome, where it is in the paper, title; at most
-    ``width`` characters; a heading above each group when there is more than one."""
-    where_w = 22
+    """The claims as a table: ID, recorded outcome, where it is in the paper, title; the last
+    two cells wrap onto further lines, so no line is wider than ``width`` and no text is cut;
+    a heading above each group when there is more than one."""
+    lead = 4 + 1 + 22 + 2  # the ID and outcome columns and their gaps
+    rest = max(width - lead - 2, 20)
+    where_w = max(12, rest * 2 // 3)
+    title_w = rest - where_w
     head = f"{'ID':<4} {'recorded outcome':<22}  {'in the paper':<{where_w}}  title"
-    lines = [head, "-" * min(width, len(head) + 30)]
+    lines = [head, "-" * width]
     groups = grouped(claims, _id)
     for title, members in groups:
         if len(groups) > 1:
             lines += ["", title]
         for c in members:
-            where = c.where or f"sec. {c.section}: {c.label}"
-            line = (
-                f"{c.id:<4} {c.expected:<22}  {fit(text_of(where), where_w):<{where_w}}  "
-                f"{claim_text(c, 'title')}"
-            )
-            lines.append(fit(line, width))
+            where = cell(text_of(c.where or f"sec. {c.section}: {c.label}"), where_w)
+            name = cell(claim_text(c, "title"), title_w)
+            for k in range(max(len(where), len(name))):
+                first = f"{c.id:<4} {c.expected:<22}  " if k == 0 else " " * lead
+                left = where[k] if k < len(where) else ""
+                right = name[k] if k < len(name) else ""
+                lines.append(f"{first}{left:<{where_w}}  {right}".rstrip())
     return lines
 
 

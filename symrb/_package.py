@@ -8,7 +8,7 @@ from typing import Any
 
 def adopt_classes(namespace: MutableMapping[str, Any], names: Iterable[str], package: str) -> None:
     """Set ``__module__`` of every public class of ``package`` defined in one of its submodules to
-    ``package`` itself, so reprs, tracebacks, the API page and pickles (sent to Dask workers)
+    ``package`` itself, so reprs, tracebacks, the API reference and pickles (sent to Dask workers)
     name ``symrb.scenes.Plan``, not ``symrb.scenes.plan.Plan``."""
     for name in names:
         obj = namespace[name]

@@ -648,16 +648,42 @@ def mv_flow(
     return run.result(h, order, failure)
 
 
+def _mv_momentum_flow(M0: ArrayLike, lam: ArrayLike, h: float, steps: int, save_every: int,
+                      method: str = "auto", order: int = 2) -> DiscreteFlowSolution:  # fmt: skip
+    """:func:`mv_flow` of one body without its attitude: the same steps on M (M bit for bit;
+    ``method="numba"`` runs the NumPy loop, the compiled one carries Q), no Q ever stepped
+    (``y`` holds M alone): the momentum form :math:`M_{k+1} = U_k^TM_kU_k` needs only the
+    :math:`U_k` of :math:`J_D(U_k) = hM_k`."""
+    L, (M,), batch = _prepare(lam, (M0, "M0", "skew"))
+    if batch:
+        raise InputError(f"one body only: M0 of shape (n, n) and lam (n,), got batch {batch}")
+    stepper = MVStepper(L, batch, method=method if method in _SOLVERS else "auto")
+    run = _FlowRun(None, 0.5 * (M - M.T), stepper, steps, save_every)
+    try:
+        run.loop3(h, order, False) if run.n == 3 else run.loop_n(h)
+        failure = ""
+    except (OutOfDomainError, NotConvergedError) as exc:
+        failure, run.k = f"step {run.k} of {steps} failed: {exc}", run.k - 1
+        if run.ks[-1] != run.k:
+            run.save()
+    return run.result(h, order, failure)
+
+
 class _FlowRun:
     """The state of one :func:`mv_flow` run and the states it saved.  For n = 3 the state is
-    kept in the kernels' layout: floats (one body) or component vectors (a batch)."""
+    kept in the kernels' layout: floats (one body) or component vectors (a batch).  ``Q`` None:
+    no attitude (one body), Q neither stepped nor saved (its n = 3 components are empty)."""
 
-    def __init__(self, Q: Array, M: Array, stepper: MVStepper, steps: int, save_every: int):
+    def __init__(self, Q: Array | None, M: Array, stepper: MVStepper, steps: int,
+                 save_every: int) -> None:  # fmt: skip
+        self.attitude = Q is not None
+        if Q is None:
+            Q = np.empty((0,) + M.shape[-2:])
         self.shapes = (Q.shape, M.shape)
         self.stepper, self.size, self.n = stepper, stepper.size, Q.shape[-1]
         self.steps, self.save_every = steps, save_every
         self.ks: list[int] = [0]
-        self.Qs: list[Array] = [Q.copy()]
+        self.Qs: list[Array] = [Q.copy()] if self.attitude else []
         self.Ms: list[Array] = [M.copy()]
         self.iters = np.ones(steps, dtype=np.int64) * (1 if self.n == 3 else 0)
         self.k = 0
@@ -666,8 +692,8 @@ class _FlowRun:
         self.coef: tuple[Any, ...] | None = None
         if self.n != 3:
             return
-        if self.size == 1:
-            self.q: Any = tuple(Q.reshape(9).tolist())
+        if self.size == 1 or not self.attitude:  # no attitude: the kernel's Q parts are empty
+            self.q: Any = tuple(Q.reshape(9).tolist()) if self.attitude else (np.empty(0),) * 9
             mm = M.reshape(9).tolist()
             self.m: Any = (mm[7], mm[2], mm[3])
         else:
@@ -680,10 +706,10 @@ class _FlowRun:
         self.ks.append(self.k)
         Qshape, Mshape = self.shapes
         if self.n != 3:
-            self.Qs.append(self.Qk)
+            self.Qs += [self.Qk] if self.attitude else []
             self.Ms.append(self.Mk)
-        elif self.size == 1:
-            self.Qs.append(np.array(self.q).reshape(Qshape))
+        elif self.size == 1 or not self.attitude:
+            self.Qs += [np.array(self.q).reshape(Qshape)] if self.attitude else []
             self.Ms.append(_hat_cols([np.array(c) for c in self.m]).reshape(Mshape))
         else:
             self.Qs.append(np.stack(self.q, axis=-1).reshape(Qshape))
@@ -755,7 +781,9 @@ class _FlowRun:
         return DiscreteFlowSolution(
             t=kk.astype(np.float64) * h,
             k=kk,
-            y=Trajectory({"Q": np.stack(self.Qs), "M": np.stack(self.Ms)}),
+            y=Trajectory(
+                {**({"Q": np.stack(self.Qs)} if self.attitude else {}), "M": np.stack(self.Ms)}
+            ),  # fmt: skip
             iterations=self.iters[: max(k, 0)] if failure else self.iters,
             success=not failure,
             status=-1 if failure else 0,

@@ -21,7 +21,9 @@ def _parser(cmd: str) -> argparse.ArgumentParser:
         )
         p.add_argument("scene", help="the scene, a TOML file")
         p.add_argument("--explain", action="store_true", help="print the plan and stop")
-        p.add_argument("--plot", action="store_true", help="save a figure of the observables")
+        p.add_argument("--plot", action="store_true",
+                       help="save a figure (SCENE.png): the relative drift of the invariants "
+                       "on a log axis, the other observables recorded over time")  # fmt: skip
     else:
         p = argparse.ArgumentParser(
             prog="symrb sweep",

@@ -50,7 +50,7 @@ def _window_last(values: NDArray[Any], windows: int) -> NDArray[Any]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Moser-Veselov (book/section2/04_moser_veselov.md)
+# Moser-Veselov (book/section2/04_moser_veselov_runs.md)
 
 
 @dataclass(frozen=True, eq=False)

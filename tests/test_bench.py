@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 import symrb
+import symrb.exact
 from benchmarks import harness as bench
 from benchmarks.harness import cli as bench_cli
 from benchmarks.harness import config, goals, precision, problems, runner, timing
@@ -166,7 +167,8 @@ def test_preprocessed_methods_reach_their_orders_and_skip_n_other_than_3() -> No
         3, 4.0, p, ["MV-pre4", "MV-pre8"], problems._modules(), notes, lambda _m: None
     )
     assert wp["backend"] in ("numpy", "numba")
-    assert wp["reference"].startswith("symrb.exact") and wp["exact_vs_mv_pre10"] < 1e-13
+    assert wp["reference"] == precision.REFERENCE and wp["reference_error_estimate"] < 1e-14
+    assert wp["reference_vs_dop853"] < 1e-10  # the same problem, to DOP853's own error
     for name, order in (("MV-pre4", 4), ("MV-pre8", 8)):
         assert abs(wp["methods"][name]["order"] - order) < 0.3, wp["methods"][name]
     wp4 = precision._work_precision(
@@ -220,6 +222,25 @@ def test_the_reference_agrees_with_an_independent_integration() -> None:
     lam, Q0, M0 = problems._problem(3, 0)
     _Q, M = problems._solve_ivp_end(lam, Q0, M0, 5.0, "DOP853", 1e-13)()
     assert np.abs(symrb.vee(M) - _euler_reference(5.0)).max() < 1e-9
+
+
+def test_the_extended_precision_reference_converges_and_agrees_with_scipy() -> None:
+    """The work-precision reference (extrapolation in np.longdouble, any n) at two macro steps
+    agrees with itself far below float64 rounding of the methods judged, and with DOP853 at
+    rtol 1e-13 (another route) to DOP853's own error; for n = 3 also with the exact solution."""
+    for n, T in ((3, 5.0), (4, 2.0)):
+        lam, Q0, M0 = problems._problem(n, 0)
+        ref, est = precision._reference(lam, Q0, M0, T)
+        assert est < 1e-15, (n, est)
+        dop = problems._solve_ivp_end(lam, Q0, M0, T, "DOP853", 1e-13)()
+        assert precision._errors(dop, ref)["error"] < 1e-11, n
+    lam, Q0, M0 = problems._problem(3, 0)
+    ref, _est = precision._reference(lam, Q0, M0, 5.0)
+    exact = symrb.exact.rigid_body_exact(Q0, M0, lam, np.array([5.0]))
+    assert precision._errors((exact.y.Q[-1], exact.y.M[-1]), ref)["error"] < 1e-13
+    # a wrong inertia (reversed) is far from it: the comparison can fail
+    wrong, _ = precision._reference(lam[::-1].copy(), Q0, M0, 5.0)
+    assert precision._errors(wrong, ref)["error"] > 1e-2
 
 
 def test_a_wrong_method_gets_a_large_error(monkeypatch: pytest.MonkeyPatch) -> None:

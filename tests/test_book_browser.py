@@ -16,8 +16,9 @@ For each HTML page of the built book (served from 127.0.0.1 by a local HTTP serv
   and no Markdown table that failed to render (lines of ``| a | b |`` or ``|---|``), and no
   rendered table has a row of raw pipes or a separator row shown as data.
 
-The errata page must have a summary table listing every erratum and one section (an ``h2``
-listed in the page's contents panel) per erratum; the errata are the claims whose outcome in
+The errata page must have a summary table listing every erratum, each linking to the erratum's
+own page (``errata/d07.html``: its heading is "Erratum D7", with an evidence table); the
+errata are the claims whose outcome in
 ``verify.json`` beside the built book (else the outcome recorded in the registry) is *holds after
 correction* or *fails*.  The claims and errata pages are also looked at as a reader would, at
 desktop width (1280 px) and on a phone (400 px): the page does not scroll sideways, no text is cut
@@ -63,7 +64,7 @@ LAUNCH_ARGS = [
 LOCAL_HOSTS = {"127.0.0.1"}
 ERRATA_OUTCOMES = ("holds after correction", "fails")
 # Pages looked at as a reader would, at these window widths (px).
-VISUAL_PAGES = ("claims.html", "errata.html")
+VISUAL_PAGES = ("intro.html", "claims.html", "errata.html", "errata/d07.html")
 WIDTHS = (1280, 400)
 
 # TeX that MathJax would have replaced; seen in visible text, it means math did not render.
@@ -80,7 +81,7 @@ HTML_TAG = re.compile(
 )
 # Markdown syntax left in visible text.
 MARKDOWN = {
-    # (the API page lists a var-keyword parameter as "**options (Any) - ...", which is no markup)
+    # (an API page lists a var-keyword parameter as "**options (Any) - ...", which is no markup)
     "bold or emphasis markers **": re.compile(r"\*\*(?!\w+ \()"),
     "bold or emphasis markers __": re.compile(r"(?<![A-Za-z0-9])__|__(?![A-Za-z0-9])"),
     "emphasis markers *...*": re.compile(
@@ -445,7 +446,11 @@ def test_book_has_pages() -> None:
         "conventions.html",
         "claims.html",
         "errata.html",
-        "api.html",
+        "getting_started.html",
+        "scene_reference.html",
+        "api/index.html",
+        "api/engine.html",
+        "api/scenes.html",
     ):
         assert page in PAGES, f"{page} is missing from the built book"
 
@@ -491,59 +496,39 @@ def test_page(page: str, server: str, browser: Any) -> None:
     assert not problems, f"{page}:\n  " + "\n  ".join(problems)
 
 
-def test_errata_page_has_a_summary_and_one_section_per_erratum(server: str, browser: Any) -> None:
+def test_errata_page_has_a_summary_and_one_page_per_erratum(server: str, browser: Any) -> None:
     errata = _errata_ids()
     assert errata, "no erratum found in the results: nothing to check"
     context, tab, _record = _open(browser, server, "errata.html")
     try:
-        sections = tab.evaluate(
-            """() => Array.from(document.querySelectorAll('article section > h2')).map(h => ({
-                id: h.parentElement.id, text: h.textContent.replace(/\\s+/g, ' ').trim()
-            }))"""
-        )
-        contents = tab.evaluate(
-            """() => Array.from(document.querySelectorAll('.bd-toc-nav a, nav.page-toc a'))
-                .map(a => ({href: a.getAttribute('href'), text: a.textContent.trim()}))"""
-        )
-        tables = tab.evaluate(
-            """first => Array.from(document.querySelectorAll('article table')).map(t => ({
-                first: Array.from(t.querySelectorAll('tbody tr')).map(r => {
-                    const cell = (r.querySelector('td, th') || document.createElement('td'))
-                        .cloneNode(true);
-                    cell.querySelectorAll('.symrb-cell-label').forEach(e => e.remove());
-                    return cell.textContent.trim();
-                }),
-                before: (() => {
-                    const h = Array.from(document.querySelectorAll('article section > h2'))
-                        .find(h => h.textContent.trim().startsWith(first));
-                    return !h || !!(t.compareDocumentPosition(h) & Node.DOCUMENT_POSITION_FOLLOWING);
-                })()
-            }))""",
-            errata[0],
+        rows = tab.evaluate(
+            """() => Array.from(document.querySelectorAll('article table tbody tr')).map(r => {
+                const a = r.querySelector('td a');
+                return {id: a ? a.textContent.trim() : '', href: a ? a.getAttribute('href') : ''};
+            })"""
         )
     finally:
         context.close()
-    starts = re.compile(r"^\W*([DS]\d+)\b")
-    headed = {}
-    for s in sections:
-        m = starts.match(s["text"])
-        if m:
-            headed.setdefault(m.group(1), []).append(s["id"])
-    missing = [cid for cid in errata if cid not in headed]
-    doubled = [cid for cid, ids in headed.items() if len(ids) > 1]
-    extra = [cid for cid in headed if cid not in errata]
-    assert not missing, f"errata without their own section (h2): {missing}"
-    assert not doubled, f"errata with more than one section: {doubled}"
-    assert not extra, f"sections for claims that are not errata: {extra}"
-    listed = {f"#{sid}" for ids in headed.values() for sid in ids}
-    in_panel = {c["href"] for c in contents if c["href"] in listed}
-    assert in_panel == listed, (
-        f"the contents panel does not list every erratum: missing {sorted(listed - in_panel)}"
-    )
-    summary = [
-        t for t in tables if t["before"] and set(errata) <= {c.split()[0] for c in t["first"] if c}
-    ]
-    assert summary, "no summary table listing every erratum before the first erratum's section"
+    listed = [r["id"] for r in rows]
+    assert listed == errata, f"the summary lists {listed}, the errata are {errata}"
+    for r in rows:
+        page, _, anchor = r["href"].partition("#")
+        assert page.startswith("errata/") and anchor, f"{r['id']} links to {r['href']}"
+        context, tab, _record = _open(browser, server, page)
+        try:
+            found = tab.evaluate(
+                """anchor => ({
+                    h1: (document.querySelector('article h1') || {textContent: ''})
+                        .textContent.replace(/\\s+/g, ' ').trim(),
+                    target: !!document.getElementById(anchor),
+                    tables: document.querySelectorAll('article table').length
+                })""",
+                anchor,
+            )
+        finally:
+            context.close()
+        assert found["h1"].startswith(f"Erratum {r['id']}"), f"{page}: heading {found['h1']!r}"
+        assert found["target"] and found["tables"], f"{page}: no #{anchor} or no evidence table"
 
 
 @pytest.mark.parametrize("width", WIDTHS)

@@ -215,7 +215,158 @@ def test_claims_table_has_a_sentences_column_for_the_paper_only(
     ev = {"form": "claim", "level": "float64", "residual": 0.0, "tol": 1e-12}
     row = {"title": "t", "outcome": "holds", "expected": "holds", "seconds": 0.1, "evidence": [ev]}
     paper = claims_table([{**row, "id": "D8"}]).splitlines()
-    assert "sentences covered" in paper[0] and "| 1/2 |" in paper[2]
+    assert "| sentences |" in paper[0] and "| 1/2 |" in paper[2]
     assert len({line.count("|") for line in paper}) == 1
     method = claims_table([{**row, "id": "M1"}]).splitlines()
     assert "sentences" not in method[0] and len({line.count("|") for line in method}) == 1
+
+
+# ---------------------------------------------------------------------------------------------
+# the verdict: every claim ID in the generated tables links to the label where its check is shown
+
+PAPER = [c for c in CLAIMS if c.group == "paper"]
+_REF = re.compile(r"^\{ref\}`([DSM]\d+) <([a-z0-9-]+)>`$")
+
+
+def _results() -> list[dict[str, Any]]:
+    """Results shaped like ``verify --json`` for every registered claim, with its recorded
+    outcome (printed-form checks failing, the others passing)."""
+    out = []
+    for c in CLAIMS:
+        evidence = [
+            {
+                "form": e.form,
+                "level": str(e.level),
+                "description": e.description,
+                "residual": 1.0 if e.form == "printed" else 0.0,
+                "tol": e.tol,
+                "seconds": 0.01,
+                "error": None,
+            }
+            for e in c.evidence
+        ]
+        out.append({
+            "id": c.id, "label": c.label, "title": c.title, "expected": c.expected,
+            "outcome": c.expected, "ok": True, "seconds": 0.01, "evidence": evidence,
+        })  # fmt: skip
+    return out
+
+
+def _rows(table: str) -> list[list[str]]:
+    """The body cells of a Markdown table."""
+    lines = [line for line in table.splitlines() if line.startswith("|")][2:]
+    return [[cell.strip() for cell in re.split(r"(?<!\\)\|", line)[1:-1]] for line in lines]
+
+
+def _anchors_shown() -> set[str]:
+    """The labels that ``check()`` places on the pages of the book (one per claim it shows)."""
+    from derivations import report
+
+    return {report.anchor_of(cid) for cid in report.check_pages()}
+
+
+def test_check_places_the_label_its_links_point_to(monkeypatch: pytest.MonkeyPatch) -> None:
+    from IPython import display as ipd
+
+    from derivations import report
+    from derivations.registry import ClaimResult
+
+    shown: list[str] = []
+    monkeypatch.setattr(ipd, "display", lambda md: shown.append(md.data))
+    fake = ClaimResult(id="D4", label="", title="", expected="holds", outcome="holds")
+    monkeypatch.setattr(report, "result_of", lambda cid: fake)
+    monkeypatch.setattr(report, "claim_markdown", lambda result: "**D4**")
+    report.check("D4")
+    report.check("D4", anchor=False)
+    assert shown == ["(claim-d4)=\n\n**D4**", "**D4**"]
+
+
+def test_every_paper_claim_is_checked_on_exactly_one_page() -> None:
+    from derivations.report import check_pages
+
+    pages = check_pages()
+    assert [c.id for c in PAPER if c.id not in pages] == []
+    for cid, doc in pages.items():
+        assert (ROOT / "book" / f"{doc}.md").is_file(), (cid, doc)
+        assert doc != "intro", f"{cid}: the landing page shows no check (its label is elsewhere)"
+
+
+def test_a_claim_anchored_on_two_pages_is_refused(tmp_path: Path, monkeypatch: Any) -> None:
+    from derivations import report
+
+    for name in ("a.md", "b.md"):
+        (tmp_path / name).write_text('check("D4");\n')
+    (tmp_path / "c.md").write_text('check("D4", anchor=False);\n')
+    monkeypatch.setattr(report, "book_dir", lambda: tmp_path)
+    report.check_pages.cache_clear()
+    try:
+        with pytest.raises(ValueError, match="anchored on a and on b"):
+            report.check_pages()
+        (tmp_path / "b.md").unlink()
+        assert report.check_pages() == {"D4": "a"}
+    finally:
+        report.check_pages.cache_clear()
+
+
+@pytest.mark.parametrize("group", ["paper", "method"])
+def test_every_claim_id_in_the_claims_tables_links_to_its_check(group: str) -> None:
+    from derivations.report import check_pages, claims_table
+
+    anchors = _anchors_shown()
+    results = [r for r in _results() if ext.GROUPS[r["id"][0]] == group]
+    rows = _rows(claims_table(results))
+    assert [r[0].split()[0].removeprefix("{ref}`") for r in rows] == [r["id"] for r in results]
+    for row, r in zip(rows, results, strict=True):
+        m = _REF.match(row[0])
+        if r["id"] in check_pages():
+            assert m and m.group(1) == r["id"], f"{r['id']} does not link: {row[0]}"
+            assert m.group(2) in anchors, f"{r['id']} links to {m.group(2)}, never placed"
+        else:
+            assert group == "method" and row[0] == r["id"], row[0]
+
+
+def test_the_landing_table_has_every_claim_each_linked_to_its_check() -> None:
+    from derivations.report import verdict_table
+
+    anchors = _anchors_shown()
+    rows = _rows(verdict_table(_results()))
+    assert len(rows) == len(PAPER) == 27
+    errata_pages = {p.stem for p in (ROOT / "book/errata").glob("*.md")}
+    for row, c in zip(rows, PAPER, strict=True):
+        m = _REF.match(row[0])
+        assert m and m.group(1) == c.id and m.group(2) in anchors, row[0]
+        if c.expected in ext.ERRATA:
+            assert f"<erratum-{c.id.lower()}>" in row[2], f"{c.id}: outcome not linked: {row[2]}"
+            assert ext.erratum_doc(c.id).removeprefix("errata/") in errata_pages, c.id
+            assert row[3], f"{c.id}: no corrected form"
+        else:
+            assert row[2] == "holds" and row[3] == "", (c.id, row[2:])
+
+
+def test_the_correction_in_one_line_comes_from_registered_formulas() -> None:
+    from derivations.report import correction_line
+
+    for c in ERRATA:
+        line = correction_line(c.id)
+        assert "\n" not in line and "[[" not in line and line.count("$") >= 2, (c.id, line)
+        assert c.headline, f"{c.id}: give a headline (its correction in one line)"
+        words = FORMULA.sub("", c.headline).split()
+        assert len(words) <= 8, f"{c.id}: the headline is a sentence, not a line: {c.headline}"
+        width = sum(len(_normal(f)) for f in FORMULA.findall(line))
+        assert width <= 130, f"{c.id}: the correction is {width} TeX tokens wide"
+    assert all(correction_line(c.id) == "" for c in PAPER if c not in ERRATA)
+
+
+def test_every_erratum_has_its_page_and_its_label() -> None:
+    pages = sorted((ROOT / "book/errata").glob("*.md"))
+    assert [f"errata/{p.stem}" for p in pages] == sorted(ext.erratum_doc(c.id) for c in ERRATA)
+    results = {r["id"]: r for r in _results()}
+    for c in ERRATA:
+        text = (ROOT / "book" / f"{ext.erratum_doc(c.id)}.md").read_text()
+        assert re.search(rf"^```{{symrb-errata}} {c.id}$", text, re.M), c.id
+        lines = ext.errata_page(list(results.values()), c.id)
+        assert lines[0] == f"(erratum-{c.id.lower()})=" and lines[1] == f"# Erratum {c.id}"
+    summary = _rows("\n".join(ext.errata_page(list(results.values()), None)))
+    assert [r[0] for r in summary] == [f"{{ref}}`{c.id} <erratum-{c.id.lower()}>`" for c in ERRATA]
+    with pytest.raises(ext.ExtensionError, match="not an erratum"):
+        ext.errata_page(list(results.values()), "D4")

@@ -145,3 +145,181 @@ def test_boundary_accuracy_is_as_conditioned() -> None:
     # the forward error is set by the conditioning of the problem, eps / sqrt(delta)
     assert np.all(run.forward_error <= 10 * run.eps_over_sqrt_delta), run.forward_error
     assert run.forward_error[-1] > 100 * run.forward_error[0]  # and does grow near the boundary
+
+
+# ---------------------------------------------------------------------------------------------
+# the scene reference (book/lib/symrb_book/scene_reference.py)
+
+
+def test_scene_reference_examples_parse_and_show_every_integrator_key():
+    from symrb_book import scene_reference as ref
+
+    from symrb.scenes import describe_schema, load_scene
+
+    for system in ref.PAGES["scene_reference"] + ref.PAGES["scene_reference_learning"]:
+        load_scene(ref.example(system))
+        forms = ref.integrator_examples(system)
+        variants = {k.variant for k in describe_schema(system) if k.table == "integrator"}
+        assert set(forms) == variants
+        for form, line in forms.items():
+            keys = [k for k in describe_schema(system) if k.variant == form]
+            shown = [k.key for k in keys if k.default != "(not set)" or k.allowed]
+            assert all(f"{key} = " in line for key in shown), (form, line)
+
+
+def test_scene_reference_pages_list_every_system_once(monkeypatch):
+    from symrb_book import scene_reference as ref
+
+    text = ref.page("scene_reference_bodies")
+    assert "## `symmetric_rigid_body`" in text and "## `mclachlan_scovel`" in text
+    monkeypatch.setitem(ref.PAGES, "scene_reference_orbits", ("double_bracket", "orbit_extremal"))
+    with pytest.raises(AssertionError, match="exactly one page"):
+        ref.page("scene_reference")  # toda is on no page
+    monkeypatch.setitem(ref.PAGES, "scene_reference_orbits", ("double_bracket", "toda", "toda"))
+    with pytest.raises(AssertionError, match="exactly one page"):
+        ref.page("scene_reference")
+
+
+def test_scene_reference_table_marks_required_keys_and_escapes_pipes():
+    from symrb_book import scene_reference as ref
+
+    from symrb.scenes import describe_schema
+
+    rows = ref.table(k for k in describe_schema("rigid_body") if k.variant == 'method = "mv"')
+    assert "| `integrator.h` | float > 0 | required |  |" in rows
+    assert "| `integrator.order` | integer | `2` | `2`, `4`, `6`, `8`, `10` |" in rows
+    assert ref.myst(":func:`symrb.simulate` at ``h``, :math:`x^2`") == (
+        "{py:func}`symrb.simulate` at `h`, $x^2$"
+    )
+
+
+def test_evidence_summary_shows_each_check_and_whether_it_is_as_recorded():
+    from types import SimpleNamespace
+
+    from symrb_book.start import evidence_summary
+
+    checks = [
+        SimpleNamespace(level="float64", form="claim", residual=3e-15, tol=1e-12, as_expected=True),
+        SimpleNamespace(
+            level="float64", form="printed", residual=None, tol=1e-12, as_expected=False
+        ),  # fmt: skip
+    ]
+    text = evidence_summary(SimpleNamespace(evidence=checks))
+    assert "| 1 | float64 | claim | 3.0e-15 | 1e-12 | yes |" in text
+    assert "| 2 | float64 | printed | error | 1e-12 | no |" in text
+
+
+# one style per method, in every figure
+
+
+def test_method_styles_have_distinct_colours():
+    from matplotlib.colors import to_rgb
+    from symrb_book.style import METHOD_STYLE
+
+    rgb = {name: np.array(to_rgb(s["color"])) for name, s in METHOD_STYLE.items()}
+    names = list(rgb)
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            # no two methods share a colour, nor come within 0.1 of each other in RGB
+            assert np.linalg.norm(rgb[a] - rgb[b]) > 0.1, (a, b)
+
+
+def test_every_method_of_symrb_the_benchmark_and_the_paper_has_a_style():
+    from symrb_book.style import canonical, method_style
+
+    from benchmarks.harness.config import ALL_METHODS
+    from symrb.rigid_body import METHODS
+
+    for name, method in METHODS.items():
+        for order in method.orders or (None,):
+            style = method_style(name, order)
+            assert {"color", "marker", "ls"} <= set(style), name
+    for name in (*ALL_METHODS, "mv_algorithm1", "mv_algorithm2", "symmetric_flow",
+                 "discrete_rigid_body_flow"):  # fmt: skip
+        canonical(name)
+    # one method, one look, under each of its names
+    assert method_style("mv", 10) == method_style("MV-pre10")
+    assert method_style("mv") == method_style("mv_flow") == method_style("MV-fast")
+    assert method_style("composition", 6) == method_style("MV-comp6")
+    assert method_style("discrete_rigid_body_flow") == method_style("MV")
+    with pytest.raises(InputError, match="no style"):
+        method_style("Euler")
+
+
+def test_work_precision_panels_use_the_style_and_stay_above_the_floor():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from pathlib import Path
+
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import to_hex
+    from symrb_book import accuracy
+    from symrb_book.style import METHOD_STYLE
+
+    from benchmarks.harness import load
+
+    full = load(Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "bench.json")
+    panels = [((w["n"], w["T"]), group) for w in accuracy.settings(full)
+              for _, group in accuracy.APPENDIX_GROUPS] + list(accuracy.MAIN_PANELS)  # fmt: skip
+    for ncols, chosen in ((3, panels[:-2]), (2, panels[-2:])):
+        fig, clipped = accuracy.work_precision(full, chosen, ncols=ncols)
+        assert clipped == 0
+        assert len(fig.legends) == 1  # one legend, below the panels
+        for ax, ((n, T), _group) in zip(fig.axes, chosen, strict=False):
+            assert ax.get_legend() is None
+            floor = accuracy.setting(full, n, T)["reference_error_estimate"]
+            series = {c.get_label(): c.lines[0] for c in ax.containers}  # errorbar: data line
+            assert 0 < len(series) <= accuracy.MAX_SERIES and set(series) <= set(METHOD_STYLE)
+            for name, line in series.items():
+                assert to_hex(line.get_color()) == to_hex(METHOD_STYLE[name]["color"]), name
+                assert line.get_marker() == METHOD_STYLE[name]["marker"], name
+                assert min(line.get_xdata()) >= floor  # nothing below the reference's error
+        plt.close(fig)
+    with pytest.raises(InputError, match="at most 6"):
+        accuracy.work_precision(full, [((3, 10.0), tuple(METHOD_STYLE)[:7])])
+
+
+#: Words that make a plotted series a method's.
+_METHOD_WORDS = ("DOP853", "RK45", "LSODA", "Radau", "BDF", "mv_flow", "mv_algorithm", "MV-",
+                 "RKMK4", "rkmk4", "symmetric vs")  # fmt: skip
+
+
+def test_book_figures_of_methods_take_their_style_from_the_table():
+    """A code cell of a book page that labels a plotted series with a method's name draws it
+    with ``symrb_book.style`` (``method_style``, or the accuracy module that uses it)."""
+    import re
+    from pathlib import Path
+
+    book = Path(__file__).resolve().parents[1] / "book"
+    checked = []
+    for page in sorted(book.rglob("*.md")):
+        if "_build" in page.parts:
+            continue
+        cells = re.findall(r"```\{code-cell\}.*?\n(.*?)```", page.read_text(), flags=re.S)
+        for cell in cells:
+            labels = re.findall(r"label=([^,)\n]*(?:\n[^,)\n]*)?)", cell)
+            if any(word in label for label in labels for word in _METHOD_WORDS) or any(
+                label.strip() == "method" for label in labels
+            ):
+                assert "method_style(" in cell, (page.name, cell[:200])
+                checked.append(page.name)
+            if "work_precision(" in cell:
+                checked.append(page.name)
+    assert {"hard_cases.md", "04_moser_veselov_runs.md", "accuracy.md"} <= set(checked), checked
+
+
+def test_tex_sci_writes_powers_of_ten_that_typeset_as_one_number() -> None:
+    from symrb_book.display import tex_sci
+
+    assert tex_sci(3.2e-16) == r"3.2\times10^{-16}"
+    assert tex_sci(-1.25e7, 2) == r"-1.25\times10^{7}"
+    assert tex_sci(4.0) == "4.0"  # no factor 10^0
+    assert "e" not in tex_sci(9.99e-300).replace("times", "")  # never the e-notation of Python
+
+
+def test_md_table_escapes_each_pipe_once() -> None:
+    from symrb_book.display import md_table
+
+    text = md_table(["a", "b"], [("|x|", r"already \| escaped")])
+    assert text.splitlines() == ["| a | b |", "|---|---|", r"| \|x\| | already \| escaped |"]

@@ -18,9 +18,9 @@ SCENES = sorted((BOOK / "scenes").glob("*.toml"))
 #: page -> (the scene its simulated figure uses, or a tuple of the scenes of its figures and
 #: tables; the experiment functions it no longer calls)
 PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
-    "rigid_body.md": ("manakov_drift", ("manakov_drift(",)),
-    "section2/02_backprop.md": ("toy_training", ("train_toy_classifier(",)),
-    "section2/04_moser_veselov.md": (
+    "rigid_body_lax.md": ("manakov_drift", ("manakov_drift(",)),
+    "section2/02b_residual_layers.md": ("toy_training", ("train_toy_classifier(",)),
+    "section2/04_moser_veselov_runs.md": (
         (
             "mv_invariants",
             "agreement_symmetric",
@@ -30,7 +30,7 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
         ),
         ("invariant_drift(", "algorithm_agreement(", "second_order("),
     ),
-    "section3/02_local_equivalence.md": (
+    "section3/02c_norm_casimir.md": (
         ("norm_conservation", "norm_conservation_boundary"),
         ("norm_conservation(",),
     ),
@@ -40,8 +40,8 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
         ("hamiltonian_on_so", "hamiltonian_on_gl"),
         ("hamiltonian_drift(",),
     ),
-    "section3/04_adjoint_orbits.md": ("toda_lattice", ("toda_lattice(",)),
-    "section3/05_double_bracket_learning.md": (
+    "section3/04c_toda_lattice.md": ("toda_lattice", ("toda_lattice(",)),
+    "section3/05b_orbit_experiments.md": (
         ("orbit_one_sample", "orbit_two_samples_shared"),
         ("one_sample_learning(", "two_sample_learning("),
     ),
@@ -50,20 +50,12 @@ PAGES: dict[str, tuple[str | tuple[str, ...], tuple[str, ...]]] = {
         ("symrb.engine.mv_flow(np.eye", "symrb.mv_algorithm2(np.eye"),
     ),
     "learning.md": (
-        (
-            "so_training_gradient",
-            "so_training_msa",
-            "so_training_shooting",
-            "resnet_digits_gd",
-            "resnet_digits_msa",
-        ),
-        (
-            "train_so_gradient(",
-            "train_so_msa(",
-            "train_so_shooting(",
-            "learning.train(",
-            "train_msa(",
-        ),
+        ("so_training_gradient", "so_training_msa", "so_training_shooting"),
+        ("train_so_gradient(", "train_so_msa(", "train_so_shooting("),
+    ),
+    "learning_resnet.md": (
+        ("resnet_digits_gd", "resnet_digits_msa"),
+        ("learning.train(", "train_msa("),
     ),
 }
 

@@ -106,6 +106,57 @@ def test_bad_usage_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert code == 2 and "unrecognized arguments: --no-such-option" in err
 
 
+def _commands_section(help_text: str) -> dict[str, str]:
+    """The ``commands:`` section of the top-level help: command -> its text (lines joined)."""
+    section = help_text.split("\ncommands:\n", 1)[1].split("\n\n", 1)[0]
+    entries: dict[str, str] = {}
+    name = ""
+    for line in section.splitlines():
+        if line.startswith("  ") and not line.startswith("   "):
+            name = line.split()[0]
+            entries[name] = line
+        else:
+            entries[name] += " " + line.strip()
+    return entries
+
+
+def test_help_lists_every_command(capsys: pytest.CaptureFixture[str]) -> None:
+    """One ``commands:`` list names every command ``symrb`` dispatches, the derivations' own
+    subcommands included (a new one there must be added to the launcher's table)."""
+    from derivations.cli import build_parser
+
+    code, out, _ = _call(capsys, "--help")
+    assert code == 0
+    listed = _commands_section(out)
+    subparsers = build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+    expected = {"run", "sweep", "bench", *subparsers}
+    assert list(listed) == [c[0] for c in launcher.ALL_COMMANDS]
+    assert set(listed) == expected, set(listed) ^ expected
+    assert not any("not available" in entry for entry in listed.values()), listed
+    code, _, err = _call(capsys, "frobnicate")
+    assert code == 2 and all(f"'{name}'" in err for name in expected), err
+
+
+def test_help_marks_the_commands_of_a_source_checkout_when_unavailable() -> None:
+    """As from a wheel: no derivations and no benchmarks; their commands are still listed,
+    each marked as unavailable here, with why."""
+    code = (
+        "import sys, importlib.util\n"
+        "for m in ('derivations', 'derivations.cli', 'benchmarks'): sys.modules[m] = None\n"
+        "from symrb.cli import main; sys.exit(main(['--help']))"
+    )
+    proc = _run(code)
+    assert proc.returncode == 0, proc.stderr
+    listed = _commands_section(proc.stdout)
+    assert set(listed) == {c[0] for c in launcher.ALL_COMMANDS}
+    for name, entry in listed.items():
+        assert ("not available here" in entry) == (name not in ("run", "sweep")), entry
+    words = " ".join(proc.stdout.split())
+    assert "no derivations package next to symrb" in words
+    assert "no benchmarks/ next to symrb" in words
+    assert not _too_wide(proc.stdout)
+
+
 @pytest.mark.parametrize("argv", [["claims"], ["show", "S1"], ["verify", "S1"], ["derive"]])
 def test_without_sympy_every_command_exits_2_and_says_what_to_install(argv: list[str]) -> None:
     launchers = (
@@ -138,7 +189,7 @@ def test_without_the_derivations_help_works_and_commands_exit_2() -> None:
 # claims
 
 
-def test_claims_lists_every_claim_on_one_line_within_100_columns(
+def test_claims_lists_every_claim_within_100_columns(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     def no_evidence(*args: Any, **kwargs: Any) -> None:
@@ -152,6 +203,39 @@ def test_claims_lists_every_claim_on_one_line_within_100_columns(
     for row, c in zip(rows, CLAIMS, strict=True):
         assert row[5:].startswith(c.expected + " "), row
     assert not _too_wide(out)
+
+
+@pytest.mark.parametrize("width", [80, 100, 120])
+def test_claims_table_wraps_its_cells_and_cuts_nothing(width: int) -> None:
+    """Every line fits ``width``; read back column by column, each claim's "in the paper" and
+    title cells hold its whole text (word for word, long words broken across lines)."""
+    lines = text.claims_lines(CLAIMS, width)
+    assert max(map(len, lines)) <= width
+    head = lines[0]
+    at_where, at_title = head.index("in the paper"), head.index("title")
+    cells: dict[str, list[list[str]]] = {}
+    current = ""
+    for line in lines[2:]:
+        if re.match(r"[DSM]\d+ ", line):
+            current = line.split()[0]
+            cells[current] = [[], []]
+        elif not line.startswith(" " * at_where):
+            current = ""  # a group heading or a blank line
+            continue
+        if current:
+            cells[current][0].append(line[at_where:at_title].strip())
+            cells[current][1].append(line[at_title:].strip())
+    assert list(cells) == IDS
+
+    def same(shown: list[str], full: str) -> bool:
+        return "".join(shown).replace(" ", "") == full.replace(" ", "")
+
+    for c in CLAIMS:
+        where = text.text_of(c.where or f"sec. {c.section}: {c.label}")
+        where = where.replace(text._DISPLAY, " ").replace(text._GLUE, " ")
+        title = text.claim_text(c, "title").replace(text._GLUE, " ")
+        assert same(cells[c.id][0], where), (c.id, cells[c.id][0], where)
+        assert same(cells[c.id][1], title), (c.id, cells[c.id][1], title)
 
 
 def test_claims_json(capsys: pytest.CaptureFixture[str]) -> None:
@@ -250,6 +334,10 @@ def test_a_tall_formula_is_set_apart_and_a_flat_one_stays_in_the_sentence() -> N
         (r"\operatorname{tr}(A)", "tr(A)"),
         (r"\tfrac{1}{2} M", "1/2 M"),
         (r"\left.\partial f/\partial x\right|_{K=0}", "∂f/∂x|_{K=0}"),
+        (r"\phi = \alpha \sum_k x_k", "ϕ = α ∑_k x_k"),  # the space after a symbol stays
+        (r"\sin \theta\, E + \hat H", "sin θ E + Ĥ"),
+        (r"|\det P_k - 1|, \dim V", "|det P_k - 1|, dim V"),
+        (r"\widehat{G(x)} = \hat b", "(G(x))^∧ = b̂"),
     ],
 )
 def test_latex_text(latex: str, shown: str) -> None:

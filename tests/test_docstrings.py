@@ -1,8 +1,9 @@
-"""The public docstrings as the API page renders them: numpydoc sections, and an example each.
+"""The public docstrings as the API pages render them: numpydoc sections, and an example each.
 
-The API page renders the docstrings with napoleon's numpydoc parser, which reads the text after
-``name :`` up to the end of the line as the type; a description written on that line (or a type
-continued on the next one) lands where the type belongs.  The examples themselves run as doctests
+The API pages (``book/api/``, one per public module) render the docstrings with napoleon's
+numpydoc parser, which reads the text after ``name :`` up to the end of the line as the type; a
+description written on that line (or a type continued on the next one) lands where the type
+belongs.  The examples themselves run as doctests
 (``--doctest-modules`` in pyproject.toml).
 """
 

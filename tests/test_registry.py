@@ -85,6 +85,8 @@ def test_declarations_are_validated() -> None:
         claim("S1", label="", title="", statement="", expected="holds", printed="p")
     with pytest.raises(ValueError, match="printed and corrected"):
         _with(_claim(), 0.5, "printed")
+    with pytest.raises(ValueError, match="headline states a correction"):
+        _claim(headline="[[x]]")
     c = _claim()
     with pytest.raises(ValueError, match="docstring"):
         c.check(Level.FLOAT64)(lambda: 0.0)
@@ -109,7 +111,7 @@ def test_registry_ids_are_those_of_claims_md() -> None:
 
 @pytest.mark.parametrize("c", CLAIMS, ids=[c.id for c in CLAIMS])
 def test_every_placeholder_has_a_formula_and_renders(c: Claim) -> None:
-    for which in ("statement", "printed", "corrected"):
+    for which in ("statement", "printed", "corrected", "headline"):
         text = c.render(which)
         assert "[[" not in text, (c.id, which)
     unused = set(c.formulas) - c.placeholders()
@@ -124,7 +126,7 @@ _PARAMETER = re.compile(r"^\s*[A-Za-z]\w*\s*=\s*[-\d.,\s]+$")
 def test_hand_written_math_states_no_relation(c: Claim) -> None:
     """Relations shown for a claim come from [[formulas]] its evidence evaluates; math typed into
     the texts may only name objects or give a parameter value such as n=3."""
-    for which in ("statement", "printed", "corrected"):
+    for which in ("statement", "printed", "corrected", "headline"):
         text = getattr(c, which) or ""
         for math in re.findall(r"\$([^$]+)\$", text):
             if _PARAMETER.match(math):
@@ -247,3 +249,72 @@ def test_uncovered_sentences_are_counted() -> None:
     assert len(uncovered) == UNCOVERED, (
         f"{len(uncovered)} uncovered sentences (recorded {UNCOVERED}):\n{listing}"
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# evidence descriptions: math in $...$, words in words
+
+_GREEK = (
+    "alpha|beta|gamma|delta|epsilon|zeta|eta|theta|kappa|lambda|Lambda|mu|nu|xi|pi|rho|sigma"
+    "|Sigma|tau|phi|Phi|psi|Psi|omega|Omega|Gamma|Delta|Theta|chi"
+)
+#: ASCII stand-ins for mathematics that a description must write in ``$...$`` instead (the book
+#: typesets ``$...$`` in its evidence tables and ``show`` turns it into text with pylatexenc):
+#: scripts in braces, ``^T``/``^2``/``^-1``, one- to three-letter names with an index (``p_k``,
+#: ``H*_xx``), Greek letters spelled out, ``d/dt``-style derivatives, ``||``, functions written as
+#: calls (``sqrt(``, ``tr(``), ASCII relations and arrows (``<=``, ``->``), ``Hhat``/``Qdot``, and
+#: equations between short names (``f = x + u``, ``n = 3``).  Accepted outside ``$...$``: words,
+#: numbers (``1e-12``), names of code, dotted or snake_case with at least four letters before the
+#: underscore (``symrb.learning.resnet_forward``, ``solve_ivp``, ``reference.J_D``,
+#: ``equ_final_th_2.7``), keyword arguments written as code (``return_info=True``) and the paper's
+#: labels (``Ukdef2``, ``mv1``, ``m8``).  A bare single letter or ``x + u`` without an equals sign
+#: cannot be told from words here; the terminal test below and the book's rendering catch the rest.
+_PSEUDO_TEX = re.compile(
+    r"[_^]\{"  # p_{k+1}, R^{n_0}
+    r"|(?<=[\w)\]])\^[\w(+-]"  # Q^T, u^2, R^-1, (...)^(1/2)
+    r"|(?<![\w.])[A-Za-z]{1,3}\*?_[A-Za-z0-9]{1,3}\b"  # indices: p_k, U_k, x_0, H*_xx, lam_1
+    rf"|\b({_GREEK})(_\w+)?\b"  # Greek letters spelled out: sigma, lambda_0
+    r"|\bd\^?\d?\w*/d"  # d/dt, dH/dx, d^2H/dy dx
+    r"|\|\|"  # ||M||
+    r"|\b(sqrt|exp|expm|log|sin|cos|tan|sinh|cosh|tanh|asinh|arcsin|det|tr|diag|eig)\("
+    r"|<=|>=|->|!=|\+-|~"  # ASCII relations, arrows, tildes
+    r"|\b(?!(that|what|chat)\b)[A-Za-z]{1,2}(hat|dot)\b"  # Hhat, Qdot, xdot
+    r"|(?<![\w.])[A-Za-z]\w{0,3} ?= ?[\w(+-]"  # an equation: f = x + u, n = 3, rtol = 1e-8
+)
+
+
+def _pseudo_tex(description: str) -> list[str]:
+    """The ASCII mathematics of ``description`` outside its ``$...$`` formulas."""
+    words = re.sub(r"\$[^$]+\$", " ", description)
+    return [m.group() for m in _PSEUDO_TEX.finditer(words)]
+
+
+def test_pseudo_tex_is_recognised() -> None:
+    for ascii_math in ("p_{k+1}", "Q^T P", "d^2H/dy dx", "||M||_op", "sqrt(2)", "U_k", "sigma",
+                       "f = x + u", "1 <= k", "Hhat", "Qdot", "R^-1", "V~", "d/dt"):  # fmt: skip
+        assert _pseudo_tex(f"the {ascii_math} here"), ascii_math
+    for fine in ("symrb.learning.resnet_forward", "solve_ivp", "reference.J_D", "Ukdef2", "1e-12",
+                 "$p_{k+1} = Q^T \\sigma$", "rigid_body", "sigmoid", "equ_final_th_2.7"):  # fmt: skip
+        assert not _pseudo_tex(f"the {fine} here"), fine
+    assert not _pseudo_tex("with return_info=True, condition=True")
+
+
+def test_evidence_descriptions_write_their_math_in_latex() -> None:
+    """Every evidence description (shown in the book's evidence tables and by ``show``) has its
+    mathematics in ``$...$`` and no ASCII pseudo-TeX (``p_{k+1}``, ``Q^T``, ``d^2H/dy dx``)."""
+    bad = {
+        f"{c.id} {ev.name}": found
+        for c in CLAIMS
+        for ev in c.evidence
+        if (found := _pseudo_tex(ev.description))
+    }
+    assert not bad, f"{len(bad)} descriptions with ASCII math: {bad}"
+
+
+def test_evidence_descriptions_read_as_text_in_the_terminal() -> None:
+    from derivations import text
+
+    for c in CLAIMS:
+        for ev in c.evidence:
+            shown = text.paragraph(text.text_of(ev.description), width=100)
+            assert not re.search(r"[$\\]", shown), f"{c.id} {ev.name}: {shown}"

@@ -61,7 +61,7 @@ MV1 = {"method": "mv_algorithm1", "h": 1.0}
 
 
 # ---------------------------------------------------------------------------------------------
-# the agreement of the three algorithms (book/section2/04_moser_veselov.md)
+# the agreement of the three algorithms (book/section2/04_moser_veselov_runs.md)
 
 
 def test_three_second_runs_equal_hand_written_calls() -> None:
@@ -240,7 +240,7 @@ def test_discretisation_scene_equals_hand_written_calls() -> None:
 
 
 # ---------------------------------------------------------------------------------------------
-# an adaptive run against a fixed-step one (book/section2/04_moser_veselov.md, second order)
+# an adaptive run against a fixed-step one (book/section2/04_moser_veselov_runs.md, second order)
 
 
 def test_second_order_sweep_equals_hand_written_runs() -> None:
@@ -288,7 +288,7 @@ def test_adaptive_and_fixed_step_runs_compare_at_common_times() -> None:
 
 
 # ---------------------------------------------------------------------------------------------
-# the operator norm of the symmetric rigid body (book/section3/02_local_equivalence.md, S11)
+# the operator norm of the symmetric rigid body (book/section3/02c_norm_casimir.md, S11)
 
 
 def test_norm_conservation_scenes_equal_the_experiment() -> None:

@@ -21,7 +21,7 @@ def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
     if not wps:
         return None
     # one panel under another, so that each stays legible at a page's width
-    fig, axes = plt.subplots(len(wps), 1, figsize=(7.5, 5.2 * len(wps)), squeeze=False)
+    fig, axes = plt.subplots(len(wps), 1, figsize=(10, 5.2 * len(wps)), squeeze=False)
     for ax, w in zip(axes[:, 0], wps, strict=True):
         for i, (m, e) in enumerate(w["methods"].items()):
             if not e.get("available"):
@@ -33,18 +33,21 @@ def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
                 "ls": "--" if m in ("RK45", "DOP853", "LSODA", "integrate") else "-",
             }
             pts = sorted(e["points"], key=lambda q: q["error"])
-            err = [max(q["error"], 1e-17) for q in pts]
+            # no point below the reference's own error: such errors are drawn at that floor
+            err = [max(q["error"], w["reference_error_estimate"]) for q in pts]
             med = [q["cpu"]["median"] for q in pts]
             lo = [q["cpu"]["median"] - q["cpu"]["min"] for q in pts]
             hi = [q["cpu"]["max"] - q["cpu"]["median"] for q in pts]
             ax.errorbar(err, med, yerr=[lo, hi], ms=5, capsize=2, label=m, **style)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        floor = w["reference_error_estimate"]
+        ax.axvspan(floor / 30, floor, color="0.85", lw=0, label="below the reference's error")
         ax.set_xlabel("error: largest entry of M(T) and Q(T) minus the reference")
         ax.set_ylabel("CPU time per run [s] (median, min-max)")
         ax.set_title(f"work-precision, n = {w['n']}, T = {w['T']:g}")
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=8, ncol=2)
+        ax.legend(fontsize=8, ncol=2, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return fig
 
 
@@ -53,18 +56,19 @@ def _long_time_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
     lts = ms.get("long-time", [])
     if not lts:
         return None
-    fig, axes = plt.subplots(len(lts), 1, figsize=(7.5, 4.6 * len(lts)), squeeze=False)
-    for ax, d in zip(axes[:, 0], lts, strict=True):
+    # the panels side by side, one per n, on a shared error axis
+    fig, axes = plt.subplots(1, len(lts), figsize=(5.0 * len(lts), 4.2), squeeze=False, sharey=True)
+    for ax, d in zip(axes[0], lts, strict=True):
         N = np.asarray(d["N"], dtype=float)
         for key, vals in d["errors"].items():
             s = d["slope"][key]
             lab = f"{key} (slope {s:.2f})" if s is not None else key
             ax.loglog(N, np.maximum(vals, 1e-18), marker=".", label=lab)
-        ax.loglog(N, EPS * np.sqrt(N), "k--", label="eps sqrt(N)")
-        ax.loglog(N, 10 * EPS * np.sqrt(N), "k:", label="10 eps sqrt(N)")
+        ax.loglog(N, EPS * np.sqrt(N), "k--", label=r"$\varepsilon\sqrt{N}$")
+        ax.loglog(N, 10 * EPS * np.sqrt(N), "k:", label=r"$10\,\varepsilon\sqrt{N}$")
         ax.set_xlabel("step number N")
         ax.set_ylabel("largest relative error up to step N")
-        ax.set_title(f"long-time invariants, n = {d['n']}, h = {d['h']:g} ({d['flow']})")
+        ax.set_title(f"n = {d['n']}, h = {d['h']:g} ({d['flow']})", fontsize=10)
         ax.legend(fontsize=8)
     return fig
 

@@ -28,6 +28,12 @@ from .problems import (
 )
 from .timing import _cost_at, fit_slope, time_interleaved
 
+#: What the work-precision errors are measured against (``reference`` of each setting).
+REFERENCE = (
+    "Gragg-Bulirsch-Stoer extrapolation of order 10 in extended precision "
+    "(derivations.reference.rigid_body_extrapolated), macro step 1/32"
+)
+
 
 def _errors(got: tuple[Array, Array], ref: tuple[Array, Array]) -> dict[str, float]:
     eQ = float(np.abs(got[0] - ref[0]).max())
@@ -35,48 +41,38 @@ def _errors(got: tuple[Array, Array], ref: tuple[Array, Array]) -> dict[str, flo
     return {"error_Q": eQ, "error_M": eM, "error": max(eQ, eM)}
 
 
-def _exact_reference(
-    lam: Array,
-    Q0: Array,
-    M0: Array,
-    T: float,
-    mods: dict[str, Any],
-    out: dict[str, Any],
-    ref_dop: tuple[Array, Array],
-    notes: list[str],
-) -> tuple[tuple[Array, Array], Callable[[], tuple[Array, Array]] | None]:
-    """(the reference, the exact solution's thunk or None): the exact solution (n = 3) replaces
-    DOP853 as the reference when it agrees with it to 1e-9; ``out`` records how they compare."""
+def _reference(lam: Array, Q0: Array, M0: Array, T: float) -> tuple[tuple[Array, Array], float]:
+    """(the reference (Q(T), M(T)), an estimate of its own error): Gragg-Bulirsch-Stoer
+    extrapolation in extended precision (:func:`derivations.reference.rigid_body_extrapolated`,
+    independent of symrb and of every method judged) of order 10 at macro step 1/32; the estimate
+    is its largest difference from the same at macro step 1/16 and from order 8 at macro step
+    1/64 (higher orders amplify rounding and are not used)."""
+    from derivations.reference import rigid_body_extrapolated
+
+    steps = max(1, round(16 * T))
+    fine = rigid_body_extrapolated(Q0, M0, lam, T, 2 * steps, stages=5)
+    others = (
+        rigid_body_extrapolated(Q0, M0, lam, T, steps, stages=5),
+        rigid_body_extrapolated(Q0, M0, lam, T, 4 * steps, stages=4),
+    )
+    est = max(
+        float(np.abs(a - b).max()) for other in others for a, b in zip(other, fine, strict=True)
+    )
+    return (np.asarray(fine[0], dtype=float), np.asarray(fine[1], dtype=float)), est
+
+
+def _exact_thunk(
+    lam: Array, Q0: Array, M0: Array, T: float, mods: dict[str, Any]
+) -> Callable[[], tuple[Array, Array]] | None:
+    """The exact solution (n = 3) at T as a thunk, or None when it is not available."""
     exact = _find(mods.get("exact"), ["rigid_body_exact"])
     if exact is None or lam.shape[-1] != 3:
-        return ref_dop, None
+        return None
 
     def exact_go() -> tuple[Array, Array]:
         return _last(exact(Q0, M0, lam, np.array([T])), 3)
 
-    try:
-        ex = exact_go()
-        agree = _errors(ex, ref_dop)["error"]
-        out["exact_vs_dop853"] = agree
-        mv = _find(mods.get("engine"), ["mv_flow"])
-        if mv is not None:
-            # an independent check at rounding level: the preprocessed method of order 10 at
-            # h = 0.02 (truncation error ~ 1e-20 here; what is left is rounding)
-            k = round(T / 0.02)
-            pre = mv(Q0, M0, lam, T / k, k, save_every=k, order=10, method="numpy")
-            out["exact_vs_mv_pre10"] = _errors(ex, _last(pre, 3))["error"]
-            out["mv_pre10_h"] = T / k
-        if agree < 1e-9:
-            out["reference"] = "symrb.exact.rigid_body_exact (agrees with DOP853 1e-13 to "
-            out["reference"] += f"{agree:.1e})"
-            return ex, exact_go
-        notes.append(
-            f"symrb.exact disagrees with DOP853 at T = {T} by {agree:.1e}; the reference is DOP853"
-        )
-        return ref_dop, exact_go
-    except Exception as exc:  # noqa: BLE001
-        notes.append(f"symrb.exact failed ({type(exc).__name__}: {exc})")
-        return ref_dop, None
+    return exact_go
 
 
 def _configurations(
@@ -132,13 +128,12 @@ def _configurations(
 def _accuracy(
     configs: dict[str, Callable[[], Any]],
     meta: dict[str, dict[str, Any]],
-    refs: tuple[tuple[Array, Array], tuple[Array, Array]],
+    ref: tuple[Array, Array],
     out: dict[str, Any],
     notes: list[str],
 ) -> None:
     """Each configuration's error (its first call) in ``meta``; configurations that fail or do
     not apply are dropped from ``configs`` and recorded in ``out["methods"]``."""
-    ref, ref_dop = refs
     for key in list(configs):
         try:
             got = configs[key]()
@@ -154,20 +149,15 @@ def _accuracy(
             out["methods"].setdefault(meta[key]["method"], {"available": False})
             out["methods"][meta[key]["method"]].setdefault("failures", []).append(str(exc))
             continue
-        # the exact solution is checked against DOP853, never against itself
-        meta[key].update(_errors(got, ref_dop if key == "exact" else ref))
+        meta[key].update(_errors(got, ref))
 
 
 def _method_entry(m: str, rows: list[dict[str, Any]], out: dict[str, Any]) -> dict[str, Any]:
     """A method's points with its fitted order (fixed step) or error-against-work slope."""
     entry: dict[str, Any] = {"available": True, "points": rows}
     if m in _STEP_ORDERS:
-        # fit where errors are well above the reference's own error: 100x DOP853's estimated
-        # error, or 20x the exact solution's distance from the order-10 method at rounding
-        if out["reference"].startswith("symrb.exact") and "exact_vs_mv_pre10" in out:
-            floor = 20 * max(out["exact_vs_mv_pre10"], EPS)
-        else:
-            floor = 100 * max(out["reference_error_estimate"], EPS)
+        # fit where errors are well above rounding and the reference's own error
+        floor = 100 * max(out["reference_error_estimate"], EPS)
         entry["nominal_order"] = _STEP_ORDERS[m]
         entry["order"] = fit_slope([r["h"] for r in rows], [r["error"] for r in rows], floor=floor)
     elif m != "exact":  # adaptive: error against work, err ~ cost^-slope
@@ -188,21 +178,23 @@ def _work_precision(
 ) -> dict[str, Any]:
     """One work-precision diagram: every configuration's error and CPU time."""
     lam, Q0, M0 = _problem(n, p["seed"])
-    ref_dop = _solve_ivp_end(lam, Q0, M0, T, "DOP853", 1e-13)()
-    # the reference's own error, estimated against a tighter run (rtol near its floor 100 eps)
-    tighter = _solve_ivp_end(lam, Q0, M0, T, "DOP853", 3e-14)()
+    ref, estimate = _reference(lam, Q0, M0, T)
     out: dict[str, Any] = {
         "n": n,
         "T": T,
         "lam": lam.tolist(),
-        "reference": "scipy DOP853, rtol = atol = 1e-13",
-        "reference_error_estimate": _errors(ref_dop, tighter)["error"],
+        "reference": REFERENCE,
+        "reference_error_estimate": estimate,
+        # the same problem solved by SciPy: agreement to DOP853's own error
+        "reference_vs_dop853": _errors(_solve_ivp_end(lam, Q0, M0, T, "DOP853", 1e-13)(), ref)[
+            "error"
+        ],
         "backend": _backend(),
         "methods": {},
     }
-    ref, exact_go = _exact_reference(lam, Q0, M0, T, mods, out, ref_dop, notes)
+    exact_go = _exact_thunk(lam, Q0, M0, T, mods)
     configs, meta = _configurations(lam, Q0, M0, T, p, methods, mods, exact_go, out)
-    _accuracy(configs, meta, (ref, ref_dop), out, notes)
+    _accuracy(configs, meta, ref, out, notes)
     log(f"work-precision n = {n}, T = {T:g}: timing {len(configs)} configurations")
     timing = time_interleaved(configs, rounds=p["rounds"], min_time=p["min_time"])
     for key, t in timing.items():

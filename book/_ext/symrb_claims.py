@@ -1,11 +1,12 @@
 """Sphinx extension for the claims and errata pages.
 
-``symrb-errata`` (a MyST directive without arguments) expands, when the book is built, into the
-errata of the paper: a summary table (claim, where in the paper, what is wrong, the corrected
-form, the evidence) and then one section per erratum, so that the page's contents panel lists
-them.  Each section has where the statement is in the paper, the printed and the corrected forms
-side by side as typeset math, what was found (the claim's note) and a table of its evidence with
-residual and tolerance.  The results are those of the build's one ``symrb verify`` run
+``symrb-errata`` (a MyST directive) expands, when the book is built, into the errata of the
+paper.  Without an argument it is the summary table of ``errata.md`` (claim, where in the paper,
+what is wrong, the corrected form); with a claim ID (``{symrb-errata} D7``, the whole of
+``errata/d07.md``) it is that erratum's page: where the statement is in the paper, a link to the
+page showing its check, the printed and the corrected forms side by side as typeset math, what was
+found (the claim's note) and a table of its evidence with residual and tolerance.  One erratum,
+one page, so that no page of the errata grows past a few screens.  The results are those of the build's one ``symrb verify`` run
 (:func:`derivations.report.load_results`); an erratum whose printed-form checks do not all fail,
 or whose corrected-form checks do not all pass, stops the build with an error.
 
@@ -19,7 +20,6 @@ cells of a row on narrow screens, so no table needs scrolling sideways on a phon
 
 from __future__ import annotations
 
-import re
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -32,46 +32,30 @@ from sphinx.util.nodes import nested_parse_with_titles
 
 from derivations.registry import GROUPS, get_claim
 from derivations.report import (
+    ERRATA,
     SHORT_LEVELS,
     breakable,
+    check_pages,
+    claim_link,
     load_results,
     plain,
     prose,
+    sentences,
     short_where,
+    summary_of,
     verify_json_path,
 )
 
-ERRATA = ("holds after correction", "fails")
-STACKED_PAGES = {"claims", "errata"}
+__all__ = ["ERRATA", "sentences", "summary_of", "errata_summary", "erratum_page", "errata_page"]
+
+#: Pages whose tables stack their cells on a narrow screen (and every page of ``errata/``).
+STACKED_PAGES = {"intro", "claims", "claims_evidence", "errata"}
 LEVELS = SHORT_LEVELS  # evidence levels as the tables show them, strongest first
-_MATH = re.compile(r"(\$[^$]+\$)")
 
 
-def _outside_math(text: str) -> list[tuple[bool, str]]:
-    """``text`` cut into (is_math, piece) pieces at ``$...$``."""
-    return [(p.startswith("$") and p.endswith("$") and len(p) > 1, p) for p in _MATH.split(text)]
-
-
-def sentences(text: str) -> list[str]:
-    """The sentences of ``text``: cut after ``.``, ``!`` or ``?`` followed by a space and a
-    capital letter, a digit, a bracket, a quote or a formula, never inside ``$...$``."""
-    masked = "".join(p[0] + "x" * (len(p) - 1) if m else p for m, p in _outside_math(text))
-    cuts = [m.end() for m in re.finditer(r"(?<=[.!?])\s+(?=[A-Z0-9(\[`'$])", masked)]
-    bounds = [0, *cuts, len(text)]
-    return [
-        text[a:b].strip() for a, b in zip(bounds, bounds[1:], strict=False) if text[a:b].strip()
-    ]
-
-
-def summary_of(note: str) -> tuple[str, str]:
-    """What is wrong (the note's first sentence) and the corrected form (its sentence starting
-    with ``Corrected:``, without that word); empty strings when the note lacks them."""
-    parts = sentences(note)
-    wrong = parts[0] if parts and not parts[0].startswith("Corrected:") else ""
-    fixed = next(
-        (p.removeprefix("Corrected:").strip() for p in parts if p.startswith("Corrected:")), ""
-    )
-    return wrong, fixed
+def erratum_doc(cid: str) -> str:
+    """``errata/d07``: the page of the errata for claim ``cid``."""
+    return f"errata/{cid[0].lower()}{int(cid[1:]):02d}"
 
 
 def _cell(text: str) -> str:
@@ -153,94 +137,109 @@ def check_erratum(result: Mapping[str, Any], note: str) -> None:
         )
 
 
-def errata_markdown(results: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The summary table and one section per erratum, as MyST Markdown lines (the paper's claims
-    only: the checks of symrb's own methods have no printed form)."""
+def errata_summary(results: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The summary table of the errata as MyST Markdown lines (the paper's claims only: the checks
+    of symrb's own methods have no printed form); each ID links to the erratum's page."""
     results = [r for r in results if GROUPS[r["id"][0]] == "paper"]
     errata = [r for r in results if r["outcome"] in ERRATA]
     lines = [
-        "## Summary",
-        "",
         f"{len(errata)} of the {len(results)} claims are errata: the paper's statement fails as "
-        "printed and a corrected form holds. Each has its own section below, with where it is "
-        "in the paper, the printed and corrected forms side by side, and its checks.",
+        "printed and a corrected form holds. Each has a page of its own (the claim's ID below "
+        "leads there) with where it is in the paper, the printed and corrected forms side by "
+        "side, and its checks.",
         "",
-        ":::{container} full-width",
-        "| claim | where in the paper | what is wrong | corrected form | evidence levels |",
-        "|---|---|---|---|---|",
+        "| claim | where in the paper | what is wrong | corrected form |",
+        "|---|---|---|---|",
     ]
     for r in errata:
         claim = get_claim(r["id"])
         check_erratum(r, claim.note)
         wrong, fixed = summary_of(prose(claim.note))
-        evidence = ", ".join(
-            LEVELS[lv] for lv in LEVELS if lv in {e["level"] for e in r["evidence"]}
-        )
         lines.append(
-            f"| {{ref}}`{claim.id} <erratum-{claim.id.lower()}>` | {_cell(short_where(claim.where))} "
-            f"| {_cell(wrong)} | {_cell(_capital(fixed) or '(none recorded)')} | {evidence} |"
+            f"| {{ref}}`{claim.id} <erratum-{claim.id.lower()}>` "
+            f"| {_cell(short_where(claim.where))} | {_cell(wrong)} "
+            f"| {_cell(_capital(fixed) or '(none recorded)')} |"
         )
-    lines.append(":::")
-    for r in errata:
-        claim = get_claim(r["id"])
-        labels = ", ".join(f"`{x.strip()}`" for x in claim.label.split(","))
-        n_printed = sum(e["form"] == "printed" for e in r["evidence"])
-        n_rest = len(r["evidence"]) - n_printed
-        if r["outcome"] == "holds after correction":
-            outcome = (
-                f"{_count(n_printed, 'check')} of the printed form fail{'s' * (n_printed == 1)} "
-                f"and {_count(n_rest, 'other check')} pass{'es' * (n_rest == 1)} "
-                f"({levels_of(r['evidence'])})"
-            )
-        else:
-            outcome = "some checks fail and no correction is recorded"
-        lines += [
-            "",
-            f"(erratum-{claim.id.lower()})=",
-            f"## {claim.id}: {prose(claim.title)}",
-            "",
-            f"**Where in the paper.** {prose(claim.where)} (LaTeX labels in the source: {labels}).",
-            "",
-            f"**Outcome.** *{r['outcome']}*: {outcome}.",
-            "",
-            f"**The claim in our words.** {breakable(claim.render('statement'))}",
-            "",
-            "::::{grid} 1 1 2 2",
-            ":gutter: 2",
-            ":class-container: symrb-forms",
-            "",
-            ":::{grid-item-card} Printed in the paper",
-            ":class-card: symrb-printed",
-            "",
-            breakable(claim.render("printed") if claim.printed else claim.render("statement")),
-            ":::",
-            "",
-            ":::{grid-item-card} Corrected",
-            ":class-card: symrb-corrected",
-            "",
-            breakable(claim.render("corrected")) if claim.corrected else "(no correction recorded)",
-            ":::",
-            "::::",
-            "",
-            f"**What was found.** {prose(claim.note)}",
-            "",
-            "**Evidence:** each check's residual against its tolerance (a check passes when the "
-            "residual is at most the tolerance; a check of the printed form is expected to fail).",
-            "",
-            *evidence_rows(r["evidence"]),
-        ]
     return lines
 
 
+def erratum_page(r: Mapping[str, Any]) -> list[str]:
+    """The page of one erratum (a result dict of ``verify --json``) as MyST Markdown lines: its
+    title and label, where it is in the paper, the outcome and a link to its check, the claim in
+    our words, the printed and corrected forms side by side, what was found and the evidence."""
+    claim = get_claim(r["id"])
+    check_erratum(r, claim.note)
+    labels = ", ".join(f"`{x.strip()}`" for x in claim.label.split(","))
+    n_printed = sum(e["form"] == "printed" for e in r["evidence"])
+    n_rest = len(r["evidence"]) - n_printed
+    if r["outcome"] == "holds after correction":
+        outcome = (
+            f"{_count(n_printed, 'check')} of the printed form fail{'s' * (n_printed == 1)} "
+            f"and {_count(n_rest, 'other check')} pass{'es' * (n_rest == 1)} "
+            f"({levels_of(r['evidence'])})"
+        )
+    else:
+        outcome = "some checks fail and no correction is recorded"
+    home = check_pages().get(claim.id)
+    shown = f" The claim with its check: {claim_link(claim.id, 'on its page')}." if home else ""
+    return [
+        f"(erratum-{claim.id.lower()})=",
+        f"# Erratum {claim.id}",  # no math: the title is also the sidebar's and the tab's
+        "",
+        f"**{claim.id}: {prose(claim.title)}**",
+        "",
+        f"**Where in the paper.** {prose(claim.where)} (LaTeX labels in the source: {labels}).",
+        "",
+        f"**Outcome.** *{r['outcome']}*: {outcome}.{shown}",
+        "",
+        f"**The claim in our words.** {breakable(claim.render('statement'))}",
+        "",
+        "::::{grid} 1 1 2 2",
+        ":gutter: 2",
+        ":class-container: symrb-forms",
+        "",
+        ":::{grid-item-card} Printed in the paper",
+        ":class-card: symrb-printed",
+        "",
+        breakable(claim.render("printed") if claim.printed else claim.render("statement")),
+        ":::",
+        "",
+        ":::{grid-item-card} Corrected",
+        ":class-card: symrb-corrected",
+        "",
+        breakable(claim.render("corrected")) if claim.corrected else "(no correction recorded)",
+        ":::",
+        "::::",
+        "",
+        f"**What was found.** {prose(claim.note)}",
+        "",
+        "**Evidence:** each check's residual against its tolerance (a check passes when the "
+        "residual is at most the tolerance; a check of the printed form is expected to fail).",
+        "",
+        *evidence_rows(r["evidence"]),
+    ]
+
+
+def errata_page(results: Sequence[Mapping[str, Any]], cid: str | None) -> list[str]:
+    """The lines of ``{symrb-errata}`` (the summary, ``cid`` None) or ``{symrb-errata} cid``."""
+    if cid is None:
+        return errata_summary(results)
+    match = [r for r in results if r["id"] == cid.upper()]
+    if not match or match[0]["outcome"] not in ERRATA:
+        raise ExtensionError(f"errata: {cid} is not an erratum of the paper")
+    return erratum_page(match[0])
+
+
 class SymrbErrata(SphinxDirective):
-    """``symrb-errata``: the summary table and one section per erratum (see the module)."""
+    """``symrb-errata [ID]``: the summary table, or the page of erratum ID (see the module)."""
 
     has_content = False
+    optional_arguments = 1
 
     def run(self) -> list[nodes.Node]:
         self.env.note_dependency(str(verify_json_path()))
         payload, _source = load_results()
-        lines = errata_markdown(payload["claims"])
+        lines = errata_page(payload["claims"], self.arguments[0] if self.arguments else None)
         content = StringList(lines, source=self.get_source_info()[0])
         holder = nodes.section()
         holder.document = self.state.document
@@ -249,12 +248,15 @@ class SymrbErrata(SphinxDirective):
 
 
 def label_table_cells(app: Any, doctree: nodes.document) -> None:
-    """On the claims and errata pages, give every table the class ``symrb-stack`` and every body
-    cell a label with its column's header, which the CSS shows when the cells are stacked."""
-    if app.env.docname not in STACKED_PAGES:
+    """On the pages of :data:`STACKED_PAGES` and of the errata, give every table the classes
+    ``symrb-stack`` and ``symrb-page-<page>`` and every body cell a label with its column's
+    header, which the CSS shows when the cells are stacked."""
+    docname = app.env.docname
+    if docname not in STACKED_PAGES and not docname.startswith("errata/"):
         return
+    page = "symrb-page-" + docname.replace("/", "-")
     for table in doctree.findall(nodes.table):
-        table["classes"].append("symrb-stack")
+        table["classes"] += ["symrb-stack", page]
         head = next(iter(table.findall(nodes.thead)), None)
         if head is None:
             continue

@@ -217,11 +217,11 @@ MV3_CAYLEY_STEP = Kernel(
 
 @M1.check(Level.SYMBOLIC_FIXED_N)
 def m1_cayley_equation_n3() -> sp.Expr:
-    """n = 3, Cayley coordinates (symbolic): the emitted update's U is cay(X) = (I + X)(I - X)^-1
-    and in SO(3); (I - X)(J_D(U) - hat b)(I + X) = hat(G(x)) with the emitted J_D, so G(x) = 0
-    exactly when J_D(U) = hat b; the emitted Newton step solves G'(x) dx = -G(x) with G' the
-    Jacobian computed by SymPy; the emitted momentum update is the emitted mv3 at Omega = U^T
-    and the attitude update is Q U."""
+    r"""$n = 3$, Cayley coordinates (symbolic): the emitted update's $U$ is $\operatorname{cay}(X) =
+    (I + X)(I - X)^{-1}$ and in $\mathrm{SO}(3)$; $(I - X)(J_D(U) - \hat b)(I + X)$ is
+    $\widehat{G(x)}$ with the emitted $J_D$, so $G(x) = 0$ exactly when $J_D(U) = \hat b$; the
+    emitted Newton step solves $G'(x)\, dx = -G(x)$ with $G'$ the Jacobian computed by SymPy; the
+    emitted momentum update is the emitted mv3 at $\Omega = U^T$ and the attitude update is $QU$."""
     x, b, lam = _CX, _CB, list(_CL)
     X, eye = hat3(x), sp.eye(3)
     U = _cayley3_matrix(x)
@@ -243,11 +243,13 @@ def m1_cayley_equation_n3() -> sp.Expr:
 
 @M1.check(Level.SYMBOLIC_FIXED_N)
 def m1_cayley_scalar_form_n3() -> sp.Expr:
-    """n = 3, the scalar form (symbolic): (D_s - hat b) z = det b with D_s = diag(2 I - s), and
-    det^2 G(z/det) = p(s) z (G(z t) as a polynomial in t), so x = z/det solves G(x) = 0 exactly
-    when p(s) = 0; the emitted Newton steps (mv3_cayley_s_newton, the ds of mv3_cayley_step) are
-    -p/p' at b = h m with p' SymPy's derivative of p, s_next = s + ds; and the emitted update's
-    cay(hat(z/det)) written without the division equals cay(hat x) of mv3_cayley_update."""
+    r"""$n = 3$, the scalar form (symbolic): $(D_s - \hat b) z = \det b$ with $D_s =
+    \operatorname{diag}(2I - s)$, and $\det^2 G(z/\det) = p(s) z$ ($G(zt)$ as a polynomial in $t$),
+    so $x = z/\det$ solves $G(x) = 0$ exactly when $p(s) = 0$; the emitted Newton steps
+    (mv3_cayley_s_newton, the $ds$ of mv3_cayley_step) are $-p/p'$ at $b = hm$ with $p'$ SymPy's
+    derivative of $p$, $s_{\mathrm{next}} = s + ds$; and the emitted update's
+    $\operatorname{cay}(\widehat{z/\det})$ written without the division equals
+    $\operatorname{cay}(\hat x)$ of mv3_cayley_update."""
     s, b, lam = _CS, _CB, _CL
     z, det, p = _cayley3_scalar_form(s, b, lam)
     Ds = sp.diag(*[2 * e - s for e in _cayley3_inertia(lam)])
@@ -268,9 +270,9 @@ def m1_cayley_scalar_form_n3() -> sp.Expr:
 
 @M1.check(Level.EXACT_RATIONAL)
 def m1_cayley_step_composition_n3() -> sp.Expr:
-    """n = 3 (exact rationals, 4 random points): m + dm and Q + dQ of mv3_cayley_step are the
-    checked mv3_cayley_update at x = z(s_next)/det(s_next) (the scalar form's x, which
-    m1_cayley_scalar_form_n3 shows solves G(x) = 0 at a root of p)."""
+    r"""$n = 3$ (exact rationals, 4 random points): $m + dm$ and $Q + dQ$ of mv3_cayley_step are the
+    checked mv3_cayley_update at $x = z(s_{\mathrm{next}})/\det(s_{\mathrm{next}})$ (the scalar
+    form's $x$, which m1_cayley_scalar_form_n3 shows solves $G(x) = 0$ at a root of $p$)."""
     rng = np.random.default_rng(10)
     total = sp.Integer(0)
     for _ in range(4):

@@ -35,12 +35,13 @@ M4 = claim(
 
 @M4.check(Level.FLOAT64, tol=0.2)
 def m4_compositions_order_against_elliptic() -> float:
-    """The MV-Algorithm 2 map is symmetric (time-reversible), so its symmetric compositions
-    raise the order: symrb.compose.composed_rigid_body_flow (orders 4, 6, 8, the engine's MV step),
-    and the textbook alternatives symrb.compose.rkmk4_rigid_body_flow (4) and
-    symrb.compose.midpoint_rigid_body_flow (2), n = 3, against the Jacobi elliptic solution of Euler's
-    equations (reference.euler_elliptic) at T = 2: the error in M at steps h and h/2 gives the
-    observed order log2(e(h)/e(h/2)); largest |observed - nominal| over the five methods."""
+    r"""The MV-Algorithm 2 map is symmetric (time-reversible), so its symmetric compositions raise
+    the order: symrb.compose.composed_rigid_body_flow (orders 4, 6, 8, the engine's MV step), and
+    the textbook alternatives symrb.compose.rkmk4_rigid_body_flow (4) and
+    symrb.compose.midpoint_rigid_body_flow (2), $n = 3$, against the Jacobi elliptic solution of
+    Euler's equations (reference.euler_elliptic) at $T = 2$: the error in $M$ at steps $h$ and $h/2$
+    gives the observed order $\log_2(e(h)/e(h/2))$; largest $|\mathrm{observed} - \mathrm{nominal}|$
+    over the five methods."""
     import symrb
 
     inertia = np.array([1.0, 1.7, 2.6])
@@ -69,12 +70,12 @@ def m4_compositions_order_against_elliptic() -> float:
 
 @M4.check(Level.MPMATH, tol=0.5)
 def m4_every_table_local_order() -> float:
-    """Every composition table of symrb.composition.composition_coefficients (each kind of
-    orders 2, 4, 6, 8, the non-default ones included), applied to the Strang splitting
-    exp(hA/2) exp(hB) exp(hA/2) of two random 3 x 3 matrices in 30-digit arithmetic (mpmath):
-    the local error against exp(h(A + B)) at steps h and h/2 gives the local order
-    log2(e(h)/e(h/2)), which is p + 1 for a table of order p; max |observed - (p + 1)| (one
-    order condition broken by a wrong coefficient lowers it by 2 or more)."""
+    r"""Every composition table of symrb.composition.composition_coefficients (each kind of orders
+    2, 4, 6, 8, the non-default ones included), applied to the Strang splitting $\exp(hA/2) \exp(hB)
+    \exp(hA/2)$ of two random $3 \times 3$ matrices in 30-digit arithmetic (mpmath): the local error
+    against $\exp(h(A + B))$ at steps $h$ and $h/2$ gives the local order $\log_2(e(h)/e(h/2))$,
+    which is $p + 1$ for a table of order $p$; $\max |\mathrm{observed} - (p + 1)|$ (one order
+    condition broken by a wrong coefficient lowers it by 2 or more)."""
     import mpmath as mp
 
     from symrb.composition import _KINDS, composition_coefficients

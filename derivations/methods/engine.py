@@ -32,9 +32,10 @@ M2 = claim(
 
 @M2.check(Level.FLOAT64, tol=1e-12)
 def m2_cayley_s_conserved() -> float:
-    """The scalar s_k = h m_k . x_k (x_k the Cayley vector of U_k = Q_k^T Q_{k+1}) along 2000
-    steps of symrb.discrete_rigid_body_flow (U-parametrised solver, n = 3, h = 0.05) is constant:
-    max |s_k/s_0 - 1| (what lets symrb.engine take one Newton step on p a step)."""
+    r"""The scalar $s_k = h\, m_k \cdot x_k$ ($x_k$ the Cayley vector of $U_k = Q_k^T Q_{k+1}$)
+    along 2000 steps of symrb.discrete_rigid_body_flow ($U$-parametrised solver, $n = 3$, $h =
+    0.05$) is constant: $\max |s_k/s_0 - 1|$ (what lets symrb.engine take one Newton step on $p$ a
+    step)."""
     import symrb
 
     M0 = ref.hat(np.array([0.9, -0.5, 0.7]))
@@ -49,9 +50,9 @@ def m2_cayley_s_conserved() -> float:
 
 @M2.check(Level.FLOAT64, tol=1e-13)
 def m2_engine_against_50_digits() -> float:
-    """symrb.engine.mv_flow (Cayley-Newton, the emitted n = 3 kernels) from (Q_0, M_0) at
-    h = 0.1, 12 steps, single body and a batch of 2 copies, against the Q_k and continuous
-    momenta of the 50-digit reference run of the symmetric representation: max absolute error."""
+    """symrb.engine.mv_flow (Cayley-Newton, the emitted $n = 3$ kernels) from $(Q_0, M_0)$ at $h =
+    0.1$, 12 steps, single body and a batch of 2 copies, against the $Q_k$ and continuous momenta of
+    the 50-digit reference run of the symmetric representation: max absolute error."""
     from symrb import engine
 
     run = _mp_run()
@@ -68,13 +69,13 @@ def m2_engine_against_50_digits() -> float:
 
 @M2.check(Level.FLOAT64, tol=1e-12)
 def m2_engine_general_n_equations() -> float:
-    """symrb.engine.mv_flow at n = 5 and n = 8 (the general-n solver and its increment update,
-    not the n = 3 kernels), 40 steps of h = 0.05: with U_k = Q_k^T Q_{k+1} from the returned
-    attitudes, the defining equations J_D(U_k) = h M_k (reference.J_D, explicit Lambda) and
-    M_{k+1} = U_k^T M_k U_k, and U_k^T U_k = I: max residual relative to max(1, |h M_k|).  Then
-    3000 steps at n = 5 with h ||M||_op = 0.5: max |M + M^T| (an exactly skew update gives 0), and
-    the relative drift of tr M^T M in units of 10 eps sqrt(N), scaled so that 1 unit = 1e-12 (the
-    tolerance)."""
+    r"""symrb.engine.mv_flow at $n = 5$ and $n = 8$ (the general-$n$ solver and its increment
+    update, not the $n = 3$ kernels), 40 steps of $h = 0.05$: with $U_k = Q_k^T Q_{k+1}$ from the
+    returned attitudes, the defining equations $J_D(U_k) = h M_k$ (reference.J_D, explicit
+    $\Lambda$) and $M_{k+1} = U_k^T M_k U_k$, and $U_k^T U_k = I$: max residual relative to $\max(1,
+    |h M_k|)$. Then 3000 steps at $n = 5$ with $h \|M\|_{\mathrm{op}} = 0.5$: $\max |M + M^T|$ (an
+    exactly skew update gives 0), and the relative drift of $\operatorname{tr} M^T M$ in units of
+    $10 \varepsilon \sqrt{N}$, scaled so that one unit is 1e-12 (the tolerance)."""
     from symrb import engine
 
     worst = 0.0
@@ -108,10 +109,11 @@ def m2_engine_general_n_equations() -> float:
 
 @M2.check(Level.FLOAT64, tol=1.0)
 def m2_engine_n3_long_run_rounding() -> float:
-    """symrb.engine.mv_flow, n = 3 (the fused kernel; the compiled loop too when numba is
-    installed), lam = (1e-3, 1, 1e3), h M_0 a tenth of the way or so to the fold, 2e4 steps:
-    the largest relative energy and tr M^2 errors and max |Q^T Q - I|, in units of
-    10 eps sqrt(N) (the long-time goal; the kernel's update written as U^T m gave 17)."""
+    r"""symrb.engine.mv_flow, $n = 3$ (the fused kernel; the compiled loop too when numba is
+    installed), $\lambda = (10^{-3}, 1, 10^3)$, $h M_0$ a tenth of the way or so to the fold, $2
+    \cdot 10^4$ steps: the largest relative energy and $\operatorname{tr} M^2$ errors and $\max |Q^T
+    Q - I|$, in units of $10 \varepsilon \sqrt{N}$ (the long-time goal; the kernel's update written
+    as $U^T m$ gave 17)."""
     from symrb import _compiled, engine
 
     lam = np.array([1e-3, 1.0, 1e3])

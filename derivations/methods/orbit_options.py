@@ -64,14 +64,15 @@ def _so_basis(k: int) -> list[np.ndarray]:
 
 @M10.check(Level.FLOAT64, tol=1.0)
 def m10_double_bracket_flow_and_report() -> float:
-    """symrb.orbits.double_bracket_flow (n = 4, t = 0, 0.5, 1, 2; with return_info False and
-    True) against solve_ivp on x' = [x, [x, N]] in NumPy at rtol 1e-13: the relative error
-    (allowed 1e-9); its report: the condition number kappa(t), a lower bound from random
-    directions, lies between 1/sqrt(dim so(4)) and 1 times the exact one (largest singular
-    value of the flow's derivative on so(4), by central differences of the NumPy flow, times
-    ||x_0||/||x(t)||), the error estimate e(t) is within a factor 10 of the actual error, and the
-    documented bound error <= 2 e + 10 (rtol + atol/||x||_rms) kappa holds; max over the
-    quantities of the discrepancy over its allowance."""
+    r"""symrb.orbits.double_bracket_flow ($n = 4$, $t = 0, 0.5, 1, 2$; with return_info False and
+    True) against solve_ivp on $x' = [x, [x, N]]$ in NumPy at rtol 1e-13: the relative error
+    (allowed 1e-9); its report: the condition number $\kappa(t)$, a lower bound from random
+    directions, lies between $1/\sqrt{\dim \mathfrak{so}(4)}$ and 1 times the exact one (largest
+    singular value of the flow's derivative on $\mathfrak{so}(4)$, by central differences of the
+    NumPy flow, times $\|x_0\|/\|x(t)\|$), the error estimate $e(t)$ is within a factor 10 of the
+    actual error, and the documented bound, error at most $2e + 10 \kappa r$ with $r = \mathrm{rtol}
+    + \mathrm{atol}/\|x\|_{\mathrm{rms}}$, holds; max over the quantities of the discrepancy over
+    its allowance."""
     import symrb
 
     rng = np.random.default_rng(101)
@@ -103,9 +104,9 @@ def m10_double_bracket_flow_and_report() -> float:
 
 @M10.check(Level.FLOAT64, tol=1e-9)
 def m10_toda_flow() -> float:
-    """symrb.orbits.toda_flow (k = 5, t in [0, 3]) against Flaschka's equations a_i' = 2(b_i^2 -
-    b_(i-1)^2), b_i' = b_i (a_(i+1) - a_i) integrated on (a, b) by solve_ivp at rtol 1e-13: max
-    entry difference of L (tridiagonal, zero off the band)."""
+    """symrb.orbits.toda_flow ($k = 5$, $t$ in $[0, 3]$) against Flaschka's equations $a_i' =
+    2(b_i^2 - b_{i-1}^2)$, $b_i' = b_i (a_{i+1} - a_i)$ integrated on $(a, b)$ by solve_ivp at rtol
+    1e-13: max entry difference of $L$ (tridiagonal, zero off the band)."""
     import symrb
 
     k = 5
@@ -171,13 +172,13 @@ def _green_condition(f: Callable, y0: np.ndarray, ts: np.ndarray) -> float:
 
 @M10.check(Level.FLOAT64, tol=1.0)
 def m10_orbit_bvp_costates_and_condition() -> float:
-    """symrb.orbits.solve_orbit_bvp (n = 3, one sample, T = 0.5) with costate = "corrected" and
-    with costate = "printed" and condition = True: the returned (x(0), p(0)) shot forward by
-    solve_ivp on the state-costate equations in NumPy reach the returned (x(T), p(T)), with
-    x(0) = x_0 and p(T) = -N (corrected) or +N (printed), allowed 1e-4 (the solver's tolerance is
-    1e-6); the reported condition number against max(kappa_1, kappa_2) from the Green's function
-    of the linearised NumPy flow on the same times, allowed 1e-4 relative: max discrepancy over
-    its allowance."""
+    r"""symrb.orbits.solve_orbit_bvp ($n = 3$, one sample, $T = 0.5$) with costate="corrected" and
+    with costate="printed" and condition=True: the returned $(x(0), p(0))$ shot forward by solve_ivp
+    on the state-costate equations in NumPy reach the returned $(x(T), p(T))$, with $x(0) = x_0$ and
+    $p(T) = -N$ (corrected) or $+N$ (printed), allowed 1e-4 (the solver's tolerance is 1e-6); the
+    reported condition number against $\max(\kappa_1, \kappa_2)$ from the Green's function of the
+    linearised NumPy flow on the same times, allowed 1e-4 relative: max discrepancy over its
+    allowance."""
     import symrb
 
     rng = np.random.default_rng(104)

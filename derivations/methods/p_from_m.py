@@ -41,9 +41,10 @@ M6 = claim(
 
 @M6.check(Level.FLOAT64, tol=1e-11)
 def m6_against_displayed_formulas() -> float:
-    """symrb.symmetric.P_from_M (real Schur form) against S10's displayed corrected formula (Hermitian
-    eigen-decomposition and expm) and its displayed closed form (symmetric eigen-decomposition),
-    n = 3..6, ||M||_op from 0.1 to 0.995 times S10's displayed domain bound: max difference."""
+    r"""symrb.symmetric.P_from_M (real Schur form) against S10's displayed corrected formula
+    (Hermitian eigen-decomposition and expm) and its displayed closed form (symmetric
+    eigen-decomposition), $n = 3, \dots, 6$, $\|M\|_{\mathrm{op}}$ from 0.1 to 0.995 times S10's
+    displayed domain bound: max difference."""
     import symrb
 
     rng = np.random.default_rng(11)
@@ -62,9 +63,10 @@ def m6_against_displayed_formulas() -> float:
 
 @M6.check(Level.MPMATH, tol=10.0)
 def m6_conditioning_near_boundary() -> float:
-    """symrb.symmetric.P_from_M at ||M||_op = 2(1 - delta), delta = 1e-4, 1e-8, 1e-12 (n = 4), against the
-    60-digit P of S10's displayed closed form: the error in units of eps/sqrt(delta), the
-    conditioning of asinh at the boundary."""
+    r"""symrb.symmetric.P_from_M at $\|M\|_{\mathrm{op}} = 2(1 - \delta)$, $\delta = 10^{-4},
+    10^{-8}, 10^{-12}$ ($n = 4$), against the 60-digit $P$ of S10's displayed closed form: the error
+    in units of $\varepsilon/\sqrt{\delta}$, the conditioning of $\operatorname{asinh}$ at the
+    boundary."""
     import symrb
 
     Qf, points, _identity = near_boundary()

@@ -51,11 +51,12 @@ def _past_fold(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
 
 @M9.check(Level.MPMATH, tol=1e-12)
 def m9_halve_against_30_digits() -> float:
-    """symrb.symmetric_flow(Q_0, P_0 = Q_0 X) and symrb.discrete_rigid_body_flow(Q_0, M_0 = 2X)
-    with halve = True, h = 0.5 and h M 25 % past the fold of J_D (n = 3, 2 steps): every state
-    against the 30-digit symmetric representation (MPDiscrete) run from the previous reference
-    state with 2^j substeps of h/2^j, j the halvings reported for that step: max error; inf when
-    no step was halved or when the run without halve does not stop at the first halved step."""
+    """symrb.symmetric_flow with $P_0 = Q_0 X$ and symrb.discrete_rigid_body_flow with $M_0 = 2X$
+    (from the same $Q_0$), with halve=True, $h = 0.5$ and $hM$ 25 % past the fold of $J_D$ ($n = 3$,
+    2 steps): every state against the 30-digit symmetric representation (MPDiscrete) run from the
+    previous reference state with $2^j$ substeps of $h/2^j$, $j$ the halvings reported for that
+    step: max error; inf when no step was halved or when the run without halve does not stop at the
+    first halved step."""
     import symrb
 
     Q0, X = _past_fold(np.random.default_rng(91))
@@ -80,14 +81,14 @@ def m9_halve_against_30_digits() -> float:
 
 @M9.check(Level.FLOAT64, tol=1e-9)
 def m9_diagnostics_condition() -> float:
-    """The condition numbers reported with diagnostics = True by symrb.symmetric_flow,
-    symrb.discrete_rigid_body_flow (h = 0.3, 4 steps), symrb.mv_algorithm1 and
-    symrb.mv_algorithm2 (4 steps), n = 3, h M at 0.8 of the fold of J_D (where the condition
-    number depends on the order of Lambda's diagonal by 6 %), against max lam / sigma_min of the
-    derivative xi -> U xi Lam + Lam xi U^T of J_D at each step's U = Q_k^T Q_(k+1), recomputed in
-    NumPy from the returned states: the report is a lower bound from a power method (within 1e-4
-    here); max over the solves of the amount by which it leaves [0.98, 1] times the recomputed
-    value (inf when a report is missing)."""
+    r"""The condition numbers reported with diagnostics=True by symrb.symmetric_flow,
+    symrb.discrete_rigid_body_flow ($h = 0.3$, 4 steps), symrb.mv_algorithm1 and symrb.mv_algorithm2
+    (4 steps), $n = 3$, $hM$ at 0.8 of the fold of $J_D$ (where the condition number depends on the
+    order of $\Lambda$'s diagonal by 6 %), against $\max \lambda / \sigma_{\min}$ of the derivative
+    $\xi \mapsto U\xi\Lambda + \Lambda\xi U^T$ of $J_D$ at each step's $U = Q_k^T Q_{k+1}$,
+    recomputed in NumPy from the returned states: the report is a lower bound from a power method
+    (within 1e-4 here); max over the solves of the amount by which it leaves $[0.98, 1]$ times the
+    recomputed value (inf when a report is missing)."""
     import symrb
 
     rng = np.random.default_rng(92)

@@ -189,14 +189,14 @@ def _hv_constants(order: int, lam: sp.Matrix) -> dict[sp.Symbol, Any]:
 
 @M3.check(Level.EXACT_RATIONAL)
 def m3_preprocessed_local_error() -> sp.Expr:
-    """n = 3, exact rationals (lam = (7/10, 11/10, 8/5), m = (3/5, -1/2, 4/5), Q = I): one
-    emitted step (mv3_cayley_step at the root s of the scalar form, found by Newton steps of
-    mv3_cayley_s_newton on series) with the modified Lambda of mv3_preprocessed_lam and
-    mv3_preprocessing_coefficients, as a power series in h, against the Taylor series of the
-    exact flow (reference.rigid_body_taylor, Picard iteration of m' = m x omega, Q' = Q hat
-    omega): for orders 2 (no preprocessing), 4, 6, 8 and 10 the coefficients of h^1..h^p of
-    m and Q agree and that of h^(p+1) in m does not.  Returns the sum of |coefficient
-    differences| up to h^p plus one per order whose h^(p+1) term vanishes."""
+    r"""$n = 3$, exact rationals ($\lambda = (7/10, 11/10, 8/5)$, $m = (3/5, -1/2, 4/5)$, $Q = I$):
+    one emitted step (mv3_cayley_step at the root $s$ of the scalar form, found by Newton steps of
+    mv3_cayley_s_newton on series) with the modified $\Lambda$ of mv3_preprocessed_lam and
+    mv3_preprocessing_coefficients, as a power series in $h$, against the Taylor series of the exact
+    flow (reference.rigid_body_taylor, Picard iteration of $m' = m \times \omega$, $Q' = Q
+    \hat\omega$): for orders 2 (no preprocessing), 4, 6, 8 and 10 the coefficients of $h^1, \dots,
+    h^p$ of $m$ and $Q$ agree and that of $h^{p+1}$ in $m$ does not. Returns the sum of absolute
+    coefficient differences up to $h^p$ plus one per order whose $h^{p+1}$ term vanishes."""
     lam = sp.Matrix([sp.Rational(7, 10), sp.Rational(11, 10), sp.Rational(8, 5)])
     m0 = [sp.Rational(3, 5), sp.Rational(-1, 2), sp.Rational(4, 5)]
     N = 12  # coefficients of h^0..h^11
@@ -236,10 +236,10 @@ def m3_preprocessed_local_error() -> sp.Expr:
 
 @M3.check(Level.FLOAT64, tol=0.25)
 def m3_preprocessed_order_against_elliptic() -> float:
-    """symrb.engine.mv_flow(order=p) (NumPy path), the preprocessed method, n = 3, against the
-    Jacobi elliptic solution of Euler's equations (reference.euler_elliptic) at T = 4: the
-    error in M at steps h and h/2 gives the observed order log2(e(h)/e(h/2)); largest
-    |observed - p| over p = 2, 4, 6, 8, 10 (steps chosen so both errors are far above
+    r"""symrb.engine.mv_flow(order=p) (NumPy path), the preprocessed method, $n = 3$, against the
+    Jacobi elliptic solution of Euler's equations (reference.euler_elliptic) at $T = 4$: the error
+    in $M$ at steps $h$ and $h/2$ gives the observed order $\log_2(e(h)/e(h/2))$; largest
+    $|\mathrm{observed} - p|$ over $p = 2, 4, 6, 8, 10$ (steps chosen so both errors are far above
     rounding)."""
     from symrb import engine
 

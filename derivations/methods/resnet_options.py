@@ -158,11 +158,11 @@ def _msa_reference(x0: np.ndarray, y: np.ndarray, K: np.ndarray, b: np.ndarray, 
 
 @M11.check(Level.FLOAT64, tol=1e-10)
 def m11_train_msa() -> float:
-    """symrb.learning.train_msa (3 iterations, rho = 0.5, 2 inner steps of 0.05), for tanh and
-    logistic, residual and plain layers, against the extended method of successive
-    approximations written in NumPy from its documented definition (costates by the adjoint
-    recursion, the ascent on the augmented Hamiltonian by the complex step): max relative
-    difference of the weights, biases and losses."""
+    r"""symrb.learning.train_msa (3 iterations, $\rho = 0.5$, 2 inner steps of 0.05), for tanh and
+    logistic, residual and plain layers, against the extended method of successive approximations
+    written in NumPy from its documented definition (costates by the adjoint recursion, the ascent
+    on the augmented Hamiltonian by the complex step): max relative difference of the weights,
+    biases and losses."""
     import symrb
 
     worst = 0.0
@@ -177,11 +177,11 @@ def m11_train_msa() -> float:
 
 @M11.check(Level.FLOAT64, tol=1e-12)
 def m11_sweep_reports() -> float:
-    """The reports (return_info = True) of symrb.learning.costate_sweep and loss_gradients, for
-    tanh and logistic, residual and plain layers: the condition number against its definition
-    max_a max_(k <= j) prod_(i = k..j-1) ||J^a_i||_2, J = I + diag(sigma'(z)) K or
-    diag(sigma'(z)) K, in NumPy; and the costates and gradients returned with it against the
-    adjoint recursion and the complex-step gradient of the NumPy loss: max relative
+    r"""The reports (return_info=True) of symrb.learning.costate_sweep and loss_gradients, for tanh
+    and logistic, residual and plain layers: the condition number against its definition $\max_a
+    \max_{k \le j} \prod_{i=k}^{j-1} \|J^a_i\|_2$, $J = I + \operatorname{diag}(\sigma'(z)) K$ or
+    $\operatorname{diag}(\sigma'(z)) K$, in NumPy; and the costates and gradients returned with it
+    against the adjoint recursion and the complex-step gradient of the NumPy loss: max relative
     difference."""
     import symrb
 

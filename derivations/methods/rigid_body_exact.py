@@ -32,11 +32,11 @@ M5 = claim(
 
 @M5.check(Level.FLOAT64, tol=1e-12)
 def m5_exact_against_elliptic() -> float:
-    """symrb.exact.rigid_body_exact (n = 3) against the Landau-Lifshitz Jacobi elliptic solution
-    (reference.euler_elliptic) at 201 times in [0, 200], with the principal axes in the three
-    cyclic orders of lam (the body momentum circles the largest axis), as one call for all times
-    (the array route) and one call per six of them (one body and at most 8 times: the float
-    route): max |M error| / |M|."""
+    r"""symrb.exact.rigid_body_exact ($n = 3$) against the Landau-Lifshitz Jacobi elliptic solution
+    (reference.euler_elliptic) at 201 times in $[0, 200]$, with the principal axes in the three
+    cyclic orders of $\lambda$ (the body momentum circles the largest axis), as one call for all
+    times (the array route) and one call per six of them (one body and at most 8 times: the float
+    route): $\max |M \text{ error}| / |M|$."""
     from symrb.exact import rigid_body_exact
 
     inertia = np.array([1.0, 1.7, 2.6])
@@ -67,12 +67,12 @@ _EXACT_SPECIAL = [
 
 @M5.check(Level.FLOAT64, tol=1e-10)
 def m5_exact_against_flow() -> float:
-    """symrb.exact.rigid_body_exact against symrb.integrate(RigidBody) (DOP853, rtol = atol =
-    1e-13) at 11 times in [0, 60], for 6 random bodies (|m| = 1; the momentum circles the largest
-    axis for some, the smallest for others) plus a steady rotation, a symmetric body and a body
-    with lam_1 < 0, all in one call (the array route) and each body alone at the last three
-    times (one body: the float route, except the steady rotation): max |Q error| and
-    |M error| / |M|."""
+    r"""symrb.exact.rigid_body_exact against symrb.integrate(RigidBody) (DOP853, rtol and atol
+    1e-13) at 11 times in $[0, 60]$, for 6 random bodies ($|m| = 1$; the momentum circles the
+    largest axis for some, the smallest for others) plus a steady rotation, a symmetric body and a
+    body with $\lambda_1 < 0$, all in one call (the array route) and each body alone at the last
+    three times (one body: the float route, except the steady rotation): $\max |Q \text{ error}|$
+    and $|M \text{ error}| / |M|$."""
     import symrb
     from symrb.exact import rigid_body_exact
 
@@ -105,10 +105,10 @@ def m5_exact_against_flow() -> float:
 
 @M5.check(Level.MPMATH, tol=1e-13)
 def m5_exact_against_mpmath_ode() -> float:
-    """symrb.exact.rigid_body_exact at t = 4 against a 20-digit Taylor integration of the rigid
-    body (mpmath.odefun on Qdot = Q hat(omega), mdot = m x omega), for a body whose momentum
-    circles its largest axis and one whose momentum circles its smallest: max |Q error| and
-    |m error| / |m|."""
+    r"""symrb.exact.rigid_body_exact at $t = 4$ against a 20-digit Taylor integration of the rigid
+    body (mpmath.odefun on $\dot Q = Q \hat\omega$, $\dot m = m \times \omega$), for a body whose
+    momentum circles its largest axis and one whose momentum circles its smallest: $\max |Q \text{
+    error}|$ and $|m \text{ error}| / |m|$."""
     from symrb.exact import rigid_body_exact
 
     worst = 0.0

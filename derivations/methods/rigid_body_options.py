@@ -55,11 +55,11 @@ def _reference() -> tuple[np.ndarray, Callable[[float], tuple[np.ndarray, np.nda
 
 @M8.check(Level.MPMATH, tol=0.3)
 def m8_base_step_objects() -> float:
-    """symrb.compose.composed_rigid_body_flow with the base step given as an object: MVStep and
-    MidpointStep under the order-4 composition (order 4), RKMK4Step under the order-2 one (the
-    step itself, order 4); the order observed from the errors at T = 1 with steps h = 0.1 and
-    0.05 against the 20-digit reference (mpmath): max |observed - nominal|; inf when the MV and
-    the midpoint objects give the same result (an object ignored)."""
+    r"""symrb.compose.composed_rigid_body_flow with the base step given as an object: MVStep and
+    MidpointStep under the order-4 composition (order 4), RKMK4Step under the order-2 one (the step
+    itself, order 4); the order observed from the errors at $T = 1$ with steps $h = 0.1$ and 0.05
+    against the 20-digit reference (mpmath): $\max |\mathrm{observed} - \mathrm{nominal}|$; inf when
+    the MV and the midpoint objects give the same result (an object ignored)."""
     from symrb.base_steps import MidpointStep, MVStep, RKMK4Step
     from symrb.compose import composed_rigid_body_flow
 
@@ -101,14 +101,15 @@ def _kappa(U: np.ndarray, lam: np.ndarray) -> float:
 
 @M8.check(Level.FLOAT64, tol=1.0)
 def m8_solver_reports() -> float:
-    """The reports of symrb.solve_moser_veselov and symrb.symmetric.P_from_M (return_info =
-    True), n = 3..5, four random momenta each (0.1 to 0.95 of the way to the fold of J_D, and
-    ||M||_op from 0.2 to 1.9 for P_from_M), against the quantities recomputed in NumPy from
-    the returned U and P: residual ||U Lam - Lam U^T - M||_F, ||U^T U - I||_F, the margin min Re
-    spec(U Lam), the condition number max lam / sigma_min(L_U) (the report's estimate is a lower
-    bound from a power method, 0.94 to 1 times it here: between 0.9 and 1), and for P_from_M ||Q^T P - P^T Q - M||_F, ||P^T P - I||_F,
-    delta = 1 - ||M||_op/2 and 1/sqrt(1 - (||M||_op/2)^2); max discrepancy over its allowance
-    (1e-13 for residuals, 1e-10 relative for the rest)."""
+    r"""The reports of symrb.solve_moser_veselov and symrb.symmetric.P_from_M (return_info=True), $n
+    = 3, \dots, 5$, four random momenta each (0.1 to 0.95 of the way to the fold of $J_D$, and
+    $\|M\|_{\mathrm{op}}$ from 0.2 to 1.9 for P_from_M), against the quantities recomputed in NumPy
+    from the returned $U$ and $P$: residual $\|U\Lambda - \Lambda U^T - M\|_F$, $\|U^T U - I\|_F$,
+    the margin $\min \operatorname{Re} \operatorname{spec}(U\Lambda)$, the condition number
+    $\max \lambda / \sigma_{\min}(L_U)$ (the report's estimate is a lower bound from a power method,
+    0.94 to 1 times it here: between 0.9 and 1), and for P_from_M $\|Q^T P - P^T Q - M\|_F$, $\|P^T
+    P - I\|_F$, $\delta = 1 - \|M\|_{\mathrm{op}}/2$ and $1/\sqrt{1 - (\|M\|_{\mathrm{op}}/2)^2}$;
+    max discrepancy over its allowance (1e-13 for residuals, 1e-10 relative for the rest)."""
     import symrb
 
     rng = np.random.default_rng(88)
@@ -143,9 +144,9 @@ def m8_solver_reports() -> float:
 
 @M8.check(Level.FLOAT64, tol=1e-14)
 def m8_algebra_operators() -> float:
-    """symrb.vee, symrb.commutator, symrb.algebra.skew_part, inertia_from_lam and
-    lam_from_inertia against their NumPy definitions (reference.vee, ab - ba, (a - a^T)/2,
-    I_i = lam_j + lam_k and its inverse), n = 3..6, batches of random matrices: max difference
+    r"""symrb.vee, symrb.commutator, symrb.algebra.skew_part, inertia_from_lam and lam_from_inertia
+    against their NumPy definitions (reference.vee, $ab - ba$, $(a - a^T)/2$, $I_i = \lambda_j +
+    \lambda_k$ and its inverse), $n = 3, \dots, 6$, batches of random matrices: max difference
     relative to the size of the entries."""
     import symrb
 
@@ -181,9 +182,9 @@ def _ms_field(lam: np.ndarray) -> Callable[[float, np.ndarray], np.ndarray]:
 
 @M8.check(Level.FLOAT64, tol=1e-9)
 def m8_fields_through_integrate() -> float:
-    """symrb.symmetric.mclachlan_scovel_rhs against (Q J^-1(Q^T B), B J^-1(Q^T B)) in NumPy
-    (reference.J_inv; B = Q S with S skew, n = 3), and symrb.integrate of
-    MultiSampleSymmetricRigidBody (three samples, t in [0, 1], rtol 1e-12) against
+    """symrb.symmetric.mclachlan_scovel_rhs against $(Q J^{-1}(Q^T B), B J^{-1}(Q^T B))$ in NumPy
+    (reference.J_inv; $B = QS$ with $S$ skew, $n = 3$), and symrb.integrate of
+    MultiSampleSymmetricRigidBody (three samples, $t$ in $[0, 1]$, rtol 1e-12) against
     scipy.integrate.solve_ivp on the multi-sample field written in NumPy: max difference."""
     from scipy.integrate import solve_ivp
 

@@ -94,12 +94,12 @@ def _h_for(order: int, options: dict[str, str]) -> float:
 
 @M7.check(Level.MPMATH, tol=0.3)
 def m7_fixed_step_orders() -> float:
-    """Every fixed-step method of simulate (mv at orders 2-10 and its backends, every
-    composition kind of orders 2-8 with the MV and the midpoint base step, RKMK4, midpoint): the
-    order observed from the errors at T = 1 with steps h and h/2 against the 20-digit reference;
-    max |observed order - nominal order| (an order or a base step not passed on, or the momentum
-    scale mixed up, moves it by 2 or more); inf when two compositions of one order (another kind or
-    base step) give the same result (a kind or a step not passed on)."""
+    r"""Every fixed-step method of simulate (mv at orders 2-10 and its backends, every composition
+    kind of orders 2-8 with the MV and the midpoint base step, RKMK4, midpoint): the order observed
+    from the errors at $T = 1$ with steps $h$ and $h/2$ against the 20-digit reference; the largest
+    distance of the observed order from the nominal one (an order or a base step not passed on, or
+    the momentum scale mixed up, moves it by 2 or more); inf when two compositions of one order
+    (another kind or base step) give the same result (a kind or a step not passed on)."""
     from symrb.rigid_body import simulate
 
     Q0, _ = _reference()
@@ -126,10 +126,10 @@ def m7_fixed_step_orders() -> float:
 
 @M7.check(Level.MPMATH, tol=1e-7)
 def m7_solve_ivp_and_exact() -> float:
-    """Every solve_ivp method of simulate at rtol = 1e-10, atol = 1e-12 (DOP853 also with the
-    option condition = True) and the exact solution (with its option check on and off), at
-    T = 1 against the 20-digit reference: max error; and the tolerances are passed on (RK45
-    at rtol = 1e-4 is at least 100 times less accurate than at 1e-10, else the check fails)."""
+    """Every solve_ivp method of simulate at rtol 1e-10, atol 1e-12 (DOP853 also with the option
+    condition=True) and the exact solution (with its option check on and off), at $T = 1$ against
+    the 20-digit reference: max error; and the tolerances are passed on (RK45 at rtol 1e-4 is at
+    least 100 times less accurate than at 1e-10, else the check fails)."""
     from symrb.rigid_body import simulate
     from symrb.rigid_body.ivp import NAMES
 
@@ -160,11 +160,11 @@ _SAMPLED = (
 
 @M7.check(Level.MPMATH, tol=1.0)
 def m7_times_kept() -> float:
-    """t_eval and save_every: for mv (h = 0.01, error about 1e-5), DOP853 (rtol = 1e-10) and
-    exact, from t0 = 0 and from t0 = 2, the returned times are the ones asked for (t_eval =
-    t0 + 0.3, 0.5, 1.0; save_every = 25: t0 + 0, 0.25, ..., 1) and the states there agree with the 20-digit reference to the method's
-    accuracy (1e-4, 1e-8, 1e-12; a state one step of 0.01 off is 1e-2 away): max error / that
-    accuracy (inf when a time differs)."""
+    r"""t_eval and save_every: for mv ($h = 0.01$, error about 1e-5), DOP853 (rtol 1e-10) and exact,
+    from $t_0 = 0$ and from $t_0 = 2$, the returned times are the ones asked for (t_eval at $t_0 +
+    0.3, 0.5, 1.0$; save_every 25: $t_0 + 0, 0.25, \dots, 1$) and the states there agree with the
+    20-digit reference to the method's accuracy (1e-4, 1e-8, 1e-12; a state one step of 0.01 off is
+    1e-2 away): max error over that accuracy (inf when a time differs)."""
     from symrb.rigid_body import simulate
 
     Q0, _ = _reference()

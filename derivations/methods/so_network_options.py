@@ -82,11 +82,12 @@ def _gradient(Q0: np.ndarray, U: np.ndarray, T: np.ndarray) -> np.ndarray:
 
 @M12.check(Level.FLOAT64, tol=1e-12)
 def m12_sweeps_and_gradient() -> float:
-    """symrb.learning.so_network_forward, so_network_costates (with and without its report),
-    so_network_gradients (with its report, alpha = 0.3) and so_extremal_residual (n = 3, 4
-    samples, 3 layers) against the NumPy sweeps, the loss, its complex-step derivative along
-    U_k e^(t xi) and ||alpha J_D(U_k) - sum_a (Q_k^T P_k - P_k^T Q_k)||_F; the reports'
-    condition number is that of multiplying by rotations, 1: max relative difference."""
+    r"""symrb.learning.so_network_forward, so_network_costates (with and without its report),
+    so_network_gradients (with its report, $\alpha = 0.3$) and so_extremal_residual ($n = 3$, 4
+    samples, 3 layers) against the NumPy sweeps, the loss, its complex-step derivative along $U_k
+    e^{t\xi}$ and $\|\alpha J_D(U_k) - \sum_a M^a_k\|_F$, $M^a_k = Q_k^T P_k - P_k^T Q_k$ of sample
+    $a$; the reports' condition number is that of multiplying by rotations, 1: max relative
+    difference."""
     import symrb.learning as sl
 
     Q0, T, U = _data()
@@ -146,12 +147,12 @@ def _procrustes_value(A: np.ndarray) -> float:
 
 @M12.check(Level.FLOAT64, tol=1e-10)
 def m12_trainers() -> float:
-    """symrb.learning.train_so_gradient (3 steps; Cayley and exponential retraction, fixed step
-    0.2 and line search) against Riemannian gradient descent written in NumPy on the
-    complex-step gradient; so_procrustes (random A, det of both signs) reaches the largest
-    tr(AU) over SO(3) in closed form; train_so_msa (2 iterations, rho = 2) against the
-    documented layer-wise maximisation of tr(A_k U) (its value in closed form, the NumPy
-    sweeps): max relative difference of the controls, losses and values."""
+    r"""symrb.learning.train_so_gradient (3 steps; Cayley and exponential retraction, fixed step 0.2
+    and line search) against Riemannian gradient descent written in NumPy on the complex-step
+    gradient; so_procrustes (random $A$, determinant of both signs) reaches the largest
+    $\operatorname{tr}(AU)$ over $\mathrm{SO}(3)$ in closed form; train_so_msa (2 iterations, $\rho
+    = 2$) against the documented layer-wise maximisation of $\operatorname{tr}(A_k U)$ (its value in
+    closed form, the NumPy sweeps): max relative difference of the controls, losses and values."""
     import symrb.learning as sl
 
     Q0, T, U = _data()
@@ -211,12 +212,12 @@ def _shooting_map(Q0: np.ndarray, T: np.ndarray, layers: int) -> Any:
 
 @M12.check(Level.FLOAT64, tol=1e-5)
 def m12_shooting() -> float:
-    """symrb.learning.train_so_shooting (alpha = 0.3, 3 layers; without condition, then with
-    condition = True from the M_0 found): each M_0 is a root of the shooting map written in NumPy (controls from alpha J_D(U_k) =
-    M_k by scipy.optimize.root, momenta transported, the NumPy sweeps), its controls are the
-    map's, and the reported condition number 1/sigma_min(dF/dM_0) agrees with central
-    differences of the NumPy map: max of ||F(M_0)||, the control difference and the relative
-    difference of the condition numbers."""
+    r"""symrb.learning.train_so_shooting ($\alpha = 0.3$, 3 layers; without condition, then with
+    condition=True from the $M_0$ found): each $M_0$ is a root of the shooting map $F$ written in
+    NumPy (controls from $\alpha J_D(U_k) = M_k$ by scipy.optimize.root, momenta transported, the
+    NumPy sweeps), its controls are the map's, and the reported condition number
+    $1/\sigma_{\min}(\partial F/\partial M_0)$ agrees with central differences of the NumPy map: max
+    of $\|F(M_0)\|$, the control difference and the relative difference of the condition numbers."""
     import symrb.learning as sl
 
     Q0, T, _U = _data()

@@ -42,7 +42,8 @@ Where each stage lives: ``schema`` (what every system shares: :class:`SceneError
 :class:`When`, the base model with its hooks, :func:`register_system`), ``parse``
 (:func:`parse_scene`, :func:`load_scene`, the errors with their TOML lines), ``plan``
 (:class:`Plan`, :func:`plan_scene`), ``run`` (:func:`scene_inputs`, :func:`run_scene`),
-``result`` (:class:`SceneResult`), ``store`` (:func:`scene_key`, :class:`SceneStore`), ``sweeps``
+``result`` (:class:`SceneResult`), ``reference`` (:func:`describe_schema`: every key of every
+system, as the scene reference in the book lists them), ``store`` (:func:`scene_key`, :class:`SceneStore`), ``sweeps``
 (:func:`expand_grid`, :func:`sweep`), and ``systems/``, one module per system with its model and
 its hooks ``_inputs``, ``_plan``, ``_run`` (a new system is a new module there).
 
@@ -82,6 +83,7 @@ except ImportError as exc:  # pragma: no cover - exercised in the clean-venv whe
 
 from .parse import load_scene, parse_scene
 from .plan import Plan, plan_scene
+from .reference import SchemaKey, describe_model, describe_schema
 from .result import SceneResult
 from .run import run_scene, scene_inputs
 from .schema import Scene as Scene
@@ -125,6 +127,9 @@ __all__ = [
     "SweepResult",
     "sweep",
     "SONetworkScene",
+    "describe_schema",
+    "describe_model",
+    "SchemaKey",
 ]
 
 adopt_classes(globals(), __all__, __name__)

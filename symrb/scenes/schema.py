@@ -249,6 +249,9 @@ class _SceneBase(_Model):
     #: observable -> the effect it needs (or None)
     OBSERVABLES: ClassVar[dict[str, str | None]] = {}
 
+    #: conserved observables -> the names of their components (empty: numbered), drawn as
+    #: relative drift by :meth:`~symrb.scenes.result.SceneResult.plot`
+    INVARIANTS: ClassVar[dict[str, tuple[str, ...]]] = {}
     #: observables that are state variables, not diagnostics: never listed as not asked for
     STATE_OBSERVABLES: ClassVar[tuple[str, ...]] = ()
     #: the label of the record axis in plots ("t", or "step" for training)

@@ -107,7 +107,8 @@ class SweepResult:
     table : pandas.DataFrame
         One row per grid point: the grid values, ``key``, ``from_cache``, ``seconds``,
         ``success`` and, for every observable with one number per record, its final value
-        (``<name>``) and its largest change from the first record (``<name>_drift``).
+        (``<name>``) and, where it was recorded as a time series (more than one record, not
+        reduced per window), its largest change from the first record (``<name>_drift``).
     results : list of SceneResult
         The results in the table's order (the arrays).
 
@@ -130,7 +131,10 @@ def _summary(point: Mapping[str, Any], r: SceneResult) -> dict[str, Any]:
         arr = np.asarray(a)
         if arr.ndim == 1 and arr.size and not np.iscomplexobj(arr):
             row[name] = float(arr[-1])
-            row[f"{name}_drift"] = float(np.max(np.abs(arr - arr[0])))
+            # a drift only where there is a series of the observable itself: not for one
+            # record (at the end) nor for records that are already per-window reductions
+            if arr.size > 1 and not r.scene.observables[name].reductions:
+                row[f"{name}_drift"] = float(np.max(np.abs(arr - arr[0])))
     return row
 
 

@@ -88,6 +88,7 @@ D1 = claim(
     "point of [[V_lambda]] for a cost multiplier $\\lambda_0$ equal to one or zero, the "
     "multipliers not all zero; with $\\lambda_0$ zero (abnormal) the cost drops out.",
     expected="holds after correction",
+    headline="[[costate]], one multiplier $\\sigma_k$ per step",
     section="2",
     where="Section 2, the first definition (the problem with fixed endpoints $x_0$, $x_N$ and the "
     "constraint $h(u_k) = 0$) and the first proposition (the extremal equations with $H = "
@@ -174,10 +175,10 @@ def _d1_variables(N: int, nx: int, nu: int, nl: int, phantom: bool = False) -> d
 
 @D1.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d1_stationarity() -> sp.Expr:
-    """The derivatives of the displayed V (one multiplier per step, x_0 and x_N fixed) in p_{k+1},
-    x_k, u_k and sigma_k are the displayed state, costate, stationarity and constraint equations
-    over their displayed ranges, and these cover every variable of V once (undefined f, g, h;
-    n = m = 2, l = 1, N = 3)."""
+    r"""The derivatives of the displayed $V$ (one multiplier per step, $x_0$ and $x_N$ fixed) in
+    $p_{k+1}$, $x_k$, $u_k$ and $\sigma_k$ are the displayed state, costate, stationarity and
+    constraint equations over their displayed ranges, and these cover every variable of $V$ once
+    (undefined $f$, $g$, $h$; $n = m = 2$, $l = 1$, $N = 3$)."""
     N = 3
     values = _d1_variables(N, 2, 2, 1)
     fn = _with_hamiltonians(_generic(2, 2, 1))
@@ -237,15 +238,16 @@ def _d1_costate_range_defect(costate: _Steps) -> sp.Expr:
 
 @D1.check(Level.EXACT_RATIONAL, form="printed")
 def d1_printed_costate_at_N() -> sp.Expr:
-    """f = x + u, g = u^2/2, x_0 = 0, x_2 = 1 (n = m = 1): at the exact minimiser, with p_1, p_2
-    from the stationarity conditions, the printed costate equation over its range up to N (with
-    p_3 = 0 and a phantom u_2) is off by |p_2 - dH/dx(0, x_2, u_2)| = 1/2."""
+    r"""$f = x + u$, $g = u^2/2$, $x_0 = 0$, $x_2 = 1$ ($n = m = 1$): at the exact minimiser, with
+    $p_1$, $p_2$ from the stationarity conditions, the printed costate equation over its range up to
+    $N$ (with $p_3 = 0$ and a phantom $u_2$) is off by $|p_2 - \partial H/\partial x(0, x_2, u_2)| =
+    1/2$."""
     return _d1_costate_range_defect(COSTATE_PRINTED)
 
 
 @D1.check(Level.EXACT_RATIONAL, form="corrected")
 def d1_corrected_costate_range() -> sp.Expr:
-    """The same computation with the corrected range 1 <= k <= N - 1: the costate equation holds
+    r"""The same computation with the corrected range $1 \le k \le N-1$: the costate equation holds
     at the minimiser."""
     return _d1_costate_range_defect(COSTATE)
 
@@ -285,16 +287,17 @@ def _d1_multiplier_defect(functional: sp.Eq) -> sp.Expr:
 
 @D1.check(Level.EXACT_RATIONAL, form="printed")
 def d1_printed_single_multiplier() -> sp.Expr:
-    """f = x + u_1, g = (u_1^2 + (u_2 - x)^2)/2, h = u_1 - u_2, N = 2, x_0 = 0, x_2 = 1: at the
-    exact minimiser, the stationarity equations of the printed V (one sigma) in x_1, u_0, u_1 have
-    no solution for (p_1, p_2, sigma): least-squares residual of that linear system."""
+    r"""$f = x + u_1$, $g = (u_1^2 + (u_2 - x)^2)/2$, $h = u_1 - u_2$, $N = 2$, $x_0 = 0$, $x_2 =
+    1$: at the exact minimiser, the stationarity equations of the printed $V$ (one $\sigma$) in
+    $x_1$, $u_0$, $u_1$ have no solution for $(p_1, p_2, \sigma)$: least-squares residual of that
+    linear system."""
     return _d1_multiplier_defect(V_PRINTED)
 
 
 @D1.check(Level.EXACT_RATIONAL, form="corrected")
 def d1_corrected_multipliers() -> sp.Expr:
-    """The same with the corrected V (sigma_k per step): the linear system for (p_1, p_2, sigma_0,
-    sigma_1) is solvable at the minimiser (residual 0)."""
+    r"""The same with the corrected $V$ ($\sigma_k$ per step): the linear system for $(p_1, p_2,
+    \sigma_0, \sigma_1)$ is solvable at the minimiser (residual 0)."""
     return _d1_multiplier_defect(V_DEF)
 
 
@@ -311,15 +314,15 @@ def _d1_rewrite_defect(functional: sp.Eq, rewrite: sp.Eq) -> sp.Expr:
 
 @D1.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d1_printed_rewrite() -> sp.Expr:
-    """The printed V minus the proof's rewrite with the sum up to N and p_{N+1} = 0 does not
-    vanish: it is -Hhat(0, x_N, u_N, sigma) (undefined f, g, h, N = 2)."""
+    r"""The printed $V$ minus the proof's rewrite with the sum up to $N$ and $p_{N+1} = 0$ does not
+    vanish: it is $-\hat H(0, x_N, u_N, \sigma)$ (undefined $f$, $g$, $h$, $N = 2$)."""
     return _d1_rewrite_defect(V_PRINTED, REWRITE_PRINTED)
 
 
 @D1.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d1_corrected_rewrite() -> sp.Expr:
-    """The corrected V minus the corrected rewrite (sum up to N - 1, minus <p_N, x_N>) vanishes
-    identically (undefined f, g, h, N = 2)."""
+    r"""The corrected $V$ minus the corrected rewrite (sum up to $N-1$, minus $\langle p_N,
+    x_N\rangle$) vanishes identically (undefined $f$, $g$, $h$, $N = 2$)."""
     return _d1_rewrite_defect(V_DEF, REWRITE)
 
 
@@ -350,11 +353,11 @@ def d1_any_dimension_defect(v_formula: sp.Eq, N: int = 3) -> int:
 
 @D1.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d1_extremals_any_dimension() -> int:
-    """The displayed V (one multiplier per step, x_0 and x_N fixed) on columns of symbolic sizes
-    n, m, l, undefined f, g, h (Jacobians as matrix symbols): the gradients of its first
-    variation in p_{k+1}, x_k, u_k and sigma_k (SymPy matrix calculus) are the displayed state,
-    costate, stationarity and constraint equations over their displayed ranges, each variable
-    once (N = 3; every dimension)."""
+    r"""The displayed $V$ (one multiplier per step, $x_0$ and $x_N$ fixed) on columns of symbolic
+    sizes $n$, $m$, $l$, undefined $f$, $g$, $h$ (Jacobians as matrix symbols): the gradients of its
+    first variation in $p_{k+1}$, $x_k$, $u_k$ and $\sigma_k$ (SymPy matrix calculus) are the
+    displayed state, costate, stationarity and constraint equations over their displayed ranges,
+    each variable once ($N = 3$; every dimension)."""
     return d1_any_dimension_defect(V_DEF)
 
 
@@ -422,22 +425,22 @@ def _constraint_rank(endpoint: int) -> tuple[int, int]:
 
 @D1.check(Level.EXACT_RATIONAL, form="printed")
 def d1_printed_abnormal_example() -> sp.Expr:
-    """The printed rule (cost multiplier 1) fails where the optimum is forced: f = x + (u_1 +
-    u_2)^2, g = ((u_1 - 1)^2 + u_2^2)/2, h = u_1 - u_2, N = 2, x_0 = 0, x_2 = 0 (n = 1, m = 2,
-    l = 1).  The only admissible control is u_k = 0; there the stationarity equations of the
-    displayed V (one multiplier per step) in x_1, u_0, u_1 have no solution (p_1, p_2, sigma_0,
-    sigma_1): least-squares residual of that linear system (1)."""
+    r"""The printed rule (cost multiplier 1) fails where the optimum is forced: $f = x + (u_1 +
+    u_2)^2$, $g = ((u_1 - 1)^2 + u_2^2)/2$, $h = u_1 - u_2$, $N = 2$, $x_0 = 0$, $x_2 = 0$ ($n = 1$,
+    $m = 2$, $l = 1$). The only admissible control is $u_k = 0$; there the stationarity equations of
+    the displayed $V$ (one multiplier per step) in $x_1$, $u_0$, $u_1$ have no solution $(p_1, p_2,
+    \sigma_0, \sigma_1)$: least-squares residual of that linear system (1)."""
     return _least_squares_residual(*_multiplier_system(0, 1))
 
 
 @D1.check(Level.EXACT_RATIONAL, form="corrected")
 def d1_corrected_normality() -> sp.Expr:
-    """The same f, g, h with x_2 = 0 and with x_2 = 8: the rank of the constraint Jacobian in
-    (x_1, u_0, u_1) at the exact minimiser decides which multiplier exists.  With full row rank
-    (x_2 = 8, minimiser u_k = (1, 1), rank 4 of 4) the normal one (lambda_0 = 1) does
-    (least-squares residual); without it (x_2 = 0, rank 3 of 4) an abnormal one (lambda_0 = 0,
-    (p, sigma) not zero) does (1 if the homogeneous system has only the zero solution); and
-    V_lambda with lambda_0 = 1 is the displayed V."""
+    r"""The same $f$, $g$, $h$ with $x_2 = 0$ and with $x_2 = 8$: the rank of the constraint
+    Jacobian in $(x_1, u_0, u_1)$ at the exact minimiser decides which multiplier exists. With full
+    row rank ($x_2 = 8$, minimiser $u_k = (1, 1)$, rank 4 of 4) the normal one ($\lambda_0 = 1$)
+    does (least-squares residual); without it ($x_2 = 0$, rank 3 of 4) an abnormal one ($\lambda_0 =
+    0$, $(p, \sigma)$ not zero) does (1 if the homogeneous system has only the zero solution); and
+    $V_\lambda$ with $\lambda_0 = 1$ is the displayed $V$."""
     total, kinds = sp.Integer(0), set()
     for endpoint in (0, 8):
         rank, rows = _constraint_rank(endpoint)

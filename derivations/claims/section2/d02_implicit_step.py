@@ -61,6 +61,7 @@ D2 = claim(
     "[[reduced]] (envelope theorem), [[step_jacobian]], so the implicit function theorem needs "
     "that matrix invertible; it equals the printed matrix only when $u^*$ does not depend on $y$.",
     expected="holds after correction",
+    headline="[[step_jacobian]] invertible",
     section="2",
     where="Section 2, the paragraph after the proof of the first proposition: the step is "
     "implicit in $p_{k+1}$ and needs the matrix $\\partial^2 H/\\partial y_i\\,\\partial x_j$ "
@@ -129,16 +130,17 @@ def _d2_defect(named: sp.Basic) -> sp.Expr:
 
 @D2.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d2_printed_matrix() -> sp.Expr:
-    """The printed matrix d^2H/dy dx at u = u* against the true Jacobian of the step in y: in
-    f = x + u, g = (u + x)^2/2 the printed matrix is 1 while the step's Jacobian is 0 (p_k = 0 for
-    every y); in f = a(x) + b(x) u, g = u^2/2 + V(x) they differ by b b' y (count of examples)."""
+    r"""The printed matrix $\partial^2 H/\partial y\,\partial x$ at $u = u^*$ against the true
+    Jacobian of the step in $y$: in $f = x + u$, $g = (u + x)^2/2$ the printed matrix is 1 while the
+    step's Jacobian is 0 ($p_k = 0$ for every $y$); in $f = a(x) + b(x) u$, $g = u^2/2 + V(x)$ they
+    differ by $b b' y$ (count of examples)."""
     return _d2_defect(PRINTED_MATRIX)
 
 
 @D2.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d2_reduced_matrix() -> sp.Expr:
     """The same comparison with the displayed right side of the corrected step Jacobian, the mixed
-    derivative of H* built from the displayed reduced Hamiltonian: equal in both examples."""
+    derivative of $H^*$ built from the displayed reduced Hamiltonian: equal in both examples."""
     return _d2_defect(STEP_JACOBIAN.rhs)
 
 
@@ -160,21 +162,22 @@ def _d2_general_n() -> tuple[sp.MatrixExpr, dict[str, sp.MatrixExpr], Alphabet, 
 
 @D2.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d2_reduced_matrix_general_n() -> sp.Expr:
-    """Every n and m: f = A x + B u, g = x^T P x/2 + x^T S u + u^T R u/2 with matrix symbols (the
-    second-order Taylor polynomials of any problem at a point, which is all the Jacobians
-    involve), u* = R^-1 (B^T y - S^T x) checked to make dH/du vanish: the Jacobian in y of the
-    displayed step (SymPy's matrix calculus), A^T - S R^-1 B^T, equals the transpose (the index
-    order) of the displayed mixed derivative of the displayed H* (words left after cancelling
-    R R^-1)."""
+    r"""Every $n$ and $m$: $f = A x + B u$, $g = \frac12 x^T P x + x^T S u + \frac12 u^T R u$ with
+    matrix symbols (the second-order Taylor polynomials of any problem at a point, which is all the
+    Jacobians involve), $u^* = R^{-1} (B^T y - S^T x)$ checked to make $\partial H/\partial u$
+    vanish: the Jacobian in $y$ of the displayed step (SymPy's matrix calculus), $A^T - S R^{-1}
+    B^T$, equals the transpose (the index order) of the displayed mixed derivative of the displayed
+    $H^*$ (words left after cancelling $R R^{-1}$)."""
     jac, shown, w, stationary = _d2_general_n()
     return stationary + w.is_zero(w.nc(jac - shown["corrected"].T))
 
 
 @D2.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def d2_printed_matrix_general_n() -> sp.Expr:
-    """The same problem: the printed d^2H/dy dx at fixed u (A, or A^T in the other index order)
-    differs from the step's Jacobian by the word S R^-1 B^T, i.e. H_xu H_uu^-1 H_uy, for every n
-    and m (fewest words left over both index orders)."""
+    r"""The same problem: the printed $\partial^2 H/\partial y\,\partial x$ at fixed $u$ ($A$, or
+    $A^T$ in the other index order) differs from the step's Jacobian by the word $S R^{-1} B^T$,
+    i.e. $H_{xu} H_{uu}^{-1} H_{uy}$, for every $n$ and $m$ (fewest words left over both index
+    orders)."""
     jac, shown, w, _stationary = _d2_general_n()
     return sp.Min(*(w.is_zero(w.nc(jac - m)) for m in (shown["printed"], shown["printed"].T)))
 

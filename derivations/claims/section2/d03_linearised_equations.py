@@ -48,6 +48,7 @@ D3 = claim(
     corrected="[[corrected]] with the second derivatives of the reduced Hamiltonian [[reduced]]; "
     "the entry $(i, j)$ of $H^*_{xy}$ is the derivative in $x_i$ and $y_j$.",
     expected="holds after correction",
+    headline="[[corrected]]",
     section="2",
     where="Section 2, the corollary (its only one): the differentials $dp_k$ and $dx_{k+1}$ of "
     "the extremal equations",
@@ -171,23 +172,23 @@ def _d3_symbolic_defect(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], ki
 
 @D3.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d3_corrected() -> sp.Expr:
-    """f = a(x) + B u, g = |u|^2/2 + V(x) (a, V undefined, n = m = 2): the displayed corrected
-    equations with the blocks of H* reproduce the Jacobians of the true maps (x_k, p_{k+1}) ->
-    (p_k, x_{k+1}) (count of mismatching entries)."""
+    r"""$f = a(x) + B u$, $g = |u|^2/2 + V(x)$ ($a$, $V$ undefined, $n = m = 2$): the displayed
+    corrected equations with the blocks of $H^*$ reproduce the Jacobians of the true maps $(x_k,
+    p_{k+1}) \mapsto (p_k, x_{k+1})$ (count of mismatching entries)."""
     return _d3_symbolic_defect(LINEARISED, _R, "reduced")
 
 
 @D3.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d3_printed_frozen_control() -> sp.Expr:
-    """Same family: the printed equations with second derivatives of Hhat at frozen u* mismatch
-    (the dp_{k+1} coefficient of dx_{k+1} is 0 instead of B B^T), for either index convention of
-    the mixed matrix (smallest count of mismatching entries)."""
+    r"""Same family: the printed equations with second derivatives of $\hat H$ at frozen $u^*$
+    mismatch (the $dp_{k+1}$ coefficient of $dx_{k+1}$ is 0 instead of $B B^T$), for either index
+    convention of the mixed matrix (smallest count of mismatching entries)."""
     return _d3_symbolic_defect(LINEARISED_PRINTED, _P, "frozen")
 
 
 @D3.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d3_printed_same_matrix() -> sp.Expr:
-    """Same family, printed equations with the blocks of H*: one mixed matrix in both lines
+    """Same family, printed equations with the blocks of $H^*$: one mixed matrix in both lines
     mismatches for either index convention (smallest count of mismatching entries)."""
     return _d3_symbolic_defect(LINEARISED_PRINTED, _P, "reduced")
 
@@ -228,25 +229,27 @@ def _d3_general_n(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind: st
 
 @D3.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d3_corrected_general_n() -> sp.Expr:
-    """Every n and m: f = A x + B u, g = x^T P x/2 + x^T S u + u^T R u/2 (matrix symbols, P and R
-    symmetric, R invertible): the displayed corrected equations with the blocks of H* (H*_xx =
-    S R^-1 S^T - P, H*_xy = A^T - S R^-1 B^T, H*_yy = B R^-1 B^T) reproduce the differentials
-    of the true maps (x_k, p_{k+1}) -> (p_k, x_{k+1}) (words left)."""
+    r"""Every $n$ and $m$: $f = A x + B u$, $g = \frac12 x^T P x + x^T S u + \frac12 u^T R u$
+    (matrix symbols, $P$ and $R$ symmetric, $R$ invertible): the displayed corrected equations with
+    the blocks of $H^*$ ($H^*_{xx} = S R^{-1} S^T - P$, $H^*_{xy} = A^T - S R^{-1} B^T$, $H^*_{yy} =
+    B R^{-1} B^T$) reproduce the differentials of the true maps $(x_k, p_{k+1}) \mapsto (p_k,
+    x_{k+1})$ (words left)."""
     return _d3_general_n(LINEARISED, _R, "reduced")
 
 
 @D3.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def d3_printed_general_n() -> sp.Expr:
-    """The same problem: the printed equations with the second derivatives of Hhat at frozen u*
-    miss them for every n and m (its dp_{k+1} coefficient in dx_{k+1} is 0, not B R^-1 B^T), for
-    either index order of the mixed matrix (fewest words left)."""
+    r"""The same problem: the printed equations with the second derivatives of $\hat H$ at frozen
+    $u^*$ miss them for every $n$ and $m$ (its $dp_{k+1}$ coefficient in $dx_{k+1}$ is 0, not $B
+    R^{-1} B^T$), for either index order of the mixed matrix (fewest words left)."""
     return _d3_general_n(LINEARISED_PRINTED, _P, "frozen")
 
 
 @D3.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def d3_printed_same_matrix_general_n() -> sp.Expr:
-    """The same problem, printed equations with the blocks of H*: one mixed matrix in both lines
-    misses them for either index order (fewest words left; A^T - S R^-1 B^T is not symmetric)."""
+    """The same problem, printed equations with the blocks of $H^*$: one mixed matrix in both lines
+    misses them for either index order (fewest words left; $A^T - S R^{-1} B^T$ is not symmetric).
+    """
     return _d3_general_n(LINEARISED_PRINTED, _P, "reduced")
 
 
@@ -283,17 +286,17 @@ def _d3_float_defect(formulas: tuple[sp.Eq, sp.Eq], names: dict[str, Any], kind:
 
 @D3.check(Level.FLOAT64, tol=1e-11, form="corrected")
 def d3_nonlinear_corrected() -> float:
-    """f = x + 0.3 tanh(W x + B u + c), g = |u|^2/2 + |x|^2/4 (u* depends on x and p_{k+1};
-    n = 3, m = 2, 3 random points): the displayed corrected equations with the blocks of H*
-    (Schur complements) against the Jacobian of the implicit advance map from scipy root and
-    implicit differentiation (largest entry of the mismatch; entries are of order 1)."""
+    r"""$f = x + 0.3 \tanh(W x + B u + c)$, $g = |u|^2/2 + |x|^2/4$ ($u^*$ depends on $x$ and
+    $p_{k+1}$; $n = 3$, $m = 2$, 3 random points): the displayed corrected equations with the blocks
+    of $H^*$ (Schur complements) against the Jacobian of the implicit advance map from scipy root
+    and implicit differentiation (largest entry of the mismatch; entries are of order 1)."""
     return _d3_float_defect(LINEARISED, _R, "reduced")
 
 
 @D3.check(Level.FLOAT64, tol=1e-11, form="printed")
 def d3_nonlinear_printed() -> float:
-    """Same family: the printed equations with blocks of Hhat at frozen u* miss that Jacobian for
-    either index convention."""
+    r"""Same family: the printed equations with blocks of $\hat H$ at frozen $u^*$ miss that
+    Jacobian for either index convention."""
     return _d3_float_defect(LINEARISED_PRINTED, _P, "frozen")
 
 

@@ -72,8 +72,9 @@ def _symplectic_defect(J: sp.Matrix) -> sp.Matrix:
 
 @D4.check(Level.SYMBOLIC_FIXED_N)
 def d4_symbolic() -> sp.Expr:
-    """D Phi from D3's corrected equations with generic symmetric H*_xx, H*_yy and generic H*_xy
-    (symbolic entries, n = 2): the displayed D Phi^T Omega D Phi - Omega cancels entrywise."""
+    r"""$D\Phi$ from D3's corrected equations with generic symmetric $H^*_{xx}$, $H^*_{yy}$ and
+    generic $H^*_{xy}$ (symbolic entries, $n = 2$): the displayed $D\Phi^T \Omega\, D\Phi - \Omega$
+    cancels entrywise."""
     dim = 2
     Hxx = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"s{min(i, j)}{max(i, j)}"))
     Hyy = sp.Matrix(dim, dim, lambda i, j: sp.Symbol(f"t{min(i, j)}{max(i, j)}"))
@@ -83,11 +84,12 @@ def d4_symbolic() -> sp.Expr:
 
 @D4.check(Level.SYMBOLIC_GENERAL_N)
 def d4_general_n() -> sp.Expr:
-    """Every n: with H*_xx, H*_yy symmetric and H*_xy invertible as noncommutative symbols, the
-    blocks D Phi = [[H*_xy^T - H*_yy H*_xy^-1 H*_xx, H*_yy H*_xy^-1], [-H*_xy^-1 H*_xx,
-    H*_xy^-1]] solve D3's displayed corrected equations (the unique solution: H*_xy is
-    invertible), and the displayed D Phi^T Omega D Phi - Omega, multiplied out in blocks with the
-    displayed Omega, reduces to zero (number of words left)."""
+    r"""Every $n$: with $H^*_{xx}$, $H^*_{yy}$ symmetric and $H^*_{xy}$ invertible as noncommutative
+    symbols, the blocks of $D\Phi$, $(D\Phi)_{11} = H^{*T}_{xy} - H^*_{yy} H^{*-1}_{xy} H^*_{xx}$,
+    $(D\Phi)_{12} = H^*_{yy} H^{*-1}_{xy}$, $(D\Phi)_{21} = -H^{*-1}_{xy} H^*_{xx}$ and
+    $(D\Phi)_{22} = H^{*-1}_{xy}$, solve D3's displayed corrected equations (the unique solution:
+    $H^*_{xy}$ is invertible), and the displayed $D\Phi^T \Omega\, D\Phi - \Omega$, multiplied out
+    in blocks with the displayed $\Omega$, reduces to zero (number of words left)."""
     Hxx, Hxy, Hyy = _R["xx"], _R["xy"], _R["yy"]
     w = Alphabet(symmetric=[str(Hxx.name), str(Hyy.name)], invertible=[str(Hxy.name)])
     Hi = sp.Inverse(Hxy)
@@ -104,8 +106,8 @@ def d4_general_n() -> sp.Expr:
 
 @D4.check(Level.EXACT_RATIONAL)
 def d4_exact_n3() -> sp.Expr:
-    """The same for n = 3 at 4 random rational symmetric H*_xx, H*_yy and invertible rational
-    H*_xy."""
+    """The same for $n = 3$ at 4 random rational symmetric $H^*_{xx}$, $H^*_{yy}$ and invertible
+    rational $H^*_{xy}$."""
     rng = np.random.default_rng(4)
     total = sp.Integer(0)
     done = 0
@@ -134,16 +136,16 @@ def symplecticity_defects(seeds: Sequence[int] = range(5), fd: bool = False) -> 
 
 @D4.check(Level.FLOAT64, tol=1e-12)
 def d4_float64() -> float:
-    """f = x + 0.3 tanh(W x + B u + c), g = |u|^2/2 + |x|^2/4 (5 random families and points,
-    n = 3, m = 2): implicit step by scipy root, D Phi by implicit differentiation, largest entry of
-    the displayed D Phi^T Omega D Phi - Omega (entries of order 1)."""
+    r"""$f = x + 0.3 \tanh(W x + B u + c)$, $g = |u|^2/2 + |x|^2/4$ (5 random families and points,
+    $n = 3$, $m = 2$): implicit step by scipy root, $D\Phi$ by implicit differentiation, largest
+    entry of the displayed $D\Phi^T \Omega\, D\Phi - \Omega$ (entries of order 1)."""
     return float(np.max(symplecticity_defects()))
 
 
 @D4.check(Level.FLOAT64, tol=1e-7)
 def d4_float64_fd() -> float:
-    """The same with D Phi by central differences of the implicit step (step 1e-6, 3 points;
-    the tolerance is the differences' truncation and round-off error)."""
+    r"""The same with $D\Phi$ by central differences of the implicit step (step 1e-6, 3 points; the
+    tolerance is the differences' truncation and round-off error)."""
     return float(np.max(symplecticity_defects(range(3), fd=True)))
 
 

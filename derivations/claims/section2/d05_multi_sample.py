@@ -75,6 +75,7 @@ D5 = claim(
     "free and $h$ a submersion the constraints are always regular, so these hold with the cost "
     "multiplier one at every solution (no abnormal case, unlike the fixed endpoint of D1).",
     expected="holds after correction",
+    headline="[[endpoint]], the endpoint free",
     section="2",
     where="Section 2, the second definition (several samples $a = 1, \\dots, M$ and an endpoint "
     "cost $\\phi$) and the second proposition (extremal equations and the endpoint condition "
@@ -173,10 +174,10 @@ def _d5_variables(N: int, M: int, nx: int, nu: int, nl: int) -> dict[Any, Any]:
 
 @D5.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d5_stationarity() -> sp.Expr:
-    """The derivatives of the displayed V (free endpoint) in p^a_{k+1}, x^a_k, x^a_N, u_k and
-    sigma_k are the displayed state, costate, endpoint, stationarity and constraint equations over
-    their displayed ranges, covering every variable of V once (undefined f, g, h, phi; n = m = 2,
-    l = 1, M = 2 samples, N = 2)."""
+    r"""The derivatives of the displayed $V$ (free endpoint) in $p^a_{k+1}$, $x^a_k$, $x^a_N$, $u_k$
+    and $\sigma_k$ are the displayed state, costate, endpoint, stationarity and constraint equations
+    over their displayed ranges, covering every variable of $V$ once (undefined $f$, $g$, $h$,
+    $\phi$; $n = m = 2$, $l = 1$, $M = 2$ samples, $N = 2$)."""
     N, M = 2, 2
     values = _d5_variables(N, M, 2, 2, 1)
     fn = _with_hamiltonians(_generic(2, 2, 1))
@@ -254,9 +255,9 @@ def _d5_example_defect(endpoint: sp.Eq, costate: _Steps) -> sp.Expr:
 
 @D5.check(Level.EXACT_RATIONAL, form="corrected")
 def d5_corrected_example() -> sp.Expr:
-    """2 samples, N = 2, f = x + u, g = (u^2 + x^2)/2, phi = (x - 1)^2/2, x_0 = 0 and 2: costates
-    from the displayed endpoint condition and costate equation satisfy the displayed stationarity
-    condition at the exact minimiser (sum over k of |sum_a H_u|)."""
+    r"""2 samples, $N = 2$, $f = x + u$, $g = (u^2 + x^2)/2$, $\phi = (x - 1)^2/2$, $x_0 = 0$ and 2:
+    costates from the displayed endpoint condition and costate equation satisfy the displayed
+    stationarity condition at the exact minimiser ($\sum_k |\sum_a H_u|$)."""
     return _d5_example_defect(ENDPOINT, COSTATE5)
 
 
@@ -268,7 +269,7 @@ def d5_printed_endpoint_sign() -> sp.Expr:
 
 @D5.check(Level.EXACT_RATIONAL, form="printed")
 def d5_printed_shared_state() -> sp.Expr:
-    """Same example with eq8.3m's un-indexed x_k (sample 1's state for both samples): the
+    """Same example with eq8.3m's un-indexed $x_k$ (sample 1's state for both samples): the
     stationarity condition fails at the minimiser."""
     return _d5_example_defect(ENDPOINT, COSTATE5_PRINTED)
 
@@ -309,9 +310,9 @@ def _d5_endpoint_defect(fixed: bool) -> sp.Expr:
 
 @D5.check(Level.EXACT_RATIONAL, form="printed")
 def d5_printed_fixed_endpoint() -> sp.Expr:
-    """prob8.1m fixes x_N and adds phi(x_N): with N = 1, f = x + u, g = u^2/2, x_0 = 0, x_1 = 1,
-    phi = (x - 3)^2/2, the stationarity condition gives p_1 = 1 while phi'(1) = -2, so neither
-    endpoint condition holds (smaller mismatch 1)."""
+    r"""prob8.1m fixes $x_N$ and adds $\phi(x_N)$: with $N = 1$, $f = x + u$, $g = u^2/2$, $x_0 =
+    0$, $x_1 = 1$, $\phi = (x - 3)^2/2$, the stationarity condition gives $p_1 = 1$ while $\phi'(1)
+    = -2$, so neither endpoint condition holds (smaller mismatch 1)."""
     return _d5_endpoint_defect(fixed=True)
 
 
@@ -361,22 +362,23 @@ def d5_any_dimension_defect(N: int = 2, M: int = 2) -> int:
 
 @D5.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d5_extremals_any_dimension() -> int:
-    """The displayed V (free endpoint) on columns of symbolic sizes n, m, l with undefined f, g,
-    h, phi (Jacobians as matrix symbols): the gradients of its first variation in p^a_{k+1},
-    x^a_k, x^a_N, u_k and sigma_k (SymPy matrix calculus) are the displayed state, costate,
-    endpoint, stationarity and constraint equations over their displayed ranges, each variable
-    once (M = 2 samples, N = 2; every dimension)."""
+    r"""The displayed $V$ (free endpoint) on columns of symbolic sizes $n$, $m$, $l$ with undefined
+    $f$, $g$, $h$, $\phi$ (Jacobians as matrix symbols): the gradients of its first variation in
+    $p^a_{k+1}$, $x^a_k$, $x^a_N$, $u_k$ and $\sigma_k$ (SymPy matrix calculus) are the displayed
+    state, costate, endpoint, stationarity and constraint equations over their displayed ranges,
+    each variable once ($M = 2$ samples, $N = 2$; every dimension)."""
     return d5_any_dimension_defect()
 
 
 @D5.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d5_free_endpoint_is_normal() -> sp.Expr:
-    """With the endpoint free the multiplier rule needs no extra hypothesis: the Jacobian of the
-    constraints (the derivatives of the displayed V in p^a_{k+1} and sigma_k) in the free
-    variables x^a_1..x^a_N, u_k has, for undefined f and h, a block in the x-columns of the
-    dynamics rows with determinant +-1 and zero x-columns in the constraint rows, so its row rank
-    is N M n plus that of the h'(u_k), full since h is a submersion (n = m = 2, l = 1, M = 2,
-    N = 2): |det| - 1 and the nonzero x-entries of the constraint rows."""
+    r"""With the endpoint free the multiplier rule needs no extra hypothesis: the Jacobian of the
+    constraints (the derivatives of the displayed $V$ in $p^a_{k+1}$ and $\sigma_k$) in the free
+    variables $x^a_1, \dots, x^a_N$, $u_k$ has, for undefined $f$ and $h$, a block in the
+    $x$-columns of the dynamics rows with determinant $\pm 1$ and zero $x$-columns in the constraint
+    rows, so its row rank is $N M n$ plus that of the $h'(u_k)$, full since $h$ is a submersion ($n
+    = m = 2$, $l = 1$, $M = 2$, $N = 2$): $|\det| - 1$ and the nonzero $x$-entries of the constraint
+    rows."""
     N, M = 2, 2
     values = _d5_variables(N, M, 2, 2, 1)
     fn = _with_hamiltonians(_generic(2, 2, 1))

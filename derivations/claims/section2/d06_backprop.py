@@ -112,6 +112,7 @@ D6 = claim(
     "cost only D5's endpoint condition [[endpoint_minus]] gives the gradients of the cost, "
     "[[backprop]] and [[weights]] with $s=-1$.",
     expected="holds after correction",
+    headline="the ResNet layer is [[residual_layer]]",
     section="2",
     where="Section 2, the paragraph 'Remark' that closes the section before Section 2.1: item 1 "
     "(the ResNet layer $f(x, u) = \\sigma(Kx + \\beta)$) and item 2 (the link with "
@@ -207,8 +208,8 @@ for _act, _res in itertools.product(ACTIVATIONS, (True, False)):
 
 @D6.check(Level.SYMBOLIC_FIXED_N)
 def d6_sigmoid() -> sp.Expr:
-    """The activation of the logistic kernels is the displayed sigmoid 1/(1 + e^-z) (read from the
-    emitted step's expression; symbolic z)."""
+    """The activation of the logistic kernels is the displayed sigmoid $1/(1 + e^{-z})$ (read from
+    the emitted step's expression; symbolic $z$)."""
     z = sp.Symbol("z", real=True)
     total = sp.Integer(0)
     for res in (True, False):
@@ -221,9 +222,10 @@ def d6_sigmoid() -> sp.Expr:
 
 @D6.check(Level.SYMBOLIC_FIXED_N)
 def d6_kernels() -> sp.Expr:
-    """Each emitted step equals the displayed layer with sigma its activation and h = 1, and each
-    emitted adjoint returns the explicit gradients in x, K and beta of the displayed H with f the
-    emitted step and g = 0 (symbolic entries, n = 3, tanh and logistic, residual and plain)."""
+    r"""Each emitted step equals the displayed layer with $\sigma$ its activation and $h = 1$, and
+    each emitted adjoint returns the explicit gradients in $x$, $K$ and $\beta$ of the displayed $H$
+    with $f$ the emitted step and $g = 0$ (symbolic entries, $n = 3$, tanh and logistic, residual
+    and plain)."""
     env = _layer_env(3)
     total = sp.Integer(0)
     for (act, res), kernel in STEP_KERNELS.items():
@@ -246,9 +248,9 @@ def d6_kernels() -> sp.Expr:
 
 @D6.check(Level.SYMBOLIC_FIXED_N)
 def d6_adjoint_formulas() -> sp.Expr:
-    """The displayed adjoint formulas of both layers (generic activation sigma, step h) are the
-    gradients in x, K and beta of the displayed H with f the displayed layer and g = 0 (symbolic
-    entries, n = 2)."""
+    r"""The displayed adjoint formulas of both layers (generic activation $\sigma$, step $h$) are
+    the gradients in $x$, $K$ and $\beta$ of the displayed $H$ with $f$ the displayed layer and $g =
+    0$ (symbolic entries, $n = 2$)."""
     dim = 2
     env = _layer_env(dim)
     u = sp.Matrix([*env["K"], *env["beta"]])
@@ -358,25 +360,25 @@ def _backprop_defect(
 
 @D6.check(Level.EXACT_RATIONAL)
 def d6_backprop_no_running_cost() -> int:
-    """Both layers with a generic activation sigma, N = 2 layers, M = 2 samples, n = 2, random
-    rational weights, inputs and target, phi = |x - c|^2/2, g = 0: with the displayed endpoint
-    condition, the costates satisfy the displayed backprop relation at every layer and the weight
-    gradients of the cost the displayed weights relation, for s = 1 (m8) and s = -1 (D5)."""
+    r"""Both layers with a generic activation $\sigma$, $N = 2$ layers, $M = 2$ samples, $n = 2$,
+    random rational weights, inputs and target, $\phi = |x - c|^2/2$, $g = 0$: with the displayed
+    endpoint condition, the costates satisfy the displayed backprop relation at every layer and the
+    weight gradients of the cost the displayed weights relation, for $s = 1$ (m8) and $s = -1$ (D5).
+    """
     return _backprop_defect(ENDPOINT_S, (1, -1), running_cost=False)
 
 
 @D6.check(Level.EXACT_RATIONAL, form="printed")
 def d6_printed_m8_running_cost() -> int:
-    """The same computation (residual layer, one sample) with a running cost
-    g = (|x|^2 + |u|^2)/3 and m8's endpoint condition: the backprop and weights relations with
-    s = 1 fail (count of failing entries)."""
+    """The same computation (residual layer, one sample) with a running cost $g = (|x|^2 + |u|^2)/3$
+    and m8's endpoint condition: the backprop and weights relations with $s = 1$ fail (count of
+    failing entries)."""
     return _backprop_defect(M8, (1,), running_cost=True, layers=(RESIDUAL_LAYER,), M=1)
 
 
 @D6.check(Level.EXACT_RATIONAL, form="corrected")
 def d6_corrected_running_cost() -> int:
-    """The same with D5's endpoint condition: the backprop and weights relations with s = -1
-    hold."""
+    """The same with D5's endpoint condition: the backprop and weights relations with $s = -1$ hold."""
     return _backprop_defect(ENDPOINT, (-1,), running_cost=True, layers=(RESIDUAL_LAYER,), M=1)
 
 
@@ -394,24 +396,25 @@ def _identity_defect(shown: sp.Eq) -> sp.Expr:
 
 @D6.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d6_printed_plain_is_not_residual() -> sp.Expr:
-    """Remark 1's layer sigma(K x + beta) is not a perturbation of the identity: its Jacobian in x
-    at K = 0 is 0, not I (count of mismatching entries, generic sigma, n = 2)."""
+    r"""Remark 1's layer $\sigma(K x + \beta)$ is not a perturbation of the identity: its Jacobian
+    in $x$ at $K = 0$ is 0, not $I$ (count of mismatching entries, generic $\sigma$, $n = 2$)."""
     return _identity_defect(PLAIN_LAYER)
 
 
 @D6.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d6_residual_layer_is_residual() -> sp.Expr:
-    """The residual layer x + h sigma(K x + beta) has Jacobian I in x at K = 0, for every beta and
-    h (generic sigma, n = 2)."""
+    r"""The residual layer $x + h \sigma(K x + \beta)$ has Jacobian $I$ in $x$ at $K = 0$, for every
+    $\beta$ and $h$ (generic $\sigma$, $n = 2$)."""
     return _identity_defect(RESIDUAL_LAYER)
 
 
 @D6.check(Level.FLOAT64, tol=1e-12)
 def d6_float64() -> float:
-    """symrb.learning.resnet_forward, symrb.learning.costate_sweep and symrb.learning.loss_gradients (both activations, both
-    layers; n = 3, N = 4, M = 5, 2 random networks) against an independent NumPy forward pass and
-    complex-step derivatives of its loss: states, -p (D5's sign) against dPhi/dx^a_k, and the
-    weight gradients; largest error relative to the largest reference entry."""
+    r"""symrb.learning.resnet_forward, symrb.learning.costate_sweep and
+    symrb.learning.loss_gradients (both activations, both layers; $n = 3$, $N = 4$, $M = 5$, 2
+    random networks) against an independent NumPy forward pass and complex-step derivatives of its
+    loss: states, $-p$ (D5's sign) against $\partial\Phi/\partial x^a_k$, and the weight gradients;
+    largest error relative to the largest reference entry."""
     import symrb
 
     errors = []
@@ -440,11 +443,13 @@ def _layer_at(shown: sp.Basic, K: Any, x: Any, beta: Any, p: Any = None) -> Any:
 
 @D6.check(Level.SYMBOLIC_GENERAL_N)
 def d6_adjoint_formulas_general_n() -> sp.Expr:
-    """Every n: the displayed adjoint formulas of both layers (generic sigma, step h) are the
-    gradients of the displayed H with f the displayed layer and g = 0: the derivative of H along
-    dx, dK and dbeta (SymPy's differentiation in t of H(x + t dx, ...), sigma' entrywise) equals
-    <dH/dx, dx>, tr((dH/dK)^T dK) and <dH/dbeta, dbeta> from the displayed formulas (trace words
-    left; sigma'(z) o v is diag(sigma'(z)) v, a symmetric letter)."""
+    r"""Every $n$: the displayed adjoint formulas of both layers (generic $\sigma$, step $h$) are
+    the gradients of the displayed $H$ with $f$ the displayed layer and $g = 0$: the derivative of
+    $H$ along $dx$, $dK$ and $d\beta$ (SymPy's differentiation in $t$ of $H(x + t\,dx, \dots)$,
+    $\sigma'$ entrywise) equals $\langle \partial H/\partial x, dx\rangle$,
+    $\operatorname{tr}((\partial H/\partial K)^T dK)$ and $\langle \partial H/\partial\beta,
+    d\beta\rangle$ from the displayed formulas (trace words left; $\sigma'(z) \circ v$ is
+    $\operatorname{diag}(\sigma'(z))\, v$, a symmetric letter)."""
     w = Alphabet(symmetric=[])
     d = {"x": vector("dx"), "K": matrix("dK"), "beta": vector("dbeta")}
     fn = {"f": lambda x, u: _layer_at(u[2], u[0], x, u[1]), "g": lambda x, u: sp.ZeroMatrix(1, 1)}
@@ -512,13 +517,14 @@ _n0, _n1, _n2 = sp.symbols("n_0 n_1 n_2", integer=True, positive=True)
 
 @D6.check(Level.SYMBOLIC_GENERAL_N)
 def d6_backprop_general_n() -> sp.Expr:
-    """Every width: two displayed plain layers R^{n_0} -> R^{n_1} -> R^{n_2} (K_k of size
-    n_{k+1} x n_k) and two residual layers (width n), generic sigma, one sample, the loss
-    gradient at x_2 a vector symbol G: with the displayed endpoint condition p_2 = s G and the
-    displayed adjoint, p_k paired with dx_k equals s times the derivative of the loss along dx_k
-    (SymPy's differentiation of the composed layers), the displayed backprop relation; and the
-    derivatives along dK_k, dbeta_k equal s times the pairing with the displayed dH/dK, dH/dbeta,
-    the displayed weights relation (s = 1 and s = -1).  Any number of layers follows by induction:
+    r"""Every width: two displayed plain layers $\mathbb{R}^{n_0} \to \mathbb{R}^{n_1} \to
+    \mathbb{R}^{n_2}$ ($K_k$ of size $n_{k+1} \times n_k$) and two residual layers (width $n$),
+    generic $\sigma$, one sample, the loss gradient at $x_2$ a vector symbol $G$: with the displayed
+    endpoint condition $p_2 = s G$ and the displayed adjoint, $p_k$ paired with $dx_k$ equals $s$
+    times the derivative of the loss along $dx_k$ (SymPy's differentiation of the composed layers),
+    the displayed backprop relation; and the derivatives along $dK_k$, $d\beta_k$ equal $s$ times
+    the pairing with the displayed $\partial H/\partial K$, $\partial H/\partial\beta$, the
+    displayed weights relation ($s = 1$ and $s = -1$). Any number of layers follows by induction:
     each step is the chain rule through one layer (trace words left)."""
     return _network_defect(PLAIN_LAYER, ADJOINT_PLAIN, (_n0, _n1, _n2)) + _network_defect(
         RESIDUAL_LAYER, ADJOINT, (n, n, n)
@@ -536,15 +542,15 @@ def _identity_general_n(shown: sp.Eq) -> sp.Expr:
 
 @D6.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def d6_printed_plain_is_not_residual_general_n() -> sp.Expr:
-    """Every n: the derivative of Remark 1's layer sigma(K x + beta) along dx at K = 0 is 0, not
-    the displayed I dx (words left)."""
+    r"""Every $n$: the derivative of Remark 1's layer $\sigma(K x + \beta)$ along $dx$ at $K = 0$ is
+    0, not the displayed $I\,dx$ (words left)."""
     return _identity_general_n(PLAIN_LAYER)
 
 
 @D6.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d6_residual_layer_is_residual_general_n() -> sp.Expr:
-    """Every n: the derivative of x + h sigma(K x + beta) along dx at K = 0 is the displayed
-    I dx, for every beta and h (words left)."""
+    r"""Every $n$: the derivative of $x + h \sigma(K x + \beta)$ along $dx$ at $K = 0$ is the
+    displayed $I\,dx$, for every $\beta$ and $h$ (words left)."""
     return _identity_general_n(RESIDUAL_LAYER)
 
 
@@ -588,16 +594,16 @@ def _running_cost_general_n(endpoint: sp.Eq, s: int) -> sp.Expr:
 
 @D6.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def d6_printed_m8_running_cost_general_n() -> sp.Expr:
-    """Every n, with a running cost g = x^T R x/2 (R a symmetric matrix symbol), two displayed
-    residual layers, phi = G^T x: with m8's endpoint condition the costates are not the gradients
-    of the displayed cost (s = 1), for every n (trace words left)."""
+    r"""Every $n$, with a running cost $g = x^T R x/2$ ($R$ a symmetric matrix symbol), two
+    displayed residual layers, $\phi = G^T x$: with m8's endpoint condition the costates are not the
+    gradients of the displayed cost ($s = 1$), for every $n$ (trace words left)."""
     return _running_cost_general_n(M8, 1)
 
 
 @D6.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def d6_corrected_running_cost_general_n() -> sp.Expr:
-    """The same with D5's endpoint condition: the costates are minus the gradients of the
-    displayed cost (s = -1) at every layer, for every n."""
+    """The same with D5's endpoint condition: the costates are minus the gradients of the displayed
+    cost ($s = -1$) at every layer, for every $n$."""
     return _running_cost_general_n(ENDPOINT, -1)
 
 

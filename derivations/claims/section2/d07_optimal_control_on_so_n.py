@@ -127,6 +127,7 @@ D7 = claim(
     "and even $N$ every $U_k$ is the half-turn about the axis of $\\lambda_1$), and symrb's "
     "flow started from its $Q_0$ and $M_0$ leaves it.",
     expected="holds after correction",
+    headline="[[dynamics]]; the discrete rigid body maximises [[cost]]",
     section="2.1",
     where="Section 2.1 (The discrete symmetric rigid body), the first definition (minimise "
     "$\\sum_k \\operatorname{tr}(\\Lambda U_k)$ subject to $Q_{k+1} = Q_k U_k$) and the first "
@@ -190,9 +191,10 @@ FLIP_DET = D7.formula("flip_det", eq(sp.Determinant(-Pk), (-1) ** n * sp.Determi
 
 @D7.check(Level.SYMBOLIC_FIXED_N)
 def d7_critical_points() -> sp.Expr:
-    """Along U(I + e xi), xi skew, d/de tr(AU(I + e xi)) at 0 equals -sum_{i<j} xi_ij D_ij with
-    D = AU - U^T A^T the displayed critical-point condition (lhs - rhs): the derivative vanishes
-    for every skew xi exactly when it holds (general A and U, n = 3)."""
+    r"""Along $U(I + e\xi)$, $\xi$ skew, $\frac{d}{de}\,\operatorname{tr}(AU(I + e\xi))$ at 0 equals
+    $-\sum_{i<j} \xi_{ij} D_{ij}$ with $D = AU - U^T A^T$ the displayed critical-point condition
+    (lhs - rhs): the derivative vanishes for every skew $\xi$ exactly when it holds (general $A$ and
+    $U$, $n = 3$)."""
     A3, U3, xi = general_matrix("a", 3), general_matrix("u", 3), skew_matrix("x", 3)
     eps = sp.Symbol("epsilon")
     f = (A3 * U3 * (sp.eye(3) + eps * xi)).trace()
@@ -203,8 +205,9 @@ def d7_critical_points() -> sp.Expr:
 
 @D7.check(Level.SYMBOLIC_FIXED_N)
 def d7_multiplier_derivative() -> sp.Expr:
-    """The proof's derivative: d/de of the displayed V~(U + e dU) at 0, with a symmetric n x n
-    Sigma, equals the displayed tr(A dU + Sigma U^T dU) (general A, U, dU, n = 3)."""
+    r"""The proof's derivative: $\frac{d}{de}$ of the displayed $\tilde V(U + e\,dU)$ at 0, with a
+    symmetric $n \times n$ $\Sigma$, equals the displayed $\operatorname{tr}(A\,dU + \Sigma U^T dU)$
+    (general $A$, $U$, $dU$, $n = 3$)."""
     A3, U3, dU = general_matrix("a", 3), general_matrix("u", 3), general_matrix("d", 3)
     Sig = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"s{min(i, j) + 1}{max(i, j) + 1}", real=True))
     eps = sp.Symbol("epsilon")
@@ -225,24 +228,25 @@ def _multiplier_mismatch(size: int) -> int:
 
 @D7.check(Level.EXACT_RATIONAL, form="corrected")
 def d7_multiplier_n_by_n() -> int:
-    """Lagrange multipliers: one per independent scalar constraint.  The constraint U^T U - I of
-    the displayed V~ has rank-6 derivative at a rational rotation (n = 3, exact); a symmetric
-    n x n Sigma has 6 entries: mismatch |6 - 6|."""
+    r"""Lagrange multipliers: one per independent scalar constraint. The constraint $U^T U - I$ of
+    the displayed $\tilde V$ has rank-6 derivative at a rational rotation ($n = 3$, exact); a
+    symmetric $n \times n$ $\Sigma$ has 6 entries: mismatch $|6 - 6|$."""
     return _multiplier_mismatch(3)
 
 
 @D7.check(Level.EXACT_RATIONAL, form="printed")
 def d7_multiplier_N_by_N() -> int:
-    """The same count with the printed N x N Sigma (N = 4 steps, n = 3): 10 multipliers for 6
-    independent constraints."""
+    r"""The same count with the printed $N \times N$ $\Sigma$ ($N = 4$ steps, $n = 3$): 10
+    multipliers for 6 independent constraints."""
     return _multiplier_mismatch(4)
 
 
 @D7.check(Level.SYMBOLIC_GENERAL_N)
 def d7_symequation() -> sp.Expr:
-    """With A = P_{k+1}^T Q_k - Lambda from the displayed H and U_k orthogonal, U_k (displayed
-    critical condition, lhs - rhs) U_k^T + (displayed symequation, lhs - rhs) reduces to 0
-    (noncommutative symbols, every n)."""
+    r"""With $A = P_{k+1}^T Q_k - \Lambda$ from the displayed $H$ and $U_k$ orthogonal, the
+    displayed critical condition (lhs - rhs) multiplied by $U_k$ on the left and by $U_k^T$ on the
+    right, plus the displayed symequation (lhs - rhs), reduces to 0 (noncommutative symbols, every
+    $n$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["U_k"])
     _c, factors = HAMILTONIAN.rhs.arg.as_coeff_matrices()  # H = tr(A U_k)
     if factors[-1] != Uk:  # pragma: no cover - the displayed H is fixed above
@@ -255,8 +259,9 @@ def d7_symequation() -> sp.Expr:
 
 @D7.check(Level.SYMBOLIC_FIXED_N)
 def d7_costate_gradients() -> sp.Expr:
-    """The gradients of the displayed H: dH/dQ_k is the displayed costate right side P_{k+1}
-    U_k^T and dH/dP_{k+1} is Q_k U_k (entrywise, general matrices, n = 3)."""
+    r"""The gradients of the displayed $H$: $\partial H/\partial Q_k$ is the displayed costate right
+    side $P_{k+1} U_k^T$ and $\partial H/\partial P_{k+1}$ is $Q_k U_k$ (entrywise, general
+    matrices, $n = 3$)."""
     lam = _lam(3)
     Qx, Px, Ux = general_matrix("q", 3), general_matrix("p", 3), general_matrix("u", 3)
     env = {"Q_k": Qx, "P_{k+1}": Px, "U_k": Ux}
@@ -268,9 +273,9 @@ def d7_costate_gradients() -> sp.Expr:
 
 @D7.check(Level.SYMBOLIC_GENERAL_N)
 def d7_final_and_flip() -> sp.Expr:
-    """With P_{k+1} = P_k U_k (U_k orthogonal) the displayed symequation's right side is the
-    displayed equ_final_th_2.7 right side, and P -> -P turns that into the right side of the
-    displayed Ukdef (noncommutative symbols, every n)."""
+    r"""With $P_{k+1} = P_k U_k$ ($U_k$ orthogonal) the displayed symequation's right side is the
+    displayed equ_final_th_2.7 right side, and $P \mapsto -P$ turns that into the right side of the
+    displayed Ukdef (noncommutative symbols, every $n$)."""
     w = Words(orthogonal=["U_k"])
     step = {Pk1: Pk * Uk}
     r = w.is_zero(w.of(SYMEQUATION.rhs.xreplace(step)) - w.of(FINAL.rhs))
@@ -295,14 +300,14 @@ def _mv_functional_gap(dynamics: sp.Eq) -> sp.Expr:
 
 @D7.check(Level.EXACT_RATIONAL, form="corrected")
 def d7_mv_functional_corrected() -> sp.Expr:
-    """The proof's identity (displayed sums) along the corrected dynamics Q_{r+1} = Q_r U_r with
-    three exact rational rotations U_r (n = 3): |left - right|."""
+    r"""The proof's identity (displayed sums) along the corrected dynamics $Q_{r+1} = Q_r U_r$ with
+    three exact rational rotations $U_r$ ($n = 3$): $|\mathrm{left} - \mathrm{right}|$."""
     return _mv_functional_gap(DYNAMICS)
 
 
 @D7.check(Level.EXACT_RATIONAL, form="printed")
 def d7_mv_functional_printed() -> sp.Expr:
-    """The same identity along the printed dynamics Q_{r+1} = Q_k U_r (k frozen at 0)."""
+    """The same identity along the printed dynamics $Q_{r+1} = Q_k U_r$ ($k$ frozen at 0)."""
     return _mv_functional_gap(DYNAMICS_PRINTED)
 
 
@@ -323,17 +328,18 @@ def _costate_gap(P0_formula: sp.Eq) -> float:
 
 @D7.check(Level.FLOAT64, tol=1e-13, form="corrected")
 def d7_costate_in_SO_is_a_choice() -> float:
-    """The costate P_0 = Q_0 exp(asinh(M_0/2)) (displayed; in SO(3)) run through
-    symrb.symmetric_flow for 12 steps gives the Q_k of the 50-digit reference started from
-    P_0 = Q_0 M_0/2, and every P_k stays in SO(3): largest of max|Q_k - Q_k(ref)|,
-    max|P_k^T P_k - I|, max|det P_k - 1| (h = 0.1, ||M_0||_op = 1.66)."""
+    r"""The costate $P_0 = Q_0 \exp(\operatorname{asinh}(M_0/2))$ (displayed; in $\mathrm{SO}(3)$)
+    run through symrb.symmetric_flow for 12 steps gives the $Q_k$ of the 50-digit reference started
+    from $P_0 = Q_0 M_0/2$, and every $P_k$ stays in $\mathrm{SO}(3)$: largest of $\max|Q_k -
+    Q_k^{\mathrm{ref}}|$, $\max|P_k^T P_k - I|$, $\max|\det P_k - 1|$ ($h = 0.1$,
+    $\|M_0\|_{\mathrm{op}} = 1.66$)."""
     return _costate_gap(P0_SO)
 
 
 @D7.check(Level.FLOAT64, tol=1e-13, form="printed")
 def d7_costate_in_SO_printed() -> float:
-    """The same residual for the costate P_0 = Q_0 M_0/2 of the same extremal (displayed): it
-    gives the same Q_k, but P_k is not in SO(3)."""
+    r"""The same residual for the costate $P_0 = Q_0 M_0/2$ of the same extremal (displayed): it
+    gives the same $Q_k$, but $P_k$ is not in $\mathrm{SO}(3)$."""
     return _costate_gap(P0_GL)
 
 
@@ -349,14 +355,14 @@ def _flip_gap(relation: sp.Eq) -> sp.Expr:
 
 @D7.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d7_flip_determinant() -> sp.Expr:
-    """The displayed det(-P) = (-1)^n det(P) for a general symbolic P, n = 2 and n = 3."""
+    r"""The displayed $\det(-P) = (-1)^n \det(P)$ for a general symbolic $P$, $n = 2$ and $n = 3$."""
     return _flip_gap(FLIP_DET)
 
 
 @D7.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def d7_flip_determinant_printed() -> sp.Expr:
-    """The same residual for det(-P) = det(P), which keeping -P in SO(n) needs: it fails for
-    n = 3."""
+    r"""The same residual for $\det(-P) = \det(P)$, which keeping $-P$ in $\mathrm{SO}(n)$ needs: it
+    fails for $n = 3$."""
     return _flip_gap(FLIP_PRINTED)
 
 
@@ -377,14 +383,15 @@ def _ukdef_count_n2(on_branch: bool) -> sp.Expr:
 
 @D7.check(Level.EXACT_RATIONAL, form="corrected")
 def d7_ukdef_branch_n2() -> sp.Expr:
-    """n = 2, exact: the solutions in SO(2) of the emitted J_D(U) = M (a rational point) that lie
-    on the branch through I: |count - 1|."""
+    r"""$n = 2$, exact: the solutions in $\mathrm{SO}(2)$ of the emitted $J_D(U) = M$ (a rational
+    point) that lie on the branch through $I$: $|\mathrm{count} - 1|$."""
     return _ukdef_count_n2(on_branch=True)
 
 
 @D7.check(Level.EXACT_RATIONAL, form="printed")
 def d7_ukdef_unique_n2() -> sp.Expr:
-    """The same count over all of SO(2): the rotations by theta and pi - theta both solve it."""
+    r"""The same count over all of $\mathrm{SO}(2)$: the rotations by $\theta$ and $\pi - \theta$
+    both solve it."""
     return _ukdef_count_n2(on_branch=False)
 
 
@@ -400,25 +407,27 @@ def _ukdef_count_n3(on_branch: bool) -> float:
 
 @D7.check(Level.FLOAT64, form="corrected")
 def d7_ukdef_branch_n3() -> float:
-    """n = 3: all solutions in O(3) of U Lambda - Lambda U^T = M (reference J_D residual and
-    orthogonality at rounding), found from the n-dimensional invariant subspaces of the
-    Riccati equation's Hamiltonian matrix; those in SO(3) on the branch through I: |count - 1|."""
+    r"""$n = 3$: all solutions in $\mathrm{O}(3)$ of $U\Lambda - \Lambda U^T = M$ (reference $J_D$
+    residual and orthogonality at rounding), found from the $n$-dimensional invariant subspaces of
+    the Riccati equation's Hamiltonian matrix; those in $\mathrm{SO}(3)$ on the branch through $I$:
+    $|\mathrm{count} - 1|$."""
     return _ukdef_count_n3(on_branch=True)
 
 
 @D7.check(Level.FLOAT64, form="printed")
 def d7_ukdef_unique_n3() -> float:
-    """The same count over all of SO(3): four solutions (the continuations of I and of the three
-    half-turns about the principal axes)."""
+    r"""The same count over all of $\mathrm{SO}(3)$: four solutions (the continuations of $I$ and of
+    the three half-turns about the principal axes)."""
     return _ukdef_count_n3(on_branch=False)
 
 
 @D7.check(Level.FLOAT64, tol=1e-13)
 def d7_symrb_flow_is_extremal() -> float:
-    """symrb.symmetric_flow (h = 1, n = 4, 8 steps) from a random P_0 in gl(4) gives controls
-    U_k = Q_k^T Q_{k+1} at which the displayed cost is stationary for fixed Q_0, Q_N: its
-    derivative along Q_k(I + e xi), every interior k and basis xi of so(4), is
-    tr(Lambda U_{k-1} xi) - tr(Lambda xi U_k) (summands of the displayed cost); max |.|."""
+    r"""symrb.symmetric_flow ($h = 1$, $n = 4$, 8 steps) from a random $P_0$ in $\mathfrak{gl}(4)$
+    gives controls $U_k = Q_k^T Q_{k+1}$ at which the displayed cost is stationary for fixed $Q_0$,
+    $Q_N$: its derivative along $Q_k(I + e\xi)$, every interior $k$ and basis $\xi$ of
+    $\mathfrak{so}(4)$, is $\operatorname{tr}(\Lambda U_{k-1} \xi) - \operatorname{tr}(\Lambda \xi
+    U_k)$ (summands of the displayed cost); largest absolute value."""
     import symrb
 
     rng = np.random.default_rng(71)
@@ -476,31 +485,32 @@ def _is_discrete_rigid_body(sign: int) -> float:
 
 @D7.check(Level.FLOAT64, tol=1e-12, form="corrected")
 def d7_maximiser_is_discrete_rigid_body() -> float:
-    """The global maximiser of the displayed cost (best of 12 BFGS runs over rotation vectors,
-    polished to an extremal; n = 3, N = 3, Q_0^T Q_N a turn by 1.41 rad) solves the theorem's
-    equations with its costate, every U_k Lambda has its eigenvalues in the open right half-plane,
-    each U_k continues to I along J_D(V) = tM_k (t from 1 to 0), and symrb.symmetric_flow
-    started from its Q_0 and M_0 = J_D(U_0) reproduces its Q_k: the largest of the Ukdef
-    residual, max|Q_k - Q_k(symrb)|, the negative part of min Re eig and the number of U_k that
-    continue elsewhere."""
+    r"""The global maximiser of the displayed cost (best of 12 BFGS runs over rotation vectors,
+    polished to an extremal; $n = 3$, $N = 3$, $Q_0^T Q_N$ a turn by 1.41 rad) solves the theorem's
+    equations with its costate, every $U_k \Lambda$ has its eigenvalues in the open right
+    half-plane, each $U_k$ continues to $I$ along $J_D(V) = tM_k$ ($t$ from 1 to 0), and
+    symrb.symmetric_flow started from its $Q_0$ and $M_0 = J_D(U_0)$ reproduces its $Q_k$: the
+    largest of the Ukdef residual, $\max|Q_k - Q_k^{\mathrm{symrb}}|$, the negative part of $\min
+    \operatorname{Re} \operatorname{eig}$ and the number of $U_k$ that continue elsewhere."""
     return _is_discrete_rigid_body(-1)
 
 
 @D7.check(Level.FLOAT64, tol=1e-12, form="printed")
 def d7_minimiser_is_discrete_rigid_body() -> float:
-    """The same residual for the global minimiser, which the problem as printed asks for and the
-    theorem's U_k is read as: it solves the theorem's equations, but symrb's flow from its data
-    leaves it and its U_k Lambda have eigenvalues in the left half-plane."""
+    r"""The same residual for the global minimiser, which the problem as printed asks for and the
+    theorem's $U_k$ is read as: it solves the theorem's equations, but symrb's flow from its data
+    leaves it and its $U_k \Lambda$ have eigenvalues in the left half-plane."""
     return _is_discrete_rigid_body(1)
 
 
 @D7.check(Level.FLOAT64, tol=1e-12, form="corrected")
 def d7_minimiser_branch() -> float:
-    """The global minimiser of the same problem solves the theorem's equations with its costate,
-    and each of its U_k is off the branch through I and continues (Newton along J_D(V) = tM_k,
-    t from 1 to 0) to the half-turn about the axis of the smallest lambda_i (lambda_1 = 0.7):
-    the largest of the Ukdef residual, max_k max(0, min Re eig(U_k Lambda)) and the number of
-    U_k that continue elsewhere."""
+    r"""The global minimiser of the same problem solves the theorem's equations with its costate,
+    and each of its $U_k$ is off the branch through $I$ and continues (Newton along $J_D(V) = tM_k$,
+    $t$ from 1 to 0) to the half-turn about the axis of the smallest $\lambda_i$ ($\lambda_1 =
+    0.7$): the largest of the Ukdef residual, the largest over $k$ of $\max(0, \min
+    \operatorname{Re} \operatorname{eig}(U_k \Lambda))$ and the number of $U_k$ that continue
+    elsewhere."""
     Us, theorem, _gap = _optimum(1)
     above = max(0.0, max(_margin(u, _LAM3) for u in Us))
     elsewhere = sum(_continued_to(u, _LAM3) != "R1" for u in Us)

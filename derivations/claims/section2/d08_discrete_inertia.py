@@ -76,17 +76,17 @@ TRANSPORT = D8.formula(
 
 @D8.check(Level.SYMBOLIC_FIXED_N)
 def d8_jd_skew() -> sp.Expr:
-    """The emitted J_D on a general (not even orthogonal) symbolic U is skew: J_D(U)^T + J_D(U)
-    expands to 0 (n = 4)."""
+    """The emitted $J_D$ on a general (not even orthogonal) symbolic $U$ is skew: $J_D(U)^T +
+    J_D(U)$ expands to 0 ($n = 4$)."""
     JDx = explicit(JD["JD"], {"U": general_matrix("u", 4)}, _lam(4))
     return residual(JDx.T + JDx)
 
 
 @D8.check(Level.SYMBOLIC_GENERAL_N)
 def d8_derivative_is_J() -> sp.Expr:
-    """The emitted J_D at U = exp(e Omega) (truncated after e^3, Omega skew so U^T = exp(-e
-    Omega)): d/de at e = 0 equals the displayed Omega Lambda + Lambda Omega (noncommutative
-    symbols, every n)."""
+    r"""The emitted $J_D$ at $U = \exp(e\Omega)$ (truncated after $e^3$, $\Omega$ skew so $U^T =
+    \exp(-e\Omega)$): $\frac{d}{de}$ at $e = 0$ equals the displayed $\Omega\Lambda + \Lambda\Omega$
+    (noncommutative symbols, every $n$)."""
     w = Words(symmetric=["Lambda"], skew=["Omega"])
     o = w("Omega")
 
@@ -100,8 +100,9 @@ def d8_derivative_is_J() -> sp.Expr:
 
 @D8.check(Level.SYMBOLIC_FIXED_N)
 def d8_J_invertible() -> sp.Expr:
-    """The matrix of the displayed Omega -> Omega Lambda + Lambda Omega on so(4) in the basis
-    E_ij - E_ji has determinant prod_{i<j}(lam_i + lam_j), non-zero for positive lam (symbolic)."""
+    r"""The matrix of the displayed $\Omega \mapsto \Omega\Lambda + \Lambda\Omega$ on
+    $\mathfrak{so}(4)$ in the basis $E_{ij} - E_{ji}$ has determinant $\prod_{i<j}(\lambda_i +
+    \lambda_j)$, non-zero for positive $\lambda$ (symbolic)."""
     lam = _lam(4)
     pairs = list(itertools.combinations(range(4), 2))
     cols = []
@@ -116,9 +117,9 @@ def d8_J_invertible() -> sp.Expr:
 
 @D8.check(Level.SYMBOLIC_GENERAL_N)
 def d8_transport() -> sp.Expr:
-    """With Q_{k+1} = Q_k U_k, P_{k+1} = P_k U_k (displayed) the momentum at k + 1 minus the
-    displayed U_k^T (Q_k^T P_k - P_k^T Q_k) U_k expands to 0 (noncommutative, every n; U_k need
-    not even be orthogonal)."""
+    """With $Q_{k+1} = Q_k U_k$, $P_{k+1} = P_k U_k$ (displayed) the momentum at $k + 1$ minus the
+    displayed $U_k^T M_k U_k$, $M_k = Q_k^T P_k - P_k^T Q_k$, expands to 0 (noncommutative, every
+    $n$; $U_k$ need not even be orthogonal)."""
     w = Words()
     step = {Qk1: Qk * Uk, Pk1: Pk * Uk}
     return w.is_zero(w.of(lhs_minus_rhs(TRANSPORT).xreplace(step)))
@@ -126,9 +127,9 @@ def d8_transport() -> sp.Expr:
 
 @D8.check(Level.FLOAT64, tol=1e-15)
 def d8_symrb_JD_pointwise() -> float:
-    """symrb.algebra.J_D(U) and symrb.paper.jd_residual(U, 0) (the emitted kernel) against reference.J_D
-    (explicit diagonal matrices), n = 2..6, 20 general U and 20 rotations each: max difference
-    over max|U| max(lam)."""
+    r"""symrb.algebra.J_D(U) and symrb.paper.jd_residual(U, 0) (the emitted kernel) against
+    reference.J_D (explicit diagonal matrices), $n = 2, \dots, 6$, 20 general $U$ and 20 rotations
+    each: max difference over $\max|U| \max \lambda$."""
     import symrb
 
     rng = np.random.default_rng(81)
@@ -151,10 +152,11 @@ def d8_symrb_JD_pointwise() -> float:
 
 @D8.check(Level.FLOAT64, tol=1e-13)
 def d8_solver_inverts_JD() -> float:
-    """symrb.solve_moser_veselov(reference.J_D(U)) returns U for U = expm(xi) on the branch
-    through I (xi random skew of norm about 1, n = 3..6), from the default (Riccati) start and
-    from the start U0 = I: the largest of |U_out - U|, |U_out^T U_out - I| and
-    |reference.J_D(U_out) - M| (absolute)."""
+    r"""symrb.solve_moser_veselov(reference.J_D(U)) returns $U$ for $U = \operatorname{expm}(\xi)$
+    on the branch through $I$ ($\xi$ random skew of norm about 1, $n = 3, \dots, 6$), from the
+    default (Riccati) start and from the start $U_0 = I$: the largest of $|U_{\mathrm{out}} - U|$,
+    $|U_{\mathrm{out}}^T U_{\mathrm{out}} - I|$ and $|J_D(U_{\mathrm{out}}) - M|$ with the reference
+    $J_D$ (absolute)."""
     import symrb
 
     rng = np.random.default_rng(82)
@@ -180,10 +182,10 @@ def d8_solver_inverts_JD() -> float:
 
 @D8.check(Level.FLOAT64, tol=1e-13)
 def d8_symrb_flows_against_50_digits() -> float:
-    """symrb.discrete_rigid_body_flow(Q_0, M_0, h = 0.1, 12 steps) against the 50-digit
-    reference run of the symmetric representation from P_0 = Q_0 M_0/2 (MPDiscrete, n = 3): its
-    Q_k and M_k = Q_k^T P_k - P_k^T Q_k, and t_k = k h; also a batch of two copies, and
-    symrb.symmetric_flow's (Q_k, P_k): max absolute error."""
+    """symrb.discrete_rigid_body_flow ($Q_0$, $M_0$, $h = 0.1$, 12 steps) against the 50-digit
+    reference run of the symmetric representation from $P_0 = Q_0 M_0/2$ (MPDiscrete, $n = 3$): its
+    $Q_k$ and $M_k = Q_k^T P_k - P_k^T Q_k$, and $t_k = k h$; also a batch of two copies, and
+    symrb.symmetric_flow's $(Q_k, P_k)$: max absolute error."""
     import symrb
 
     run = _mp_run()
@@ -201,9 +203,9 @@ def d8_symrb_flows_against_50_digits() -> float:
 
 @D8.check(Level.SYMBOLIC_GENERAL_N)
 def d8_values_are_skew_every_n() -> sp.Expr:
-    """The emitted J_D(U) is skew for every U (J_D(U) + J_D(U)^T expands to 0, U not even
-    orthogonal), and the displayed J maps a skew Omega to a skew Omega Lambda + Lambda Omega
-    (noncommutative symbols, Lambda symmetric, every n)."""
+    r"""The emitted $J_D(U)$ is skew for every $U$ ($J_D(U) + J_D(U)^T$ expands to 0, $U$ not even
+    orthogonal), and the displayed $J$ maps a skew $\Omega$ to a skew $\Omega\Lambda +
+    \Lambda\Omega$ (noncommutative symbols, $\Lambda$ symmetric, every $n$)."""
     w = Words(symmetric=["Lambda"], skew=["Omega"])
     jd = w.of(JD["JD"])
     j = w.of(DJD.rhs)

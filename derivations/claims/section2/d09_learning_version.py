@@ -81,6 +81,7 @@ D9 = claim(
     "directions $U_k(I + \\xi_k)$ has full row rank, computed as 54 of 54 on a rational network "
     "($n = 3$, $N = 3$, $M = 2$), so no abnormal multiplier occurs.",
     expected="holds after correction",
+    headline="[[cost]], with $Q^a_N$ free",
     section="2.1",
     where="Section 2.1, the second definition (several samples $Q^a$ and a terminal cost $\\phi$) "
     "and the second theorem (with $P^a_N = \\partial\\phi/\\partial Q^a_N$), with its proof",
@@ -250,27 +251,29 @@ def _d9_mismatch(cost: sp.Expr, endpoint: sp.Eq, relation: sp.Eq) -> float:
 
 @D9.check(Level.FLOAT64, tol=1e-8, form="corrected")
 def d9_theorem() -> float:
-    """The displayed cost (sum from k = 0), P_N = +dphi/dQ_N and Ukdef2: the cost's derivative in
-    every U_k matches the gradient that vanishes exactly when Ukdef2 holds (absolute)."""
+    r"""The displayed cost (sum from $k = 0$), $P_N = +\partial\phi/\partial Q_N$ and Ukdef2: the
+    cost's derivative in every $U_k$ matches the gradient that vanishes exactly when Ukdef2 holds
+    (absolute)."""
     return _d9_mismatch(D9_COST, ENDPOINT, UKDEF2)
 
 
 @D9.check(Level.FLOAT64, tol=1e-8, form="printed")
 def d9_printed_index() -> float:
-    """The same mismatch with the printed running cost (sum from k = 1): wrong at k = 0."""
+    """The same mismatch with the printed running cost (sum from $k = 1$): wrong at $k = 0$."""
     return _d9_mismatch(D9_COST_PRINTED, ENDPOINT, UKDEF2)
 
 
 @D9.check(Level.FLOAT64, tol=1e-8, form="corrected")
 def d9_unflipped_endpoint() -> float:
-    """Before the sign change: P_N = -dphi/dQ_N with equ_final_th_2.7's sign (displayed)
-    matches the derivative of the cost."""
+    r"""Before the sign change: $P_N = -\partial\phi/\partial Q_N$ with equ_final_th_2.7's sign
+    (displayed) matches the derivative of the cost."""
     return _d9_mismatch(D9_COST, ENDPOINT_UNFLIPPED, FINAL_UNFLIPPED)
 
 
 @D9.check(Level.FLOAT64, tol=1e-8, form="printed")
 def d9_unflipped_endpoint_printed() -> float:
-    """Before the sign change with m8's P_N = +dphi/dQ_N (displayed): it does not match."""
+    r"""Before the sign change with m8's $P_N = +\partial\phi/\partial Q_N$ (displayed): it does not
+    match."""
     return _d9_mismatch(D9_COST, ENDPOINT_M8, FINAL_UNFLIPPED)
 
 
@@ -318,11 +321,13 @@ def _so_emitted_gradients(
 
 @D9.check(Level.EXACT_RATIONAL, form="corrected")
 def d9_so_network_gradient_exact() -> sp.Expr:
-    """The emitted SO(n) network kernels (layer, endpoint P_N = -dphi/dQ_N, costate P_k =
-    P_{k+1} U_k^T and skew gradient) against the directional derivative of an independently
-    written loss sum_a 1/2||Q^a_N - T^a||^2 + alpha sum_k tr(Lambda(I - U_k)) along U_k exp(t xi)
-    (which has the tangent U_k xi of U_k (I + t xi) at t = 0): sum over k and a basis xi of so(3)
-    of |d/dt L - tr(G_k^T xi)|, exact rationals (n = 3, N = 3, M = 2 samples)."""
+    r"""The emitted $\mathrm{SO}(n)$ network kernels (layer, endpoint $P_N = -\partial\phi/\partial
+    Q_N$, costate $P_k = P_{k+1} U_k^T$ and skew gradient) against the directional derivative of an
+    independently written loss $L$, the sum over samples of $\frac12\|Q^a_N - T^a\|^2$ plus $\alpha
+    \sum_k \operatorname{tr}(\Lambda(I - U_k))$, along $U_k \exp(t\xi)$ (which has the tangent $U_k
+    \xi$ of $U_k (I + t\xi)$ at $t = 0$): sum over $k$ and a basis $\xi$ of $\mathfrak{so}(3)$ of
+    $|\frac{d}{dt} L - \operatorname{tr}(G_k^T \xi)|$, exact rationals ($n = 3$, $N = 3$, $M = 2$
+    samples)."""
     controls, starts, targets, lam, alpha = _so_exact_network()
     grads = _so_emitted_gradients(controls, starts, targets, lam, alpha)
     t = sp.Symbol("t")
@@ -341,11 +346,11 @@ def d9_so_network_gradient_exact() -> sp.Expr:
 
 @D9.check(Level.SYMBOLIC_GENERAL_N)
 def d9_so_network_gradient_is_ukdef2() -> sp.Expr:
-    """The emitted costate step is the displayed costate equation solved for P_k (P_{k+1} =
-    P_k U_k with U_k orthogonal), and with it the emitted gradient equals U_k^T (alpha J_D(U_k) -
-    (Q_k^T P_k - P_k^T Q_k)) U_k / 2 (the emitted J_D; both with the inertia alpha Lambda), so it
-    vanishes exactly when Ukdef2 holds (one sample; the sum over samples is linear; noncommutative
-    symbols, every n)."""
+    r"""The emitted costate step is the displayed costate equation solved for $P_k$ ($P_{k+1} = P_k
+    U_k$ with $U_k$ orthogonal), and with it the emitted gradient equals $\frac12 U_k^T (\alpha
+    J_D(U_k) - M_k) U_k$, $M_k = Q_k^T P_k - P_k^T Q_k$ (the emitted $J_D$; both with the inertia
+    $\alpha\Lambda$), so it vanishes exactly when Ukdef2 holds (one sample; the sum over samples is
+    linear; noncommutative symbols, every $n$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["U"])
     q, p, u = w("Q"), w("P"), w("U")
     # costate: the displayed P^a_{k+1} = P^a_k U_k, then the emitted step must give back P_k
@@ -365,9 +370,10 @@ def d9_so_network_gradient_is_ukdef2() -> sp.Expr:
 
 @D9.check(Level.FLOAT64, tol=1e-7, form="corrected")
 def d9_symrb_so_network_gradients() -> float:
-    """symrb.learning.so_network_gradients against central differences (step 1e-5) of an
-    independently written NumPy loss along U_k expm(t xi), n = 4, N = 3, M = 5, alpha = 0.3, for
-    every k and a basis of so(4): largest |difference| over the largest |G|."""
+    r"""symrb.learning.so_network_gradients against central differences (step 1e-5) of an
+    independently written NumPy loss along $U_k \operatorname{expm}(t\xi)$, $n = 4$, $N = 3$, $M =
+    5$, $\alpha = 0.3$, for every $k$ and a basis of $\mathfrak{so}(4)$: largest absolute difference
+    over the largest $|G|$."""
     from symrb.learning import so_network_gradients
 
     rng = np.random.default_rng(12)
@@ -400,10 +406,11 @@ def d9_symrb_so_network_gradients() -> float:
 
 @D9.check(Level.EXACT_RATIONAL, form="corrected")
 def d9_free_endpoint_is_normal() -> int:
-    """Normality on SO(n) with a free endpoint: on the rational network (n = 3, N = 3, M = 2) the
-    Jacobian of the displayed dynamics, Q^a_{k+1} - Q^a_k U_k in gl(3), in the free variables
-    (the entries of Q^a_1, ..., Q^a_N and xi_k, the control moved to U_k (I + xi_k) with xi_k in
-    so(3)) at the network has full row rank: rows minus rank (54 rows)."""
+    r"""Normality on $\mathrm{SO}(n)$ with a free endpoint: on the rational network ($n = 3$, $N =
+    3$, $M = 2$) the Jacobian of the displayed dynamics, $Q^a_{k+1} - Q^a_k U_k$ in
+    $\mathfrak{gl}(3)$, in the free variables (the entries of $Q^a_1, \dots, Q^a_N$ and $\xi_k$, the
+    control moved to $U_k (I + \xi_k)$ with $\xi_k$ in $\mathfrak{so}(3)$) at the network has full
+    row rank: rows minus rank (54 rows)."""
     controls, starts, _targets, _lam, _alpha = _so_exact_network()
     N, M = len(controls), len(starts)
     states = {(a, k): general_matrix(f"q{a}{k}_", 3) for a in range(M) for k in range(1, N + 1)}
@@ -449,10 +456,11 @@ def _d9_fixed_endpoint_gap(endpoint: sp.Eq) -> sp.Expr:
 
 @D9.check(Level.EXACT_RATIONAL, form="printed")
 def d9_printed_fixed_endpoint() -> sp.Expr:
-    """The definition keeps Q^a_N given and fixed beside the terminal cost phi(Q^a_N): with N = 1,
-    Q_0 = I, the fixed Q_1 = R (a rational rotation) and phi(Q) = 1/2 ||Q - R||^2, the admissible
-    control U_0 = R violates the equation for U_k with the costate of either displayed endpoint
-    condition (both give P_1 = 0): the smaller ||J_D(U_0) - (Q_0^T P_0 - P_0^T Q_0)||_F^2."""
+    r"""The definition keeps $Q^a_N$ given and fixed beside the terminal cost $\phi(Q^a_N)$: with $N
+    = 1$, $Q_0 = I$, the fixed $Q_1 = R$ (a rational rotation) and $\phi(Q) = \frac12\|Q - R\|^2$,
+    the admissible control $U_0 = R$ violates the equation for $U_k$ with the costate of either
+    displayed endpoint condition (both give $P_1 = 0$): the smaller $\|J_D(U_0) - M_0\|_F^2$, $M_0 =
+    Q_0^T P_0 - P_0^T Q_0$."""
     return sp.Min(*(_d9_fixed_endpoint_gap(e) for e in (ENDPOINT, ENDPOINT_UNFLIPPED)))
 
 

@@ -99,9 +99,9 @@ N2 = D10.formula(
 
 @D10.check(Level.SYMBOLIC_GENERAL_N)
 def d10_mv3_conjugation() -> sp.Expr:
-    """The emitted mv3 applied to the emitted mv2 momentum, for orthogonal Omega, equals
-    Lambda Omega^T - Omega Lambda = -(emitted J_D at Omega); and the emitted kernels are the
-    displayed mv2, mv3 (noncommutative, every n)."""
+    r"""The emitted mv3 applied to the emitted mv2 momentum, for orthogonal $\Omega$, equals
+    $\Lambda\Omega^T - \Omega\Lambda = -J_D(\Omega)$ (the emitted $J_D$); and the emitted kernels
+    are the displayed mv2, mv3 (noncommutative, every $n$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["Omega"])
     nxt = MV_TRANSPORT["M_next"].xreplace({M: MV_MOMENTUM["M"]})
     r = w.is_zero(w.of(nxt) + w.of(JD["JD"].xreplace({U: Om})))
@@ -111,9 +111,9 @@ def d10_mv3_conjugation() -> sp.Expr:
 
 @D10.check(Level.SYMBOLIC_FIXED_N)
 def d10_solvability_n2() -> sp.Expr:
-    """n = 2: the emitted mv2 at Omega = R(theta)^T, i.e. J_D(R(theta)), equals the displayed
-    (lam1 + lam2) sin(theta) E with E = [[0, -1], [1, 0]] (symbolic): mv2 is solvable exactly
-    when |M_21| <= lam1 + lam2."""
+    r"""$n = 2$: the emitted mv2 at $\Omega = R(\theta)^T$, i.e. $J_D(R(\theta))$, equals the
+    displayed $(\lambda_1 + \lambda_2) \sin \theta\, E$ with $E = \begin{pmatrix} 0 & -1 \\ 1 & 0
+    \end{pmatrix}$ (symbolic): mv2 is solvable exactly when $|M_{21}| \le \lambda_1 + \lambda_2$."""
     R = sp.Matrix([[sp.cos(_theta), -sp.sin(_theta)], [sp.sin(_theta), sp.cos(_theta)]])
     got = explicit(MV_MOMENTUM["M"], {"Omega": R.T}, [_l1, _l2])
     want = explicit(N2.rhs, {"E": sp.Matrix([[0, -1], [1, 0]])})
@@ -122,8 +122,8 @@ def d10_solvability_n2() -> sp.Expr:
 
 @D10.check(Level.FLOAT64, tol=1e-12)
 def d10_fold_n2() -> float:
-    """symrb.fold_scale for n = 2 against the closed form (lam1 + lam2)/|M_21| from the displayed
-    formula, three momenta: max relative error."""
+    r"""symrb.fold_scale for $n = 2$ against the closed form $(\lambda_1 + \lambda_2)/|M_{21}|$ from
+    the displayed formula, three momenta: max relative error."""
     import symrb
 
     lam = np.array([0.7, 1.9])
@@ -137,10 +137,11 @@ def d10_fold_n2() -> float:
 
 @D10.check(Level.FLOAT64, tol=1e-13)
 def d10_fold_n3() -> float:
-    """n = 3, M = t M_1 with t* = symrb.fold_scale(M_1): at 0.999 t* symrb.solve_moser_veselov's
-    U solves reference.J_D(U) = M and is the only solution on the branch among all solutions in
-    O(3) (invariant-subspace enumeration); at 1.001 t* the enumeration finds no solution on the
-    branch and symrb raises OutOfDomainError.  Residual: the J_D error plus the miscounts."""
+    r"""$n = 3$, $M = t M_1$ with $t^*$ from symrb.fold_scale at $M_1$: at $0.999\, t^*$
+    symrb.solve_moser_veselov's $U$ solves $J_D(U) = M$ (reference $J_D$) and is the only solution
+    on the branch among all solutions in $\mathrm{O}(3)$ (invariant-subspace enumeration); at
+    $1.001\, t^*$ the enumeration finds no solution on the branch and symrb raises OutOfDomainError.
+    Residual: the $J_D$ error plus the miscounts."""
     import symrb
 
     M1 = ref.hat(np.array([0.3, -0.2, 0.4]))
@@ -161,10 +162,10 @@ def d10_fold_n3() -> float:
 
 @D10.check(Level.FLOAT64, tol=1e-13)
 def d10_symrb_algorithms_against_50_digits() -> float:
-    """symrb.mv_algorithm1 from (Q_0, Q_1), symrb.mv_algorithm2 from (Q_1, M_1) and
-    symrb.symmetric_flow from (Q_0, P_0) (float64, n = 3, 12 steps) against the Q_k of the
-    50-digit reference run of the symmetric representation (h = 0.1; M_1 = h(Q_0^T P_0 -
-    P_0^T Q_0)): max absolute error."""
+    """symrb.mv_algorithm1 from $(Q_0, Q_1)$, symrb.mv_algorithm2 from $(Q_1, M_1)$ and
+    symrb.symmetric_flow from $(Q_0, P_0)$ (float64, $n = 3$, 12 steps) against the $Q_k$ of the
+    50-digit reference run of the symmetric representation ($h = 0.1$; $M_1 = h(Q_0^T P_0 - P_0^T
+    Q_0)$): max absolute error."""
     import symrb
 
     run = _mp_run()
@@ -178,18 +179,18 @@ def d10_symrb_algorithms_against_50_digits() -> float:
 
 @D10.check(Level.MPMATH, tol=1e-40)
 def d10_mv1_equals_symmetric_50_digits() -> float:
-    """50 digits: MV-Algorithm 1 (MPDiscrete.mv1) from (Q_0, Q_1) of the reference run
-    reproduces the symmetric representation's Q_k (n = 3, 6 steps)."""
+    """50 digits: MV-Algorithm 1 (MPDiscrete.mv1) from $(Q_0, Q_1)$ of the reference run reproduces
+    the symmetric representation's $Q_k$ ($n = 3$, 6 steps)."""
     run, mv = _mp_run(), _mp_mv_runs()
     return float(_mp_gap(mv["mv1_Q"], run["Qs"][: _MP_STEPS + 2]))
 
 
 @D10.check(Level.SYMBOLIC_GENERAL_N)
 def d10_quantities_in_their_spaces() -> sp.Expr:
-    """The displayed mv1 gives an orthogonal Omega_k when Q_k and Q_{k-1} are (Omega_k^T Omega_k
-    and Omega_k Omega_k^T reduce to 1), the emitted mv2 momentum is skew for every Omega (M + M^T
-    expands to 0, Omega not even orthogonal), and the emitted mv3 keeps a skew M skew
-    (noncommutative, every n)."""
+    r"""The displayed mv1 gives an orthogonal $\Omega_k$ when $Q_k$ and $Q_{k-1}$ are ($\Omega_k^T
+    \Omega_k$ and $\Omega_k \Omega_k^T$ reduce to 1), the emitted mv2 momentum is skew for every
+    $\Omega$ ($M + M^T$ expands to 0, $\Omega$ not even orthogonal), and the emitted mv3 keeps a
+    skew $M$ skew (noncommutative, every $n$)."""
     w = Words(symmetric=["Lambda"], skew=["M"], orthogonal=["Q_k", "Q_{k-1}"])
     om = w.of(MV1.rhs)
     r = w.is_zero(w.T(om) * om - 1) + w.is_zero(om * w.T(om) - 1)

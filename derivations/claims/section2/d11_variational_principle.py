@@ -45,10 +45,10 @@ D11.formula("mv3", MV3)
 
 @D11.check(Level.SYMBOLIC_GENERAL_N)
 def d11_euler_lagrange() -> sp.Expr:
-    """Varying Q_k to Q_k(1 + e xi) (xi skew) in the two displayed terms that contain Q_k gives
-    tr(B xi); with Omega_k = Q_k^T Q_{k-1}, Omega_{k+1} = Q_{k+1}^T Q_k (mv1) and the emitted
-    mv2 and mv3 kernels, B - B^T equals mv3's right side minus M_{k+1}: stationarity is mv3
-    (noncommutative, every n)."""
+    r"""Varying $Q_k$ to $Q_k(1 + e\xi)$ ($\xi$ skew) in the two displayed terms that contain $Q_k$
+    gives $\operatorname{tr}(B\xi)$; with $\Omega_k = Q_k^T Q_{k-1}$, $\Omega_{k+1} = Q_{k+1}^T Q_k$
+    (mv1) and the emitted mv2 and mv3 kernels, $B - B^T$ equals mv3's right side minus $M_{k+1}$:
+    stationarity is mv3 (noncommutative, every $n$)."""
     w = Words(symmetric=["Lambda"], skew=["xi"], orthogonal=["Q_{k-1}", "Q_k", "Q_{k+1}"])
     xi = matrix("xi")
     moved = Qk + _eps * Qk * xi
@@ -70,11 +70,12 @@ def d11_euler_lagrange() -> sp.Expr:
 
 @D11.check(Level.FLOAT64, tol=1e-13)
 def d11_symrb_sequences_stationary() -> float:
-    """Along symrb.mv_algorithm1 from (Q_0, Q_1) and symrb.mv_algorithm2 from (Q_1, M_1) (n = 4,
-    8 steps, lam in [0.6, 1.7]) the first variation of the displayed S-hat at every interior Q_k
-    along Q_k(I + e xi), xi a basis element of so(4), is tr(Q_{k-1} Lam (Q_k xi)^T) +
-    tr(Q_k xi Lam Q_{k+1}^T) (the displayed summand, linear in Q_k): max |.|, absolute (the
-    terms are at most 4 max(lam))."""
+    r"""Along symrb.mv_algorithm1 from $(Q_0, Q_1)$ and symrb.mv_algorithm2 from $(Q_1, M_1)$ ($n =
+    4$, 8 steps, $\lambda$ in $[0.6, 1.7]$) the first variation of the displayed $\hat S$ at every
+    interior $Q_k$ along $Q_k(I + e\xi)$, $\xi$ a basis element of $\mathfrak{so}(4)$, is
+    $\operatorname{tr}(Q_{k-1} \Lambda (Q_k \xi)^T)$ plus $\operatorname{tr}(Q_k \xi \Lambda
+    Q_{k+1}^T)$ (the displayed summand, linear in $Q_k$): largest absolute value (the terms are at
+    most $4 \max \lambda$)."""
     import symrb
 
     rng = np.random.default_rng(111)

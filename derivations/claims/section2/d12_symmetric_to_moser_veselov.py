@@ -67,6 +67,7 @@ D12 = claim(
     "- \\Lambda U_k^T = J_D(U_k)$, and the third transports it as the symmetric algorithm does. "
     "With a time step $h$ the momenta are $h$ times the continuous ones (`symrb.paper`).",
     expected="holds after correction",
+    headline="[[ident_omega]], [[ident_momentum]]",
     section="2.2",
     where="Section 2.2, the last paragraph: a solution $(Q_k, P_k)$ of the symmetric equations "
     "gives the Moser-Veselov momentum $M_{k+1} = Q_k^T P_k - P_k^T Q_k$ (and Section 2.1, 'if we "
@@ -83,10 +84,11 @@ CONVERSE = D12.formula("converse", eq(Pk, Qk * Mk1 / 2))
 
 @D12.check(Level.SYMBOLIC_GENERAL_N)
 def d12_symmetric_gives_mv() -> sp.Expr:
-    """With Q_{k+1} = Q_k U_k, P_{k+1} = P_k U_k (Q_k, U_k orthogonal): mv1 gives
-    Omega_{k+1} = Q_{k+1}^T Q_k = U_k^T (displayed); the emitted mv2 at it is the emitted J_D at
-    U_k; the emitted mv3 transports the displayed Mdef1 momentum at k to the one at k + 1; and
-    the displayed converse P_k makes Mdef1 hold for skew M_{k+1} (noncommutative, every n)."""
+    r"""With $Q_{k+1} = Q_k U_k$, $P_{k+1} = P_k U_k$ ($Q_k$, $U_k$ orthogonal): mv1 gives
+    $\Omega_{k+1} = Q_{k+1}^T Q_k = U_k^T$ (displayed); the emitted mv2 at it is the emitted $J_D$
+    at $U_k$; the emitted mv3 transports the displayed Mdef1 momentum at $k$ to the one at $k + 1$;
+    and the displayed converse $P_k$ makes Mdef1 hold for skew $M_{k+1}$ (noncommutative, every
+    $n$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["Q_k", "U_k"], skew=["M_{k+1}"])
     step = {Qk1: Qk * Uk, Pk1: Pk * Uk}
     om = (Qk1.T * Qk).xreplace(step)
@@ -123,31 +125,32 @@ def _identification_gap(identification: sp.Eq) -> float:
 
 @D12.check(Level.MPMATH, tol=1e-40, form="corrected")
 def d12_identification() -> float:
-    """50 digits: M_{k+1} of MV-Algorithm 2 (MPDiscrete.mv2 from (Q_1, M_1)) against the
-    displayed J_D(U_k), U_k = Q_k^T Q_{k+1} of the symmetric reference run (n = 3, 7 momenta)."""
+    """50 digits: $M_{k+1}$ of MV-Algorithm 2 (MPDiscrete.mv2 from $(Q_1, M_1)$) against the
+    displayed $J_D(U_k)$, $U_k = Q_k^T Q_{k+1}$ of the symmetric reference run ($n = 3$, 7 momenta).
+    """
     return _identification_gap(IDENT_MOMENTUM)
 
 
 @D12.check(Level.MPMATH, tol=1e-40, form="printed")
 def d12_identification_printed() -> float:
-    """The same comparison with the printed identification M_{k+1} = U_k."""
+    """The same comparison with the printed identification $M_{k+1} = U_k$."""
     return _identification_gap(IDENT_PRINTED)
 
 
 @D12.check(Level.MPMATH, tol=1e-40)
 def d12_mv2_equals_symmetric_50_digits() -> float:
-    """50 digits: MV-Algorithm 2 (MPDiscrete.mv2) from (Q_1, M_1 = h(Q_0^T P_0 - P_0^T Q_0))
-    reproduces the symmetric representation's Q_{k+1} (n = 3, 6 steps)."""
+    """50 digits: MV-Algorithm 2 (MPDiscrete.mv2) from $(Q_1, M_1)$, $M_1 = h(Q_0^T P_0 - P_0^T
+    Q_0)$, reproduces the symmetric representation's $Q_{k+1}$ ($n = 3$, 6 steps)."""
     run, mv = _mp_run(), _mp_mv_runs()
     return float(_mp_gap(mv["mv2_Q"], run["Qs"][1 : _MP_STEPS + 2]))
 
 
 @D12.check(Level.FLOAT64, tol=1e-13)
 def d12_symrb_momenta_against_50_digits() -> float:
-    """symrb.mv_algorithm2 from (Q_1, M_1) returns M_{k+1} equal to the 50-digit Mdef1 momenta
-    h(Q_k^T P_k - P_k^T Q_k) of the symmetric reference run, and symrb.paper.symmetric_step's U_k at
-    the reference states has J_D(U_k) (reference.J_D) equal to them (n = 3, 12 steps): max
-    absolute error."""
+    """symrb.mv_algorithm2 from $(Q_1, M_1)$ returns $M_{k+1}$ equal to the 50-digit Mdef1 momenta
+    $h(Q_k^T P_k - P_k^T Q_k)$ of the symmetric reference run, and symrb.paper.symmetric_step's
+    $U_k$ at the reference states has $J_D(U_k)$ (reference.J_D) equal to them ($n = 3$, 12 steps):
+    max absolute error."""
     import symrb
 
     run = _mp_run()

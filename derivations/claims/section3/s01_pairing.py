@@ -49,7 +49,7 @@ S1.formula("pair_is_dot", eq(Pair(matrix("uhat"), matrix("vhat")), _u.T * _v))
 
 @S1.check(Level.SYMBOLIC_FIXED_N)
 def s1_pairing_is_dot() -> sp.Expr:
-    """The pairing's right side on hat(u), hat(v) minus u.v expands to 0 (n = 3)."""
+    r"""The pairing's right side on $\hat u$, $\hat v$ minus $u \cdot v$ expands to 0 ($n = 3$)."""
     u, v = sym_vector("u", 3), sym_vector("v", 3)
     value = explicit(PAIRING.rhs, {"xi": hat3(u), "eta": hat3(v)})
     return residual(value - u.dot(v))
@@ -57,15 +57,16 @@ def s1_pairing_is_dot() -> sp.Expr:
 
 @S1.check(Level.SYMBOLIC_FIXED_N)
 def s1_hat_is_cross() -> sp.Expr:
-    """The hat matrix used throughout satisfies the defining relation hat(u) v = u x v (n = 3)."""
+    r"""The hat matrix used throughout satisfies the defining relation $\hat u\, v = u \times v$ ($n
+    = 3$)."""
     u, v = sym_vector("u", 3), sym_vector("v", 3)
     return residual(explicit(lhs_minus_rhs(HAT), {"uhat": hat3(u), "v": v, "u": u}))
 
 
 @S1.check(Level.FLOAT64, tol=1e-14)
 def s1_symrb_hat_and_pairing() -> float:
-    """symrb.hat(u) v against numpy.cross(u, v) and symrb.pairing(hat u, hat v) against u.v
-    (relative, 50 random pairs)."""
+    r"""symrb.hat($u$) $v$ against numpy.cross($u$, $v$) and symrb.pairing($\hat u$, $\hat v$)
+    against $u \cdot v$ (relative, 50 random pairs)."""
     import symrb
 
     rng = np.random.default_rng(1)
@@ -98,9 +99,10 @@ def _killing_gram(k: int) -> sp.Matrix:
 
 @S1.check(Level.SYMBOLIC_FIXED_N)
 def s1_multiple_of_killing() -> sp.Expr:
-    """The displayed pairing is a multiple of the Killing form: on so(3), so(4), so(5) the Gram
-    matrix of kappa (from the structure constants) minus c times that of the displayed pairing
-    vanishes for one non-zero c (c = -2(n - 2): kappa = (n - 2) tr)."""
+    r"""The displayed pairing is a multiple of the Killing form: on $\mathfrak{so}(3)$,
+    $\mathfrak{so}(4)$, $\mathfrak{so}(5)$ the Gram matrix of $\kappa$ (from the structure
+    constants) minus $c$ times that of the displayed pairing vanishes for one non-zero $c$ ($c =
+    -2(n - 2)$: $\kappa = (n - 2) \operatorname{tr}$)."""
     total = sp.Integer(0)
     for k in (3, 4, 5):
         kappa, gram = _killing_gram(k), _pairing_gram(k)
@@ -111,10 +113,11 @@ def s1_multiple_of_killing() -> sp.Expr:
 
 @S1.check(Level.SYMBOLIC_FIXED_N)
 def s1_pairing_is_inner_product() -> sp.Integer:
-    """The displayed pairing is an inner product on so(n), so it identifies so(n)* with so(n)
-    (xi -> <xi, .> is injective, hence onto): its Gram matrix on the basis E_ij (i < j) is
-    symmetric and positive definite for n = 2..6 (here the identity).  The number of n for which
-    it is not."""
+    r"""The displayed pairing is an inner product on $\mathfrak{so}(n)$, so it identifies
+    $\mathfrak{so}(n)^*$ with $\mathfrak{so}(n)$ ($\xi \mapsto \langle \xi, \cdot\rangle$ is
+    injective, hence onto): its Gram matrix on the basis $E_{ij}$ ($i < j$) is symmetric and
+    positive definite for $n = 2, \dots, 6$ (here the identity). The number of $n$ for which it is
+    not."""
     bad = 0
     for k in range(2, 7):
         gram = _pairing_gram(k)

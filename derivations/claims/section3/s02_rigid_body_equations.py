@@ -101,8 +101,8 @@ def J_explicit(X: sp.Matrix, lam: list[sp.Expr]) -> sp.Matrix:
 
 @S2.check(Level.SYMBOLIC_FIXED_N)
 def s2_emitted_field() -> sp.Expr:
-    """The emitted field at Q = I: its Omega = Qdot satisfies the displayed J(Omega) = M, and its
-    Mdot equals the displayed [M, Omega] (symbolic skew M, n = 4)."""
+    r"""The emitted field at $Q = I$: its $\Omega = \dot Q$ satisfies the displayed $J(\Omega) = M$,
+    and its $\dot M$ equals the displayed $[M, \Omega]$ (symbolic skew $M$, $n = 4$)."""
     lam, Ms = lam_symbols(4), skew_matrix("m", 4)
     env = {"Q": sp.eye(4), "M": Ms}
     Omega = explicit(RIGID_BODY_RHS["Qdot"], env, lam)
@@ -117,7 +117,8 @@ def s2_emitted_field() -> sp.Expr:
 
 @S2.check(Level.SYMBOLIC_FIXED_N)
 def s2_J_symmetric() -> sp.Expr:
-    """The displayed symmetry <J a, b> = <a, J b> for symbolic skew a, b (n = 4)."""
+    r"""The displayed symmetry $\langle J a, b\rangle = \langle a, J b\rangle$ for symbolic skew
+    $a$, $b$ ($n = 4$)."""
     lam, a, b = lam_symbols(4), skew_matrix("a", 4), skew_matrix("b", 4)
     eq = S2.formulas["J_symmetric"]
     return residual(explicit(lhs_minus_rhs(eq), {"a": a, "b": b}, lam))
@@ -125,8 +126,9 @@ def s2_J_symmetric() -> sp.Expr:
 
 @S2.check(Level.SYMBOLIC_FIXED_N)
 def s2_J_positive() -> sp.Expr:
-    """<Om, J Om> = sum_{i<j} c_ij Om_ij^2 with c_ij the left side of the displayed positivity
-    condition at (lam_i, lam_j): positive definite exactly when it holds (n = 4)."""
+    r"""$\langle \Omega, J\Omega\rangle = \sum_{i<j} c_{ij} \Omega_{ij}^2$ with $c_{ij}$ the left
+    side of the displayed positivity condition at $(\lambda_i, \lambda_j)$: positive definite
+    exactly when it holds ($n = 4$)."""
     lam, Omega = lam_symbols(4), skew_matrix("w", 4)
     form = sum(
         (
@@ -146,8 +148,9 @@ def _pair_trace(e: sp.Basic) -> sp.Basic:
 
 @S2.check(Level.SYMBOLIC_GENERAL_N)
 def s2_J_symmetric_general_n() -> sp.Expr:
-    """Every n: the displayed <J a, b> - <a, J b>, with a, b and the symmetric Lambda
-    noncommutative, is a sum of traces that cancels up to cyclic rotation (trace words left)."""
+    r"""Every $n$: the displayed $\langle J a, b\rangle - \langle a, J b\rangle$, with $a$, $b$ and
+    the symmetric $\Lambda$ noncommutative, is a sum of traces that cancels up to cyclic rotation
+    (trace words left)."""
     w = Words(symmetric=["Lambda"])
     return sp.Integer(len(trace_words_of(w.trace_argument(
         _pair_trace(lhs_minus_rhs(S2.formulas["J_symmetric"]))))))  # fmt: skip
@@ -155,11 +158,12 @@ def s2_J_symmetric_general_n() -> sp.Expr:
 
 @S2.check(Level.SYMBOLIC_GENERAL_N)
 def s2_J_positive_general_n() -> sp.Expr:
-    """Every n, with symbolic indices: <Om, J Om> (the displayed J, Lambda = diag(lambda)) is
-    the double sum over 0 <= i, k <= n - 1 of SymPy's entries of the matrix product, whose
-    summand, with Om_ki = -Om_ik (skew), is (1/2) c_ik Om_ik^2 with c_ik the left side of the
-    displayed positivity condition at (lambda_i, lambda_k): positive definite when it holds for
-    i != k (Om_ii = 0).  Residual: 1 if the summands differ."""
+    r"""Every $n$, with symbolic indices: $\langle \Omega, J\Omega\rangle$ (the displayed $J$,
+    $\Lambda = \operatorname{diag}(\lambda)$) is the double sum over $0 \le i, k \le n - 1$ of
+    SymPy's entries of the matrix product, whose summand, with $\Omega_{ki} = -\Omega_{ik}$ (skew),
+    is $\frac12 c_{ik} \Omega_{ik}^2$ with $c_{ik}$ the left side of the displayed positivity
+    condition at $(\lambda_i, \lambda_k)$: positive definite when it holds for $i \ne k$
+    ($\Omega_{ii} = 0$). Residual: 1 if the summands differ."""
     lv = sp.MatrixSymbol("lambda", n, 1)
     i = sp.Symbol("i", integer=True)
     quad = _pair_trace(Pair(Om, J_DEF.rhs))  # -tr(Om J(Om))/2
@@ -182,8 +186,8 @@ def s2_J_positive_general_n() -> sp.Expr:
 
 @S2.check(Level.SYMBOLIC_FIXED_N)
 def s2_moments_n3() -> sp.Expr:
-    """For n = 3: 1/2 <Om, J Om> = 1/2 sum I_i w_i^2 with the displayed I_1 and its cyclic
-    permutations."""
+    r"""For $n = 3$: $\frac12 \langle \Omega, J\Omega\rangle = \frac12 \sum_i I_i \omega_i^2$ with
+    the displayed $I_1$ and its cyclic permutations."""
     lam, w = lam_symbols(3), sym_vector("w", 3)
     moments = _moments(lam)
     kinetic = sum((Ii * wi**2 for Ii, wi in zip(moments, w, strict=True)), sp.Integer(0)) / 2
@@ -213,8 +217,8 @@ EULER_RHS_SO3 = Kernel(
 
 @S2.check(Level.SYMBOLIC_FIXED_N)
 def s2_euler_n3() -> sp.Expr:
-    """The emitted Euler kernel equals m x omega with omega_i = m_i / I_i and the displayed
-    moments I_1 = lam_2 + lam_3 (cyclic) (symbolic, n = 3)."""
+    r"""The emitted Euler kernel equals $m \times \omega$ with $\omega_i = m_i / I_i$ and the
+    displayed moments $I_1 = \lambda_2 + \lambda_3$ (cyclic) (symbolic, $n = 3$)."""
     m, lam = _m3, list(_l3v)
     moments = _moments(lam)
     omega = sp.Matrix([m[i] / moments[i] for i in range(3)])
@@ -224,8 +228,9 @@ def s2_euler_n3() -> sp.Expr:
 
 @S2.check(Level.FLOAT64, tol=1e-13)
 def s2_symrb_field_pointwise() -> float:
-    """symrb.rigid_body.rigid_body_rhs against the reference field with J^-1 from an n^2 x n^2 linear solve,
-    n = 2..6, batches of 20 random (Q, M, lam): max relative difference."""
+    r"""symrb.rigid_body.rigid_body_rhs against the reference field with $J^{-1}$ from an $n^2
+    \times n^2$ linear solve, $n = 2, \dots, 6$, batches of 20 random $(Q, M, \lambda)$: max
+    relative difference."""
     import symrb
 
     rng = np.random.default_rng(2)
@@ -246,8 +251,9 @@ def s2_symrb_field_pointwise() -> float:
 
 @S2.check(Level.FLOAT64, tol=1e-14)
 def s2_symrb_inertia_operators() -> float:
-    """symrb.J and symrb.J_inv against the reference operators (explicit diagonal matrices, and
-    an n^2 x n^2 linear solve), n = 2..6, 20 random skew matrices each: max relative difference."""
+    r"""symrb.J and symrb.J_inv against the reference operators (explicit diagonal matrices, and an
+    $n^2 \times n^2$ linear solve), $n = 2, \dots, 6$, 20 random skew matrices each: max relative
+    difference."""
     import symrb
 
     rng = np.random.default_rng(21)
@@ -265,8 +271,8 @@ def s2_symrb_inertia_operators() -> float:
 
 @S2.check(Level.FLOAT64, tol=1e-9)
 def s2_flow_against_elliptic() -> float:
-    """symrb.integrate(RigidBody) (n = 3, DOP853, rtol 1e-12) against the Jacobi elliptic solution
-    of Euler's equations at 41 times in [0, 20]: max |M error| / |M|."""
+    r"""symrb.integrate(RigidBody) ($n = 3$, DOP853, rtol 1e-12) against the Jacobi elliptic
+    solution of Euler's equations at 41 times in $[0, 20]$: $\max |M \text{ error}| / |M|$."""
     import symrb
 
     inertia = np.array([1.0, 1.7, 2.6])
@@ -282,8 +288,9 @@ def s2_flow_against_elliptic() -> float:
 
 @S2.check(Level.FLOAT64, tol=1e-13)
 def s2_symrb_euler_pointwise() -> float:
-    """symrb.rigid_body.euler_rhs_so3 against numpy.cross(m, m / I) with I from symrb's convention checked
-    above (I_1 = lam_2 + lam_3), 50 random points: max relative difference."""
+    r"""symrb.rigid_body.euler_rhs_so3 against numpy.cross($m$, $m / I$) with $I$ from symrb's
+    convention checked above ($I_1 = \lambda_2 + \lambda_3$), 50 random points: max relative
+    difference."""
     import symrb
 
     rng = np.random.default_rng(3)

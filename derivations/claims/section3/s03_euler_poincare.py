@@ -70,7 +70,8 @@ KINETIC_ENERGY = Kernel(
 
 @S3.check(Level.SYMBOLIC_FIXED_N)
 def s3_variational_derivative() -> sp.Expr:
-    """d/de l(Om + e eta) at e = 0 equals <J Om, eta> for the displayed l (n = 4)."""
+    r"""$\frac{d}{de}\, l(\Omega + e\eta)$ at $e = 0$ equals $\langle J\Omega, \eta\rangle$ for the
+    displayed $l$ ($n = 4$)."""
     lam, Omega, eta = lam_symbols(4), skew_matrix("w", 4), skew_matrix("e", 4)
     eps = sp.Symbol("epsilon")
     lag = explicit(LAGRANGIAN.rhs, {"Omega": Omega + eps * eta}, lam)
@@ -82,8 +83,9 @@ def s3_variational_derivative() -> sp.Expr:
 
 @S3.check(Level.SYMBOLIC_GENERAL_N)
 def s3_coadjoint() -> sp.Expr:
-    """The displayed <mu, [xi, eta]> = <[mu, xi], eta> holds as trace words for every n, and with
-    it <M, [Om, eta]> = <[M, Om], eta>: ad*_Om M is the right side of the displayed Euler-Poincare
+    r"""The displayed $\langle \mu, [\xi, \eta]\rangle = \langle [\mu, \xi], \eta\rangle$ holds as
+    trace words for every $n$, and with it $\langle M, [\Omega, \eta]\rangle = \langle [M, \Omega],
+    \eta\rangle$: $\mathrm{ad}^*_\Omega M$ is the right side of the displayed Euler-Poincare
     equation (noncommutative symbols)."""
     w = Words()
     r = trace_residual(w.trace_argument(lhs_minus_rhs(COADJOINT).doit()))
@@ -93,8 +95,8 @@ def s3_coadjoint() -> sp.Expr:
 
 @S3.check(Level.SYMBOLIC_FIXED_N)
 def s3_kinetic_energy_kernel() -> sp.Expr:
-    """The emitted kinetic energy at M = J(Om) equals the displayed l(Om) (symbolic skew Om,
-    n = 4)."""
+    r"""The emitted kinetic energy at $M = J(\Omega)$ equals the displayed $l(\Omega)$ (symbolic
+    skew $\Omega$, $n = 4$)."""
     lam, Omega = lam_symbols(4), skew_matrix("w", 4)
     Mx = J_explicit(Omega, lam)
     E = explicit(KINETIC_ENERGY["E"], {"M": Mx}, lam)
@@ -103,8 +105,9 @@ def s3_kinetic_energy_kernel() -> sp.Expr:
 
 @S3.check(Level.FLOAT64, tol=1e-13)
 def s3_symrb_kinetic_energy() -> float:
-    """symrb.kinetic_energy(M) against 1/2 <Om, J Om> with Om from the reference linear solve,
-    n = 2..6, 20 random M each: max relative difference."""
+    r"""symrb.kinetic_energy($M$) against $\frac12 \langle \Omega, J\Omega\rangle$ with $\Omega$
+    from the reference linear solve, $n = 2, \dots, 6$, 20 random $M$ each: max relative difference.
+    """
     import symrb
 
     rng = np.random.default_rng(4)
@@ -151,13 +154,13 @@ def _action_variation(
 
 @S3.check(Level.FLOAT64, tol=1e-9)
 def s3_hamiltons_principle_on_the_group() -> float:
-    """The Lagrangian on T SO(n) corresponds to l: the displayed L(g, gdot) (NumPy) is left
-    invariant, L(h g, h gdot) = L(g, gdot), and equals l(g^-1 gdot); and along a solution of
-    the rigid body equations (symrb.integrate(RigidBody), n = 4, DOP853, rtol 1e-12, t in
-    [0, 2]) its action is stationary: for variations g = Q exp(e s(t) eta0) with fixed ends
-    (s = sin(pi t / 2), 3 random skew eta0) the derivative in e (complex step, 48-point
-    Gauss-Legendre quadrature) vanishes.  Max of the relative invariance error and of the
-    derivative relative to the size of its terms."""
+    r"""The Lagrangian on $T\,\mathrm{SO}(n)$ corresponds to $l$: the displayed $L(g, \dot g)$
+    (NumPy) is left invariant, $L(hg, h\dot g) = L(g, \dot g)$, and equals $l(g^{-1} \dot g)$; and
+    along a solution of the rigid body equations (symrb.integrate(RigidBody), $n = 4$, DOP853, rtol
+    1e-12, $t$ in $[0, 2]$) its action is stationary: for variations $g = Q \exp(e\, s(t)\, \eta_0)$
+    with fixed ends ($s = \sin(\pi t/2)$, 3 random skew $\eta_0$) the derivative in $e$ (complex
+    step, 48-point Gauss-Legendre quadrature) vanishes. Max of the relative invariance error and of
+    the derivative relative to the size of its terms."""
     import symrb
 
     rng = np.random.default_rng(33)

@@ -143,8 +143,9 @@ CASIMIR_TRACES = Kernel(
 
 @S4.check(Level.SYMBOLIC_GENERAL_N)
 def s4_lax_pair_general_n() -> sp.Expr:
-    """With Lambda and Om noncommutative, M the displayed J(Om) and Mdot the displayed [M, Om]:
-    Mdot minus the right side of the displayed Lax equation expands to 0 (any n)."""
+    r"""With $\Lambda$ and $\Omega$ noncommutative, $M$ the displayed $J(\Omega)$ and $\dot M$ the
+    displayed $[M, \Omega]$: $\dot M$ minus the right side of the displayed Lax equation expands to
+    0 (any $n$)."""
     w = Words(symmetric=["Lambda"])
     Mdot = w.of(MDOT.rhs.xreplace({M: J_DEF.rhs}))  # Lambda is constant: d/dt lhs = Mdot
     rhs = w.of(LAX.rhs.xreplace({M: J_DEF.rhs}))
@@ -177,8 +178,9 @@ def conservation(lam: list[sp.Expr], Ms: sp.Matrix, max_degree: int) -> sp.Expr:
 
 @S4.check(Level.SYMBOLIC_FIXED_N)
 def s4_integrals_conserved() -> sp.Expr:
-    """d/dt F = <grad F, Mdot> vanishes identically for the emitted integrals of degree <= 4,
-    with Mdot from the emitted rigid body field (symbolic M and Lambda, n = 4)."""
+    r"""$\frac{d}{dt} F = \langle \nabla F, \dot M\rangle$ vanishes identically for the emitted
+    integrals of degree at most 4, with $\dot M$ from the emitted rigid body field (symbolic $M$ and
+    $\Lambda$, $n = 4$)."""
     lam, Ms = lam_symbols(4), skew_matrix("m", 4)
     return conservation(lam, Ms, 4)
 
@@ -192,9 +194,9 @@ def _derivative_at_zero(values: list[sp.Rational]) -> sp.Rational:
 
 @S4.check(Level.EXACT_RATIONAL)
 def s4_integrals_conserved_exact() -> sp.Expr:
-    """The same for every emitted integral and Casimir (degrees up to 6): d/de F(M + e Mdot) at
-    e = 0, by exact interpolation of F at e = 0..6, vanishes at 3 random rational (M, Lambda),
-    n = 4 and 5."""
+    r"""The same for every emitted integral and Casimir (degrees up to 6): $\frac{d}{de} F(M + e\dot
+    M)$ at $e = 0$, by exact interpolation of $F$ at $e = 0, \dots, 6$, vanishes at 3 random
+    rational $(M, \Lambda)$, $n = 4$ and 5."""
     rng = np.random.default_rng(44)
     total = sp.Integer(0)
     for k in (4, 5):
@@ -212,8 +214,8 @@ def s4_integrals_conserved_exact() -> sp.Expr:
 
 @S4.check(Level.SYMBOLIC_FIXED_N)
 def s4_integrals_in_involution() -> sp.Expr:
-    """Lie-Poisson brackets {F, G}(M) = -<M, [grad F, grad G]> of the emitted Manakov integrals
-    of degree <= 4 vanish pairwise (symbolic, n = 4)."""
+    r"""Lie-Poisson brackets $\{F, G\}(M) = -\langle M, [\nabla F, \nabla G]\rangle$ of the emitted
+    Manakov integrals of degree at most 4 vanish pairwise (symbolic, $n = 4$)."""
     lam, Ms = lam_symbols(4), skew_matrix("m", 4)
     grads = [skew_gradient(F, Ms) for F in _integrals(4, lam, Ms)]
     total = sp.Integer(0)
@@ -225,9 +227,9 @@ def s4_integrals_in_involution() -> sp.Expr:
 
 @S4.check(Level.SYMBOLIC_FIXED_N)
 def s4_coefficients_by_expansion() -> sp.Expr:
-    """Another route to the same integrals: expand the displayed trace with explicit symbolic
-    3 x 3 matrices as a polynomial in lambda; its coefficients equal the emitted Manakov integrals
-    and Casimirs (n = 3)."""
+    r"""Another route to the same integrals: expand the displayed trace with explicit symbolic $3
+    \times 3$ matrices as a polynomial in $\lambda$; its coefficients equal the emitted Manakov
+    integrals and Casimirs ($n = 3$)."""
     lam, Ms = lam_symbols(3), skew_matrix("m", 3)
     base = explicit(GENERATING.arg.base, {"M": Ms, "lambda": _lp}, lam)
     total = sp.Integer(0)
@@ -244,9 +246,9 @@ def s4_coefficients_by_expansion() -> sp.Expr:
 
 @S4.check(Level.FLOAT64, tol=1e-10)
 def s4_symrb_integrals_pointwise() -> float:
-    """symrb.manakov_integrals and symrb.casimir_traces against coefficients of a polynomial fit
-    of tr((M + t Lambda^2)^k) over t (plain NumPy), n = 4, 5, 10 random M each: max relative
-    difference."""
+    r"""symrb.manakov_integrals and symrb.casimir_traces against coefficients of a polynomial fit of
+    $\operatorname{tr}((M + t\Lambda^2)^k)$ over $t$ (plain NumPy), $n = 4, 5$, 10 random $M$ each:
+    max relative difference."""
     import symrb
 
     rng = np.random.default_rng(5)
@@ -274,8 +276,9 @@ def s4_symrb_integrals_pointwise() -> float:
 
 @S4.check(Level.FLOAT64, tol=1e-9)
 def s4_conserved_on_reference_flow() -> float:
-    """symrb.manakov_integrals along a trajectory of the reference rigid body field (J^-1 by a
-    linear solve; DOP853, rtol 1e-12, n = 4, t in [0, 20]): max drift relative to the values."""
+    """symrb.manakov_integrals along a trajectory of the reference rigid body field ($J^{-1}$ by a
+    linear solve; DOP853, rtol 1e-12, $n = 4$, $t$ in $[0, 20]$): max drift relative to the values.
+    """
     from scipy.integrate import solve_ivp
 
     import symrb
@@ -333,11 +336,12 @@ def _rank(A: np.ndarray) -> tuple[int, bool]:
 
 @S4.check(Level.FLOAT64)
 def s4_number_of_independent_integrals() -> sp.Integer:
-    """The paper's 'right number of integrals', counted: for n = 3..6 at a random point, the rank
-    of the gradients of all coefficients of the displayed generating trace is m + r and that of
-    the Casimirs r, with r = floor(n/2) the rank of so(n) and 2m = n(n-1)/2 - r the dimension
-    of a generic coadjoint orbit (2, 4, 6, 9 in all; Mishchenko-Fomenko).  The number of n for
-    which a rank differs or the singular values show no clear gap."""
+    r"""The paper's 'right number of integrals', counted: for $n = 3, \dots, 6$ at a random point,
+    the rank of the gradients of all coefficients of the displayed generating trace is $m + r$ and
+    that of the Casimirs $r$, with $r = \lfloor n/2 \rfloor$ the rank of $\mathfrak{so}(n)$ and $2m
+    = n(n-1)/2 - r$ the dimension of a generic coadjoint orbit (2, 4, 6, 9 in all;
+    Mishchenko-Fomenko). The number of $n$ for which a rank differs or the singular values show no
+    clear gap."""
     rng = np.random.default_rng(4)
     bad = 0
     for k in range(3, 7):
@@ -350,11 +354,12 @@ def s4_number_of_independent_integrals() -> sp.Integer:
 
 @S4.check(Level.SYMBOLIC_GENERAL_N)
 def s4_discrete_lax_pair() -> sp.Expr:
-    """Moser and Veselov's Lax form with parameter of the discrete rigid body: the displayed
-    (M_{k+1} + lambda Lambda^2)(Omega_k - lambda Lambda) = (Omega_k - lambda Lambda)(M_k +
-    lambda Lambda^2) with M_k the emitted mv2 momentum and M_{k+1} the emitted mv3 transport of
-    it, Omega_k orthogonal and Lambda symmetric (noncommutative, every n): left minus right
-    reduces to 0 (so tr((M_k + lambda Lambda^2)^p) does not depend on k)."""
+    r"""Moser and Veselov's Lax form with parameter of the discrete rigid body: the displayed
+    $(M_{k+1} + \lambda\Lambda^2)(\Omega_k - \lambda\Lambda)$ equals $(\Omega_k -
+    \lambda\Lambda)(M_k + \lambda\Lambda^2)$ with $M_k$ the emitted mv2 momentum and $M_{k+1}$ the
+    emitted mv3 transport of it, $\Omega_k$ orthogonal and $\Lambda$ symmetric (noncommutative,
+    every $n$): left minus right reduces to 0 (so $\operatorname{tr}((M_k + \lambda\Lambda^2)^p)$
+    does not depend on $k$)."""
     w = Words(symmetric=["Lambda"], orthogonal=["Omega"])
     Mk_v = MV_MOMENTUM["M"]
     env = {Mk: Mk_v, Mk1: MV_TRANSPORT["M_next"].xreplace({M: Mk_v}), Omk: Om}
@@ -363,10 +368,10 @@ def s4_discrete_lax_pair() -> sp.Expr:
 
 @S4.check(Level.FLOAT64, tol=1e-12)
 def s4_discrete_flow_conserves_the_integrals() -> float:
-    """The Moser-Veselov map conserves the integrals, as its Lax form says: symrb.engine.mv_flow
-    (n = 5, random Lambda and M_0 with |M_0| = 1, h = 0.05, 1000 steps) against the emitted
-    Manakov integrals (symrb.rigid_body.manakov_integrals): max over the six integrals of the
-    drift relative to the integral's size."""
+    r"""The Moser-Veselov map conserves the integrals, as its Lax form says: symrb.engine.mv_flow
+    ($n = 5$, random $\Lambda$ and $M_0$ with $|M_0| = 1$, $h = 0.05$, 1000 steps) against the
+    emitted Manakov integrals (symrb.rigid_body.manakov_integrals): max over the six integrals of
+    the drift relative to the integral's size."""
     import symrb
 
     rng = np.random.default_rng(41)
@@ -380,14 +385,15 @@ def s4_discrete_flow_conserves_the_integrals() -> float:
 
 @S4.check(Level.SYMBOLIC_FIXED_N)
 def s4_generalized_rigid_body_su3() -> sp.Integer:
-    """Beyond SO(n), the paper's 'any semisimple Lie group', on su(3) (Mishchenko-Fomenko): with
-    a = i diag(1, 3, -4), b = i diag(2, -1, 1/2) and Omega from [a, Omega] = [b, M] off the
-    diagonal (0 on it), Mdot = [M, Omega] is the Lax equation with parameter d/dt(M + lambda a) =
-    [M + lambda a, Omega + lambda b] and the Lie-Poisson flow of H = 1/2 <M, Omega> (grad H =
-    Omega); the non-constant lambda-coefficients of tr((M + lambda a)^p), p = 2, 3, and H are
-    conserved and pairwise in involution (symbolic M, 8 coordinates); at a rational point their
-    gradients have rank 5 = (dim + rank)/2, the Casimirs' rank 2: 3 integrals for the generic
-    6-dimensional orbits.  The number of these that fail."""
+    r"""Beyond $\mathrm{SO}(n)$, the paper's 'any semisimple Lie group', on $\mathfrak{su}(3)$
+    (Mishchenko-Fomenko): with $a = i \operatorname{diag}(1, 3, -4)$, $b = i \operatorname{diag}(2,
+    -1, 1/2)$ and $\Omega$ from $[a, \Omega] = [b, M]$ off the diagonal (0 on it), $\dot M = [M,
+    \Omega]$ is the Lax equation with parameter $\frac{d}{dt}(M + \lambda a) = [M + \lambda a,
+    \Omega + \lambda b]$ and the Lie-Poisson flow of $H = \frac12 \langle M, \Omega\rangle$ ($\nabla
+    H = \Omega$); the non-constant $\lambda$-coefficients of $\operatorname{tr}((M + \lambda a)^p)$,
+    $p = 2, 3$, and $H$ are conserved and pairwise in involution (symbolic $M$, 8 coordinates); at a
+    rational point their gradients have rank $5 = (\dim + \mathrm{rank})/2$, the Casimirs' rank 2: 3
+    integrals for the generic 6-dimensional orbits. The number of these that fail."""
     m = sp.symbols("m1:9", real=True)
     a, b = [sp.I * v for v in (1, 3, -4)], [sp.I * v for v in (2, -1, sp.Rational(1, 2))]
     A, B, M_ = sp.diag(*a), sp.diag(*b), su3.element(m)

@@ -46,6 +46,7 @@ S5 = claim(
     "subject to [[eqnr]] with $Q(0)$ and $Q(T)$ given satisfy [[srb1]] with [[optimal_U]], where "
     "$P\\in\\mathfrak{gl}(n)$ is the costate of the maximum principle.",
     expected="holds after correction",
+    headline="[[H_corrected]]",
     printed="The Hamiltonian [[H_printed]], maximised with respect to $U$, gives [[optimal_U]].",
     corrected="With the costate paired with $\\dot Q$ by [[pairing]] on $\\mathfrak{gl}(n)$ "
     "(which extends the pairing of S1 on $\\mathfrak{so}(n)$), the Hamiltonian [[H_corrected]] "
@@ -189,29 +190,31 @@ def _s5_extremals(form: str) -> sp.Integer:
 
 @S5.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def s5_printed_hamiltonian() -> sp.Integer:
-    """The printed Hamiltonian (pairing as displayed, general Q, P, skew U, symbolic Lambda,
-    n = 3): is it maximised, at the displayed U, and is the emitted field (QU, PU) with
-    Qdot = dH/dP, Pdot = -dH/dQ there?  Residual: the number of entries or conditions that
-    fail (the printed H is convex in U, its stationary point is -J^-1(Q^T P - P^T Q))."""
+    r"""The printed Hamiltonian (pairing as displayed, general $Q$, $P$, skew $U$, symbolic
+    $\Lambda$, $n = 3$): is it maximised, at the displayed $U$, and is the emitted field $(QU, PU)$
+    with $\dot Q = \partial H/\partial P$, $\dot P = -\partial H/\partial Q$ there? Residual: the
+    number of entries or conditions that fail (the printed $H$ is convex in $U$, its stationary
+    point is $-J^{-1}(Q^T P - P^T Q)$)."""
     return _s5_extremals("printed")
 
 
 @S5.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def s5_corrected_hamiltonian() -> sp.Integer:
-    """The same for the corrected Hamiltonian: its Hessian in U is negative definite
-    (-c (lam_i + lam_j), c > 0), its maximiser is the displayed U = J^-1(Q^T P - P^T Q), and the
-    emitted symmetric rigid body field equals (QU, PU) and the displayed costate equations
-    (gradients in the displayed pairing, solved from its Gram matrix) at that U."""
+    r"""The same for the corrected Hamiltonian: its Hessian in $U$ is negative definite ($-c
+    (\lambda_i + \lambda_j)$, $c > 0$), its maximiser is the displayed $U = J^{-1}(Q^T P - P^T Q)$,
+    and the emitted symmetric rigid body field equals $(QU, PU)$ and the displayed costate equations
+    (gradients in the displayed pairing, solved from its Gram matrix) at that $U$."""
     return _s5_extremals("corrected")
 
 
 @S5.check(Level.FLOAT64, tol=1e-9)
 def s5_first_variation() -> float:
-    """Extremals are critical points: along a trajectory of symrb.symmetric.symmetric_rigid_body_rhs
-    (n = 4, P in gl(n), t in [0, 2], DOP853 rtol 1e-13), the first variation of the cost in a
-    control direction dU, int 1/2 <J U, dU> dt with J from the reference, equals <P_T, dQ_T> in
-    the displayed pairing, dQ from the tangent-linear equation dQdot = dQ U + Q dU, dQ(0) = 0.
-    Relative difference (it vanishes only when J U = Q^T P - P^T Q along the flow)."""
+    r"""Extremals are critical points: along a trajectory of
+    symrb.symmetric.symmetric_rigid_body_rhs ($n = 4$, $P$ in $\mathfrak{gl}(n)$, $t$ in $[0, 2]$,
+    DOP853 rtol 1e-13), the first variation of the cost in a control direction $dU$, $\int \frac12
+    \langle J U, dU\rangle\, dt$ with $J$ from the reference, equals $\langle P_T, dQ_T\rangle$ in
+    the displayed pairing, $dQ$ from the tangent-linear equation $d\dot Q = dQ\, U + Q\, dU$, $dQ(0)
+    = 0$. Relative difference (it vanishes only when $J U = Q^T P - P^T Q$ along the flow)."""
     from scipy.integrate import solve_ivp
 
     import symrb
@@ -307,19 +310,20 @@ def _s5_general_n(form: str) -> sp.Integer:
 
 @S5.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s5_corrected_general_n() -> sp.Integer:
-    """Every n (noncommutative Q, P, skew U, symmetric Lambda, derivatives along a direction,
-    traces compared as words): the corrected Hamiltonian has dH = <M - J(U), dU>/2 along skew dU,
-    zero exactly at the displayed U = J^-1(Q^T P - P^T Q), second derivative -<dU, J(dU)>/2
-    (a maximum where J is positive definite, S2), and its gradients in P and Q in the displayed
-    pairing give the displayed Qdot = Q U, Pdot = P U through the displayed costate equations."""
+    r"""Every $n$ (noncommutative $Q$, $P$, skew $U$, symmetric $\Lambda$, derivatives along a
+    direction, traces compared as words): the corrected Hamiltonian has $dH = \langle M - J(U),
+    dU\rangle/2$ along skew $dU$, zero exactly at the displayed $U = J^{-1}(Q^T P - P^T Q)$, second
+    derivative $-\langle dU, J(dU)\rangle/2$ (a maximum where $J$ is positive definite, S2), and its
+    gradients in $P$ and $Q$ in the displayed pairing give the displayed $\dot Q = Q U$, $\dot P = P
+    U$ through the displayed costate equations."""
     return _s5_general_n("corrected")
 
 
 @S5.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def s5_printed_general_n() -> sp.Integer:
-    """The same for the printed Hamiltonian: dH = <M + J(U), dU>/2 and d^2H = +<dU, J(dU)>/2, so
-    it is convex in U for every n and its stationary point is -J^-1(M), not the displayed U
-    (trace words left)."""
+    r"""The same for the printed Hamiltonian: $dH = \langle M + J(U), dU\rangle/2$ and $d^2 H =
+    +\langle dU, J(dU)\rangle/2$, so it is convex in $U$ for every $n$ and its stationary point is
+    $-J^{-1}(M)$, not the displayed $U$ (trace words left)."""
     return _s5_general_n("printed")
 
 

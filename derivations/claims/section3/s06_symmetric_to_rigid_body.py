@@ -61,9 +61,10 @@ OMEGA = S6.formula("Omega", eq(Om, Jinv(M)))
 
 @S6.check(Level.SYMBOLIC_GENERAL_N)
 def s6_rigid_body_general_n() -> sp.Integer:
-    """Noncommutative Q, P (any n): with the emitted field, every J^-1 in it is the displayed
-    Omega = J^-1(M) of the emitted M (J^-1 is linear), Qdot equals the displayed Q Omega, and
-    d/dt M (product rule) equals the displayed [M, Omega], using only Omega^T = -Omega."""
+    r"""Noncommutative $Q$, $P$ (any $n$): with the emitted field, every $J^{-1}$ in it is the
+    displayed $\Omega = J^{-1}(M)$ of the emitted $M$ ($J^{-1}$ is linear), $\dot Q$ equals the
+    displayed $Q\Omega$, and $\frac{d}{dt} M$ (product rule) equals the displayed $[M, \Omega]$,
+    using only $\Omega^T = -\Omega$."""
     w = Words(skew=["Omega"])
     Mk = SYMMETRIC_MOMENTUM["M"]
     target = {"Omega": OMEGA.rhs.xreplace({M: Mk})}
@@ -78,8 +79,8 @@ def s6_rigid_body_general_n() -> sp.Integer:
 
 @S6.check(Level.SYMBOLIC_GENERAL_N)
 def s6_momentum_skew() -> sp.Integer:
-    """The emitted M = Q^T P - P^T Q is skew for noncommutative Q, P (any n): M + M^T reduces
-    to 0."""
+    """The emitted $M = Q^T P - P^T Q$ is skew for noncommutative $Q$, $P$ (any $n$): $M + M^T$
+    reduces to 0."""
     w = Words()
     Mw = w.of(SYMMETRIC_MOMENTUM["M"])
     return w.is_zero(Mw + w.T(Mw))
@@ -94,9 +95,10 @@ def _costate_for(Q0: np.ndarray, M0: np.ndarray, rng: np.random.Generator) -> np
 
 @S6.check(Level.FLOAT64, tol=1e-9)
 def s6_flow_against_elliptic() -> float:
-    """symrb.integrate(SymmetricRigidBody) (n = 3, DOP853, rtol 1e-12) from Q0 in SO(3) and a
-    costate in gl(3) with M(0) = hat(m0): its M(t) = Q^T P - P^T Q against the Jacobi elliptic
-    solution of Euler's equations at 41 times in [0, 20]: max |M error| / |m0|."""
+    r"""symrb.integrate(SymmetricRigidBody) ($n = 3$, DOP853, rtol 1e-12) from $Q_0$ in
+    $\mathrm{SO}(3)$ and a costate in $\mathfrak{gl}(3)$ with $M(0) = \hat m_0$: its $M(t) = Q^T P -
+    P^T Q$ against the Jacobi elliptic solution of Euler's equations at 41 times in $[0, 20]$: $\max
+    |M \text{ error}| / |m_0|$."""
     import symrb
 
     rng = np.random.default_rng(61)
@@ -115,9 +117,9 @@ def s6_flow_against_elliptic() -> float:
 
 @S6.check(Level.FLOAT64, tol=1e-9)
 def s6_flow_against_reference_rigid_body() -> float:
-    """symrb.integrate(SymmetricRigidBody) (n = 4, rtol 1e-12) against the reference rigid body
-    field (J^-1 by a linear solve) integrated by solve_ivp from (Q0, M0), at 11 times in [0, 5]:
-    max difference of Q and of M = Q^T P - P^T Q, relative to |M0|."""
+    """symrb.integrate(SymmetricRigidBody) ($n = 4$, rtol 1e-12) against the reference rigid body
+    field ($J^{-1}$ by a linear solve) integrated by solve_ivp from $(Q_0, M_0)$, at 11 times in
+    $[0, 5]$: max difference of $Q$ and of $M = Q^T P - P^T Q$, relative to $|M_0|$."""
     from scipy.integrate import solve_ivp
 
     import symrb

@@ -32,6 +32,7 @@ S7 = claim(
     "these equations leave the set where $Q^TB$ is skew invariant, and on it $Q^TB$ follows the "
     "rigid body equations (the McLachlan-Scovel equations).",
     expected="holds after correction",
+    headline="[[extremal_B]]",
     printed="The extremal equations for a costate $B$ with [[skew]] are [[rbnlms]].",
     corrected="The extremal equations for a costate $B$ with [[skew]] are [[extremal_B]]: "
     "the McLachlan-Scovel equations hold for the rescaled costate [[rescaled]], which on this set is "
@@ -87,25 +88,26 @@ def _s7_extremals(form: str) -> sp.Integer:
 
 @S7.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def s7_printed_extremals() -> sp.Integer:
-    """The emitted S5 extremal field (QU, BU), U = J^-1(Q^T B - B^T Q), for a costate B with the
-    displayed skewness (a rewriting rule B^T Q -> -Q^T B) against the printed (rbnlms), any n
-    (noncommutative Q, B; J^-1 linear): number of equations that differ."""
+    r"""The emitted S5 extremal field $(QU, BU)$, $U = J^{-1}(Q^T B - B^T Q)$, for a costate $B$
+    with the displayed skewness (a rewriting rule $B^T Q \mapsto -Q^T B$) against the printed
+    (rbnlms), any $n$ (noncommutative $Q$, $B$; $J^{-1}$ linear): number of equations that differ.
+    """
     return _s7_extremals("printed")
 
 
 @S7.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s7_corrected_extremals() -> sp.Integer:
-    """The same field against the corrected equations with U = J^-1(2 Q^T B), any n."""
+    """The same field against the corrected equations with $U = J^{-1}(2 Q^T B)$, any $n$."""
     return _s7_extremals("corrected")
 
 
 @S7.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s7_remark_maps_symmetric_flow() -> sp.Integer:
-    """Noncommutative Q (orthogonal), P, any n: for B from the displayed remark, Q^T B is the
-    momentum, so the emitted McLachlan-Scovel field at (Q, B) has the U of the emitted symmetric
-    field; d/dt B along the symmetric field (product rule) equals its Bdot, and its Qdot equals
-    the symmetric Qdot.  And on the displayed skew set (B^T Q -> -Q^T B) the remark equals the
-    displayed rescaling 2B."""
+    r"""Noncommutative $Q$ (orthogonal), $P$, any $n$: for $B$ from the displayed remark, $Q^T B$ is
+    the momentum, so the emitted McLachlan-Scovel field at $(Q, B)$ has the $U$ of the emitted
+    symmetric field; $\frac{d}{dt} B$ along the symmetric field (product rule) equals its $\dot B$,
+    and its $\dot Q$ equals the symmetric $\dot Q$. And on the displayed skew set ($B^T Q \mapsto
+    -Q^T B$) the remark equals the displayed rescaling $2B$."""
     w = Words(orthogonal=["Q"], skew=["U"])
     target = {"U": Jinv(MOMENTUM)}
     sym = {o: w.of(jinv_letters(SYMMETRIC_RIGID_BODY_RHS[o], w, target)) for o in ("Qdot", "Pdot")}
@@ -124,9 +126,9 @@ def s7_remark_maps_symmetric_flow() -> sp.Integer:
 
 @S7.check(Level.SYMBOLIC_GENERAL_N)
 def s7_skew_set_invariant() -> sp.Integer:
-    """Noncommutative Q, B, any n: along the emitted McLachlan-Scovel field (Qdot = QU,
-    Bdot = BU with one U, not assumed skew), S = Q^T B + B^T Q obeys the linear equation
-    Sdot = U^T S + S U, so S(0) = 0 gives S = 0."""
+    r"""Noncommutative $Q$, $B$, any $n$: along the emitted McLachlan-Scovel field ($\dot Q = QU$,
+    $\dot B = BU$ with one $U$, not assumed skew), $S = Q^T B + B^T Q$ obeys the linear equation
+    $\dot S = U^T S + S U$, so $S(0) = 0$ gives $S = 0$."""
     w = Words()
     rates = {
         o[0]: w.of(jinv_letters(MCLACHLAN_SCOVEL_RHS[o], w, {"U": Jinv(Q.T * B)}))
@@ -139,9 +141,10 @@ def s7_skew_set_invariant() -> sp.Integer:
 
 @S7.check(Level.FLOAT64, tol=1e-9)
 def s7_flow_against_elliptic() -> float:
-    """symrb.integrate(McLachlanScovel) (n = 3, DOP853, rtol 1e-12) from Q0 in SO(3),
-    B0 = Q0 hat(m0): its M = Q^T B against the Jacobi elliptic solution of Euler's equations at
-    41 times in [0, 20]: max |M error| / |m0| (a factor in U changes the speed)."""
+    r"""symrb.integrate(McLachlanScovel) ($n = 3$, DOP853, rtol 1e-12) from $Q_0$ in
+    $\mathrm{SO}(3)$, $B_0 = Q_0 \hat m_0$: its $M = Q^T B$ against the Jacobi elliptic solution of
+    Euler's equations at 41 times in $[0, 20]$: $\max |M \text{ error}| / |m_0|$ (a factor in $U$
+    changes the speed)."""
     import symrb
 
     rng = np.random.default_rng(71)
@@ -169,11 +172,12 @@ def _rational_rotation(k: int, rng: np.random.Generator) -> sp.Matrix:
 
 @S7.check(Level.EXACT_RATIONAL)
 def s7_restricts_to_SO_x_SO() -> sp.Integer:
-    """The symmetric rigid body system restricts to SO(n) x SO(n): at exact rational rotations
-    (Q, P) (Cayley transforms, 3 pairs each for n = 3, 4, rational Lambda) the emitted field is
-    tangent to SO(n) x SO(n), Q^T Qdot and P^T Pdot skew, so the closed set SO(n) x SO(n) is
-    invariant.  The number of entries of Q^T Qdot + Qdot^T Q and P^T Pdot + Pdot^T P that are
-    not 0."""
+    r"""The symmetric rigid body system restricts to $\mathrm{SO}(n) \times \mathrm{SO}(n)$: at
+    exact rational rotations $(Q, P)$ (Cayley transforms, 3 pairs each for $n = 3, 4$, rational
+    $\Lambda$) the emitted field is tangent to $\mathrm{SO}(n) \times \mathrm{SO}(n)$, $Q^T \dot Q$
+    and $P^T \dot P$ skew, so the closed set $\mathrm{SO}(n) \times \mathrm{SO}(n)$ is invariant.
+    The number of entries of $Q^T \dot Q + \dot Q^T Q$ and $P^T \dot P + \dot P^T P$ that are not 0.
+    """
     rng = np.random.default_rng(7)
     bad = 0
     for k in (3, 4):

@@ -42,6 +42,7 @@ S8 = claim(
     "$\\sum_a\\phi(Q^a_T)$, the extremals satisfy [[costates]] with [[control]], the maximiser "
     "of [[H]], and an endpoint condition on $P^a_T$.",
     expected="holds after correction",
+    headline="[[endpoint_corrected]], with $Q^a_T$ free",
     printed="The definition keeps $Q_T$ given and fixed beside the terminal cost "
     "$\\sum_a\\phi(Q^a_T)$; [[endpoint_printed]] (with the printed $U$).",
     corrected="The endpoints $Q^a_T$ are free (fixed, they make the terminal cost a constant "
@@ -112,10 +113,11 @@ def _samples(expr: sp.Basic, count: int) -> sp.Basic:
 
 @S8.check(Level.SYMBOLIC_FIXED_N)
 def s8_two_samples() -> sp.Integer:
-    """Two samples, n = 3, general Q^a, P^a, skew U, symbolic Lambda: the displayed Hamiltonian
-    (pairing of S5) is maximised (Hessian -c (lam_i + lam_j)) at the displayed control
-    U = sum_a J^-1(...); for every sample the emitted control field equals the displayed
-    (Q^a U, P^a U) and the costate equations Qdot^a = dH/dP^a, Pdot^a = -dH/dQ^a of S5."""
+    r"""Two samples, $n = 3$, general $Q^a$, $P^a$, skew $U$, symbolic $\Lambda$: the displayed
+    Hamiltonian (pairing of S5) is maximised (Hessian $-c (\lambda_i + \lambda_j)$) at the displayed
+    control $U = \sum_a J^{-1}(\dots)$; for every sample the emitted control field equals the
+    displayed $(Q^a U, P^a U)$ and the costate equations $\dot Q^a = \partial H/\partial P^a$, $\dot
+    P^a = -\partial H/\partial Q^a$ of S5."""
     lam, Ux = lam_symbols(3), skew_matrix("u", 3)
     env: dict[str, sp.Matrix] = {"U": Ux}
     for i in (1, 2):
@@ -136,9 +138,10 @@ def s8_two_samples() -> sp.Integer:
 
 @S8.check(Level.FLOAT64, tol=1e-13)
 def s8_symrb_multi_sample() -> float:
-    """symrb.symmetric.multi_sample_control against sum_a J^-1((Q^a)^T P^a - (P^a)^T Q^a) with J^-1 from the
-    reference linear solve, and symrb.symmetric.multi_sample_rhs against (Q^a U, P^a U), for m = 1, 2, 5
-    samples, n = 3, 4, batches of 3: max difference relative to the size of the reference U."""
+    r"""symrb.symmetric.multi_sample_control against $\sum_a J^{-1}(M^a)$, $M^a = (Q^a)^T P^a -
+    (P^a)^T Q^a$, with $J^{-1}$ from the reference linear solve, and
+    symrb.symmetric.multi_sample_rhs against $(Q^a U, P^a U)$, for $m = 1, 2, 5$ samples, $n = 3,
+    4$, batches of 3: max difference relative to the size of the reference $U$."""
     import symrb
 
     rng = np.random.default_rng(81)
@@ -219,17 +222,17 @@ def _endpoint_mismatch(form: str) -> float:
 
 @S8.check(Level.FLOAT64, tol=1e-8, form="printed")
 def s8_printed_endpoint() -> float:
-    """The derivative of the learning cost (two samples, n = 3, phi = 1/2 |Q - R|_F^2, controls
-    linear in t) in a direction dU, forward (tangent-linear dQ) against the adjoint form
-    int 1/2 <J(U - symrb.symmetric.multi_sample_control(Q, P)), dU> dt with P integrated backward from the
-    printed endpoint condition (its coefficient read from the displayed formula): relative
-    mismatch."""
+    r"""The derivative of the learning cost (two samples, $n = 3$, $\phi = \frac12 |Q - R|_F^2$,
+    controls linear in $t$) in a direction $dU$, forward (tangent-linear $dQ$) against the adjoint
+    form $\int \frac12 \langle J(U - U^*), dU\rangle\, dt$, $U^*$ the control of
+    symrb.symmetric.multi_sample_control at $(Q, P)$, with $P$ integrated backward from the printed
+    endpoint condition (its coefficient read from the displayed formula): relative mismatch."""
     return _endpoint_mismatch("printed")
 
 
 @S8.check(Level.FLOAT64, tol=1e-8, form="corrected")
 def s8_corrected_endpoint() -> float:
-    """The same with P integrated backward from the displayed corrected endpoint condition."""
+    """The same with $P$ integrated backward from the displayed corrected endpoint condition."""
     return _endpoint_mismatch("corrected")
 
 
@@ -264,11 +267,12 @@ def _rational_rotation(a: int, b: int, c: int, d: int) -> sp.Matrix:
 
 @S8.check(Level.EXACT_RATIONAL, form="printed")
 def s8_printed_fixed_endpoint() -> sp.Expr:
-    """The definition keeps Q_T given and fixed beside the terminal cost: with Q_0 = I, the fixed
-    Q_T a rational rotation R (Cayley, entries 1, 2, -1 over 7) and phi(Q) = 1/2 ||Q - R||^2, an
-    admissible control is not zero, yet either displayed endpoint condition gives P_T = 0, where
-    the displayed extremal equations are at rest, so the extremal meeting it starts at R, not at
-    Q_0: the smaller of ||Q(0) - Q_0||_F^2 over the printed and corrected conditions."""
+    r"""The definition keeps $Q_T$ given and fixed beside the terminal cost: with $Q_0 = I$, the
+    fixed $Q_T$ a rational rotation $R$ (Cayley, entries 1, 2, -1 over 7) and $\phi(Q) = \frac12\|Q
+    - R\|^2$, an admissible control is not zero, yet either displayed endpoint condition gives $P_T
+    = 0$, where the displayed extremal equations are at rest, so the extremal meeting it starts at
+    $R$, not at $Q_0$: the smaller of $\|Q(0) - Q_0\|_F^2$ over the printed and corrected
+    conditions."""
     R = _rational_rotation(1, 2, -1, 7)
     gaps = [_s8_endpoint_extremal_start(R, form) - sp.eye(3) for form in ("printed", "corrected")]
     return sp.Min(*(sp.nsimplify(sum(e**2 for e in g)) for g in gaps))
@@ -276,10 +280,9 @@ def s8_printed_fixed_endpoint() -> sp.Expr:
 
 @S8.check(Level.EXACT_RATIONAL, form="corrected")
 def s8_free_endpoint() -> sp.Expr:
-    """The same terminal cost with Q_T free and Q_0 = R: U = 0 is optimal (the cost, a sum of
-    non-negative terms, vanishes there), so Q_T = R, and the corrected endpoint condition with
-    the displayed extremal equations gives the extremal that starts at Q_0:
-    ||Q(0) - Q_0||_F^2."""
+    r"""The same terminal cost with $Q_T$ free and $Q_0 = R$: $U = 0$ is optimal (the cost, a sum of
+    non-negative terms, vanishes there), so $Q_T = R$, and the corrected endpoint condition with the
+    displayed extremal equations gives the extremal that starts at $Q_0$: $\|Q(0) - Q_0\|_F^2$."""
     R = _rational_rotation(1, 2, -1, 7)
     return sp.nsimplify(sum(e**2 for e in _s8_endpoint_extremal_start(R, "corrected") - R))
 
@@ -318,19 +321,20 @@ def _s8_adjoint_defect(form: str) -> sp.Integer:
 
 @S8.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s8_endpoint_any_n() -> sp.Integer:
-    """Why the corrected endpoint condition, for every n (noncommutative symbols): along the
-    displayed fields d/dt <P^a, dQ^a> equals 1/2 <M^a, dU> (dQ^a the variation of the
-    displayed dynamics, U and dU skew), so the cost's derivative, tr(G^T dQ_T) plus the running
-    part, equals the adjoint form int 1/2 <J(U - sum_a J^-1(M^a)), dU> dt exactly when
-    tr(G^T dQ_T) + <P_T, dQ_T> vanishes for every free dQ_T; with the displayed corrected P_T it
-    does (G the entrywise derivative of phi; count of trace words left)."""
+    r"""Why the corrected endpoint condition, for every $n$ (noncommutative symbols): along the
+    displayed fields $\frac{d}{dt} \langle P^a, dQ^a\rangle$ equals $\frac12 \langle M^a, dU\rangle$
+    ($dQ^a$ the variation of the displayed dynamics, $U$ and $dU$ skew), so the cost's derivative,
+    $\operatorname{tr}(G^T dQ_T)$ plus the running part, equals the adjoint form $\int \frac12
+    \langle J(U - \sum_a J^{-1}(M^a)), dU\rangle\, dt$ exactly when $\operatorname{tr}(G^T dQ_T) +
+    \langle P_T, dQ_T\rangle$ vanishes for every free $dQ_T$; with the displayed corrected $P_T$ it
+    does ($G$ the entrywise derivative of $\phi$; count of trace words left)."""
     return _s8_adjoint_defect("corrected")
 
 
 @S8.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def s8_printed_endpoint_any_n() -> sp.Integer:
-    """The same with the printed endpoint condition: tr(G^T dQ_T) + <P_T, dQ_T> does not vanish
-    (every n)."""
+    r"""The same with the printed endpoint condition: $\operatorname{tr}(G^T dQ_T) + \langle P_T,
+    dQ_T\rangle$ does not vanish (every $n$)."""
     return _s8_adjoint_defect("printed")
 
 

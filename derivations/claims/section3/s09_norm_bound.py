@@ -50,9 +50,9 @@ GL_SOLUTION = S9.formula("gl", eq(P, Q * M / 2))
 
 @S9.check(Level.SYMBOLIC_GENERAL_N)
 def s9_identity_general_n() -> sp.Integer:
-    """Noncommutative orthogonal Q, P (any n): the displayed identity with M the emitted
-    momentum and A = Q^T P reduces to 0, and its constant is the square of the displayed bound
-    (so |Mx|^2 <= bound^2 |x|^2)."""
+    r"""Noncommutative orthogonal $Q$, $P$ (any $n$): the displayed identity with $M$ the emitted
+    momentum and $A = Q^T P$ reduces to 0, and its constant is the square of the displayed bound (so
+    $|Mx|^2 \le \mathrm{bound}^2 |x|^2$)."""
     w = Words(orthogonal=["Q", "P"])
     env = {M: SYMMETRIC_MOMENTUM["M"], _Ao: Q.T * P}
     lhs, rhs = (w.of(side.xreplace(env)) for side in (IDENTITY.lhs, IDENTITY.rhs))
@@ -61,16 +61,17 @@ def s9_identity_general_n() -> sp.Integer:
 
 @S9.check(Level.SYMBOLIC_GENERAL_N)
 def s9_no_bound_on_gl() -> sp.Integer:
-    """Noncommutative orthogonal Q and skew M (any n): the emitted momentum at the displayed
-    P = Q M / 2 reduces to M, whatever the size of M."""
+    """Noncommutative orthogonal $Q$ and skew $M$ (any $n$): the emitted momentum at the displayed
+    $P = QM/2$ reduces to $M$, whatever the size of $M$."""
     w = Words(orthogonal=["Q"], skew=["M"])
     return w.is_zero(w.of(SYMMETRIC_MOMENTUM["M"].xreplace({P: GL_SOLUTION.rhs})) - w("M"))
 
 
 @S9.check(Level.FLOAT64, tol=1e-12)
 def s9_sampled_bound() -> float:
-    """symrb.symmetric.symmetric_momentum of 3000 random pairs of reference rotations (n = 2..7): by how
-    much its largest operator norm exceeds the displayed bound (0 when it does not)."""
+    r"""symrb.symmetric.symmetric_momentum of 3000 random pairs of reference rotations ($n = 2,
+    \dots, 7$): by how much its largest operator norm exceeds the displayed bound (0 when it does
+    not)."""
     import symrb
 
     rng = np.random.default_rng(9)
@@ -86,9 +87,9 @@ def s9_sampled_bound() -> float:
 
 @S9.check(Level.FLOAT64, tol=1e-13)
 def s9_bound_attained() -> float:
-    """The bound is attained: for Q^T P an orthogonal matrix with a rotation by pi/2 in some
-    plane (random Q, random rotation on the complement, n = 3..6), the operator norm of
-    symrb.symmetric.symmetric_momentum(Q, P) minus the displayed bound, in absolute value."""
+    r"""The bound is attained: for $Q^T P$ an orthogonal matrix with a rotation by $\pi/2$ in some
+    plane (random $Q$, random rotation on the complement, $n = 3, \dots, 6$), the operator norm of
+    symrb.symmetric.symmetric_momentum($Q$, $P$) minus the displayed bound, in absolute value."""
     from scipy.linalg import block_diag
 
     import symrb
@@ -108,11 +109,11 @@ def s9_bound_attained() -> float:
 
 @S9.check(Level.EXACT_RATIONAL)
 def s9_skew_orthogonal_pairs() -> sp.Integer:
-    """The remark after the definition of C: for n = 2, 4, 6 the block rotation A by pi/2 in
-    orthogonal planes is skew, orthogonal, in SO(n), and at the pair (Q, P) = (I, A) the emitted
-    momentum M has every eigenvalue of M^T M equal to the displayed bound squared (so the pair is
-    in C); for n = 3, 5 the determinant of a general symbolic skew matrix is 0 (no skew
-    matrix is orthogonal: the remark is vacuous).  The number of these that fail."""
+    r"""The remark after the definition of $C$: for $n = 2, 4, 6$ the block rotation $A$ by $\pi/2$
+    in orthogonal planes is skew, orthogonal, in $\mathrm{SO}(n)$, and at the pair $(Q, P) = (I, A)$
+    the emitted momentum $M$ has every eigenvalue of $M^T M$ equal to the displayed bound squared
+    (so the pair is in $C$); for $n = 3, 5$ the determinant of a general symbolic skew matrix is 0
+    (no skew matrix is orthogonal: the remark is vacuous). The number of these that fail."""
     bad = 0
     for k in (2, 4, 6):
         A = sp.diag(*[sp.Matrix([[0, -1], [1, 0]])] * (k // 2))
@@ -125,10 +126,11 @@ def s9_skew_orthogonal_pairs() -> sp.Integer:
 
 @S9.check(Level.FLOAT64, tol=1e-12)
 def s9_S_onto_S_M() -> float:
-    """S_M is the image of S: for random (Q, M) in S_M (Q a reference rotation, M skew with
-    ||M||_op = 0.5, 1.5, 1.99; n = 3..6), P = Q (M/2 + (I + M^2/4)^(1/2)) (square root by
-    numpy.linalg.eigh) is a rotation, and symrb.symmetric.symmetric_momentum(Q, P) is M.  Max of
-    |Q^T P - P^T Q - M|, |P^T P - I| and |det P - 1|."""
+    r"""$S_M$ is the image of $S$: for random $(Q, M)$ in $S_M$ ($Q$ a reference rotation, $M$ skew
+    with $\|M\|_{\mathrm{op}} = 0.5, 1.5, 1.99$; $n = 3, \dots, 6$), $P = Q (M/2 + (I +
+    M^2/4)^{1/2})$ (square root by numpy.linalg.eigh) is a rotation, and
+    symrb.symmetric.symmetric_momentum($Q$, $P$) is $M$. Max of $|Q^T P - P^T Q - M|$, $|P^T P - I|$
+    and $|\det P - 1|$."""
     import symrb
 
     rng = np.random.default_rng(91)
@@ -156,12 +158,13 @@ def _lagrangian(g: np.ndarray, gdot: np.ndarray, lam: np.ndarray) -> np.ndarray:
 
 @S9.check(Level.FLOAT64, tol=1e-12)
 def s9_left_trivialisation() -> float:
-    """The trivialisation of the definition: the fibre derivative of the rigid body Lagrangian
-    L(g, gdot) = 1/2 <g^-1 gdot, J(g^-1 gdot)> (S3) at (Q, Q Omega), evaluated on the left
-    translates Q E_ij of the basis of so(n) (complex step), and identified with so(n) by the Gram
-    matrix of the pairing (killing.eqn), is M = J(Omega): the point (Q, M) of T*SO(n) in which
-    S_M is stated is the rigid body's attitude and momentum (n = 3..5, 5 random points each; max
-    difference relative to |M|)."""
+    r"""The trivialisation of the definition: the fibre derivative of the rigid body Lagrangian
+    $L(g, \dot g) = \frac12 \langle g^{-1} \dot g, J(g^{-1} \dot g)\rangle$ (S3) at $(Q, Q\Omega)$,
+    evaluated on the left translates $Q E_{ij}$ of the basis of $\mathfrak{so}(n)$ (complex step),
+    and identified with $\mathfrak{so}(n)$ by the Gram matrix of the pairing (killing.eqn), is $M =
+    J(\Omega)$: the point $(Q, M)$ of $T^*\mathrm{SO}(n)$ in which $S_M$ is stated is the rigid
+    body's attitude and momentum ($n = 3, \dots, 5$, 5 random points each; max difference relative
+    to $|M|$)."""
     rng = np.random.default_rng(92)
     worst = 0.0
     for k in range(3, 6):

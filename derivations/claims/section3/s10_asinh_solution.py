@@ -37,6 +37,7 @@ S10 = claim(
     "$1/\\sqrt{1 + u^2}$, converges on the skew $u$ of operator norm below 1 and there inverts "
     "$\\sinh$; it still converges on the boundary, as slowly as the scalar series.",
     expected="holds after correction",
+    headline="[[corrected]]",
     printed="[[printed]], the exponent read as half of $\\sinh^{-1}M$.",
     corrected="[[corrected]], which on skew matrices is [[closed]].",
     note="The printed exponent $\\sinh^{-1} M/2$ is ambiguous, and read as $\\tfrac12\\sinh^{-1} "
@@ -144,16 +145,16 @@ def _s10_scalar(form: str) -> sp.Expr:
 
 @S10.check(Level.SYMBOLIC_FIXED_N, form="printed")
 def s10_printed_scalar() -> sp.Integer:
-    """On an eigenvalue x of M, the displayed printed reading P = Q exp(X(x)) gives
-    exp(X) - exp(-X) - x, the eigenvalue of Q^T P - P^T Q - M: does it simplify to 0?"""
+    r"""On an eigenvalue $x$ of $M$, the displayed printed reading $P = Q \exp(X(x))$ gives $\exp(X)
+    - \exp(-X) - x$, the eigenvalue of $Q^T P - P^T Q - M$: does it simplify to 0?"""
     return _s10_scalar("printed")
 
 
 @S10.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def s10_corrected_scalar() -> sp.Integer:
-    """The same for the corrected reading, and exp(X(x)) equals the displayed closed form
-    x/2 + (1 + x^2/4)^(1/2) (identities of analytic functions, simplified for real x after
-    rewriting asinh as a log, so they hold on the imaginary eigenvalues of M too)."""
+    r"""The same for the corrected reading, and $\exp(X(x))$ equals the displayed closed form $x/2 +
+    (1 + x^2/4)^{1/2}$ (identities of analytic functions, simplified for real $x$ after rewriting
+    $\operatorname{asinh}$ as a log, so they hold on the imaginary eigenvalues of $M$ too)."""
     return _s10_scalar("corrected")
 
 
@@ -182,18 +183,19 @@ def _s10_general_n(form: str) -> sp.Integer:
 
 @S10.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s10_corrected_general_n() -> sp.Integer:
-    """Every n: Q^T P - P^T Q - M (the displayed M formula, noncommutative Q orthogonal, M skew)
-    with P = Q F, F the displayed corrected exp(asinh(M/2)), reduces to F - F^T - M; F^T = F(-M)
-    for a real power series of skew M, and functions of one matrix commute, so it vanishes for
-    every n when exp(asinh(z/2)) - exp(asinh(-z/2)) = z, which SymPy confirms."""
+    r"""Every $n$: $Q^T P - P^T Q - M$ (the displayed $M$ formula, noncommutative $Q$ orthogonal,
+    $M$ skew) with $P = Q F$, $F$ the displayed corrected $\exp(\operatorname{asinh}(M/2))$, reduces
+    to $F - F^T - M$; $F^T = F(-M)$ for a real power series of skew $M$, and functions of one matrix
+    commute, so it vanishes for every $n$ when $\exp(\operatorname{asinh}(z/2))$ minus
+    $\exp(\operatorname{asinh}(-z/2))$ is $z$, which SymPy confirms."""
     return _s10_general_n("corrected")
 
 
 @S10.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def s10_printed_general_n() -> sp.Integer:
-    """The same reduction for the printed reading F = exp(asinh(M)/2): F(z) - F(-z) - z does not
-    vanish, so the printed formula fails for every n (a nonzero function of M is nonzero on some
-    skew M of norm below 2, already for n = 2)."""
+    r"""The same reduction for the printed reading $F = \exp(\operatorname{asinh}(M)/2)$: $F(z) -
+    F(-z) - z$ does not vanish, so the printed formula fails for every $n$ (a nonzero function of
+    $M$ is nonzero on some skew $M$ of norm below 2, already for $n = 2$)."""
     return _s10_general_n("printed")
 
 
@@ -214,9 +216,9 @@ def _s10_equation(form: str) -> float:
 
 @S10.check(Level.FLOAT64, tol=1e-12, form="printed")
 def s10_printed_matrix() -> float:
-    """The displayed printed formula evaluated with matrices (asinh by the Hermitian
-    eigen-decomposition of iM, scipy expm) for random skew M with ||M||_op < 0.9 and rotations
-    Q, n = 3..6: max |Q^T P - P^T Q - M|."""
+    r"""The displayed printed formula evaluated with matrices ($\operatorname{asinh}$ by the
+    Hermitian eigen-decomposition of $iM$, scipy expm) for random skew $M$ with $\|M\|_{\mathrm{op}}
+    < 0.9$ and rotations $Q$, $n = 3, \dots, 6$: $\max |Q^T P - P^T Q - M|$."""
     return _s10_equation("printed")
 
 
@@ -264,8 +266,9 @@ def near_boundary() -> tuple[np.ndarray, list[tuple[float, np.ndarray, Any]], fl
 
 @S10.check(Level.MPMATH, tol=1e-50, form="corrected")
 def s10_high_precision_identity() -> float:
-    """60 digits: P from the displayed closed form solves Q^T P - P^T Q = M with P^T P = I at
-    ||M||_op = 2(1 - delta), delta = 1e-4, 1e-8, 1e-12 (n = 4): largest residual."""
+    r"""60 digits: $P$ from the displayed closed form solves $Q^T P - P^T Q = M$ with $P^T P = I$ at
+    $\|M\|_{\mathrm{op}} = 2(1 - \delta)$, $\delta = 10^{-4}, 10^{-8}, 10^{-12}$ ($n = 4$): largest
+    residual."""
     return near_boundary()[2]
 
 
@@ -294,10 +297,11 @@ def _skew_of_norm(k: int, norm: float, rng: np.random.Generator) -> np.ndarray:
 
 @S10.check(Level.FLOAT64, tol=1e-13)
 def s10_asinh_series_inside() -> float:
-    """The paper's series for sinh^-1 on so(n) inside its domain: for random skew u (n = 3, 4, 5)
-    with ||u||_op = 0.5 and 0.9, the partial sum of 400 terms equals the matrix function asinh(u)
-    (eigen-decomposition of iu, asinh(iy) = i arcsin y) and sinh of it (scipy's expm) is u again:
-    max error."""
+    r"""The paper's series for $\sinh^{-1}$ on $\mathfrak{so}(n)$ inside its domain: for random skew
+    $u$ ($n = 3, 4, 5$) with $\|u\|_{\mathrm{op}} = 0.5$ and 0.9, the partial sum of 400 terms
+    equals the matrix function $\operatorname{asinh}(u)$ (eigen-decomposition of $iu$,
+    $\operatorname{asinh}(iy) = i \arcsin y$) and $\sinh$ of it (scipy's expm) is $u$ again: max
+    error."""
     rng = np.random.default_rng(10)
     worst = 0.0
     for k in (3, 4, 5):
@@ -311,10 +315,11 @@ def s10_asinh_series_inside() -> float:
 
 @S10.check(Level.FLOAT64, tol=0.05)
 def s10_asinh_series_on_the_boundary() -> float:
-    """On the boundary ||u||_op = 1 (random skew u, n = 4) the series still converges to asinh(u),
-    as slowly as the scalar series at |y| = 1: the error of the partial sums of K = 100 and
-    10,000 terms against the matrix function falls like K^(-1/2); |fitted exponent + 1/2| (inf
-    unless sinh of the matrix function is u to 1e-12)."""
+    r"""On the boundary $\|u\|_{\mathrm{op}} = 1$ (random skew $u$, $n = 4$) the series still
+    converges to $\operatorname{asinh}(u)$, as slowly as the scalar series at $|y| = 1$: the error
+    of the partial sums of $K = 100$ and 10,000 terms against the matrix function falls like
+    $K^{-1/2}$; $|\text{fitted exponent} + 1/2|$ (inf unless $\sinh$ of the matrix function is $u$
+    to 1e-12)."""
     u = _skew_of_norm(4, 1.0, np.random.default_rng(11))
     limit = _asinh_skew(u)
     if np.abs(_sinh(limit) - u).max() > 1e-12:
@@ -328,11 +333,12 @@ _SERIES_TERMS = 8  # odd powers xi, xi^3, ..., xi^15 in the symbolic check
 
 @S10.check(Level.SYMBOLIC_GENERAL_N)
 def s10_sinh_is_skew_general_n() -> sp.Integer:
-    """Every n: with xi a noncommutative skew letter (xi^T = -xi), the displayed definition
-    (e^xi - e^-xi)/2, expanded to degree 15, is the odd series sum xi^(2k+1)/(2k+1)! (the even
-    powers cancel), and its transpose is minus itself, so sinh maps so(n) to so(n); a truncation
-    keeps it degree by degree, so the statement holds for the whole series.  Replacing -xi by
-    xi^T in e^-xi (a non-skew letter) leaves a nonzero residual."""
+    r"""Every $n$: with $\xi$ a noncommutative skew letter ($\xi^T = -\xi$), the displayed
+    definition $(e^\xi - e^{-\xi})/2$, expanded to degree 15, is the odd series $\sum_k
+    \xi^{2k+1}/(2k+1)!$ (the even powers cancel), and its transpose is minus itself, so $\sinh$ maps
+    $\mathfrak{so}(n)$ to $\mathfrak{so}(n)$; a truncation keeps it degree by degree, so the
+    statement holds for the whole series. Replacing $-\xi$ by $\xi^T$ in $e^{-\xi}$ (a non-skew
+    letter) leaves a nonzero residual."""
     w = Words(skew=["xi"])
     xi = w("xi")
     exp_series = sum((xi**j / sp.factorial(j) for j in range(2 * _SERIES_TERMS)), sp.Integer(0))
@@ -345,10 +351,11 @@ def s10_sinh_is_skew_general_n() -> sp.Integer:
 
 @S10.check(Level.FLOAT64, tol=1e-13)
 def s10_sinh_and_its_inverse_on_so_n() -> float:
-    """sinh and sinh^-1 stay in so(n): for random skew xi (n = 2..6, ||xi||_op = 0.5, 2, 5) the
-    displayed (e^xi - e^-xi)/2 (scipy's expm) is skew and equals its odd power series (80 terms);
-    for random skew u with ||u||_op = 0.5, 0.9 the paper's series for sinh^-1 (400 terms) is
-    skew and sinh of it is u: the largest of these errors, relative to the norm of the matrix."""
+    r"""$\sinh$ and $\sinh^{-1}$ stay in $\mathfrak{so}(n)$: for random skew $\xi$ ($n = 2, \dots,
+    6$, $\|\xi\|_{\mathrm{op}} = 0.5, 2, 5$) the displayed $(e^\xi - e^{-\xi})/2$ (scipy's expm) is
+    skew and equals its odd power series (80 terms); for random skew $u$ with $\|u\|_{\mathrm{op}} =
+    0.5, 0.9$ the paper's series for $\sinh^{-1}$ (400 terms) is skew and $\sinh$ of it is $u$: the
+    largest of these errors, relative to the norm of the matrix."""
     from scipy.linalg import expm
 
     rng = np.random.default_rng(12)

@@ -42,8 +42,9 @@ S11.formula("M", eq(M, SYMMETRIC_MOMENTUM.outputs["M"]))
 
 @S11.check(Level.SYMBOLIC_GENERAL_N)
 def s11_spatial_momentum_general_n() -> sp.Integer:
-    """Noncommutative Q, P (any n): d/dt of the displayed Q M Q^T, with M the emitted momentum
-    and (Qdot, Pdot) the emitted field (J^-1(M) a skew letter), reduces to the displayed 0."""
+    r"""Noncommutative $Q$, $P$ (any $n$): $\frac{d}{dt}$ of the displayed $Q M Q^T$, with $M$ the
+    emitted momentum and $(\dot Q, \dot P)$ the emitted field ($J^{-1}(M)$ a skew letter), reduces
+    to the displayed 0."""
     w = Words(skew=["U"])
     Mk = SYMMETRIC_MOMENTUM["M"]
     rates = {
@@ -56,9 +57,9 @@ def s11_spatial_momentum_general_n() -> sp.Integer:
 
 @S11.check(Level.SYMBOLIC_GENERAL_N)
 def s11_conjugation_keeps_norm_general_n() -> sp.Integer:
-    """The operator norm is invariant under conjugation, for every n: with Q orthogonal and M
-    skew (noncommutative letters), X = Q M Q^T has X^T X = Q (M^T M) Q^T and y = Q^T x has
-    y^T y = x^T x, so |X x|^2 = |M y|^2 and the suprema over unit vectors agree (each identity
+    """The operator norm is invariant under conjugation, for every $n$: with $Q$ orthogonal and $M$
+    skew (noncommutative letters), $X = Q M Q^T$ has $X^T X = Q (M^T M) Q^T$ and $y = Q^T x$ has
+    $y^T y = x^T x$, so $|Xx|^2 = |My|^2$ and the suprema over unit vectors agree (each identity
     reduces to 0)."""
     w = Words(orthogonal=["Q"], skew=["M"])
     q, m, x = w("Q"), w("M"), w("x")
@@ -72,9 +73,10 @@ def s11_conjugation_keeps_norm_general_n() -> sp.Integer:
 
 @S11.check(Level.SYMBOLIC_GENERAL_N)
 def s11_coadjoint_is_conjugation() -> sp.Integer:
-    """Under the identification of so(n)* with so(n) by the pairing of S1, the coadjoint action is
-    conjugation: <mu, g^-1 xi g> = <g mu g^-1, xi> for g orthogonal (g^-1 = g^T), as trace words
-    in noncommutative mu, g, xi (every n)."""
+    r"""Under the identification of $\mathfrak{so}(n)^*$ with $\mathfrak{so}(n)$ by the pairing of
+    S1, the coadjoint action is conjugation: $\langle \mu, g^{-1} \xi g\rangle = \langle g \mu
+    g^{-1}, \xi\rangle$ for $g$ orthogonal ($g^{-1} = g^T$), as trace words in noncommutative $\mu$,
+    $g$, $\xi$ (every $n$)."""
     w = Words()
     mu, g, xi = matrix("mu"), matrix("g"), matrix("xi")
     diff = Pair(mu, g.T * xi * g) - Pair(g * mu * g.T, xi)
@@ -100,11 +102,11 @@ def _norm_drift(k: int, lam: np.ndarray, Q0: np.ndarray, P0: np.ndarray) -> floa
 
 @S11.check(Level.FLOAT64, tol=1e-9)
 def s11_norm_constant_on_flow() -> float:
-    """The level sets are invariant: along symrb.integrate(SymmetricRigidBody) (n = 4, DOP853,
-    rtol 1e-12, t in [0, 10]) the operator norm of M = Q^T P - P^T Q (numpy.linalg.norm, ord 2)
-    stays 2 from a pair in C (Q^T P a rotation by pi/2 in one plane) and stays at its value below
-    2 from a random pair in S; and ||Q M Q^T||_op = ||M||_op for 20 random rotations Q and skew
-    M (n = 3..6).  Max absolute change."""
+    r"""The level sets are invariant: along symrb.integrate(SymmetricRigidBody) ($n = 4$, DOP853,
+    rtol 1e-12, $t$ in $[0, 10]$) the operator norm of $M = Q^T P - P^T Q$ (numpy.linalg.norm, ord
+    2) stays 2 from a pair in $C$ ($Q^T P$ a rotation by $\pi/2$ in one plane) and stays at its
+    value below 2 from a random pair in $S$; and $\|Q M Q^T\|_{\mathrm{op}} = \|M\|_{\mathrm{op}}$
+    for 20 random rotations $Q$ and skew $M$ ($n = 3, \dots, 6$). Max absolute change."""
     from scipy.linalg import block_diag
 
     rng = np.random.default_rng(111)

@@ -124,9 +124,9 @@ def hamilton_equations(k: int, convention: sp.Expr) -> tuple[sp.Matrix, ...]:
 
 @S12.check(Level.SYMBOLIC_FIXED_N)
 def s12_hamilton_equations() -> sp.Integer:
-    """Hamilton's equations from the displayed form (its Gram matrix on the elementary matrices,
-    no coefficient assumed), the displayed convention and the emitted Hamiltonian, solved for
-    X_H, against the emitted symmetric rigid body field (symbolic entries and Lambda, n = 3):
+    r"""Hamilton's equations from the displayed form (its Gram matrix on the elementary matrices, no
+    coefficient assumed), the displayed convention and the emitted Hamiltonian, solved for $X_H$,
+    against the emitted symmetric rigid body field (symbolic entries and $\Lambda$, $n = 3$):
     entries that differ."""
     convention, dH = HAMILTON.rhs.as_coeff_Mul()
     if dH.func.__name__ != "dH":
@@ -137,9 +137,9 @@ def s12_hamilton_equations() -> sp.Integer:
 
 @S12.check(Level.SYMBOLIC_GENERAL_N)
 def s12_SO_invariant_general_n() -> sp.Integer:
-    """Noncommutative Q, P (any n), emitted field with J^-1(M) a skew letter U: d/dt(Q^T Q - I)
-    equals [Q^T Q - I, U], a linear homogeneous equation, so Q^T Q = I is invariant; likewise
-    for P."""
+    r"""Noncommutative $Q$, $P$ (any $n$), emitted field with $J^{-1}(M)$ a skew letter $U$:
+    $\frac{d}{dt}(Q^T Q - I)$ equals $[Q^T Q - I, U]$, a linear homogeneous equation, so $Q^T Q = I$
+    is invariant; likewise for $P$."""
     w = Words(skew=["U"])
     rates = {
         o[0]: w.of(jinv_letters(SYMMETRIC_RIGID_BODY_RHS[o], w, {"U": Jinv(MOMENTUM)}))
@@ -156,8 +156,9 @@ def s12_SO_invariant_general_n() -> sp.Integer:
 
 @S12.check(Level.SYMBOLIC_GENERAL_N)
 def s12_quarter_energy_general_n() -> sp.Integer:
-    """The emitted Hamiltonian minus the displayed 1/4 <J^-1(M), M> (pairing -1/2 tr), with
-    J^-1(M) a letter, as trace words in noncommutative Q, P (any n): no word remains."""
+    r"""The emitted Hamiltonian minus the displayed $\frac14 \langle J^{-1}(M), M\rangle$ (pairing
+    $-\frac12 \operatorname{tr}$), with $J^{-1}(M)$ a letter, as trace words in noncommutative $Q$,
+    $P$ (any $n$): no word remains."""
     w = Words()
     letters = {"V": Jinv(MOMENTUM)}
     emitted = jinv_letters(GL_HAMILTONIAN["H"], w, letters)
@@ -167,10 +168,11 @@ def s12_quarter_energy_general_n() -> sp.Integer:
 
 @S12.check(Level.FLOAT64, tol=1e-13)
 def s12_symrb_pointwise() -> float:
-    """symrb.symmetric.gl_hamiltonian against 1/4 <J^-1(M), M> and symrb.symmetric.symmetric_rigid_body_rhs against
-    the reference field, J^-1 by the reference linear solve, M = Q^T P - P^T Q in NumPy, n = 2..6,
-    batches of 20 random (Q in SO(n), P in gl(n)): max difference relative to the reference
-    values' size."""
+    r"""symrb.symmetric.gl_hamiltonian against $\frac14 \langle J^{-1}(M), M\rangle$ and
+    symrb.symmetric.symmetric_rigid_body_rhs against the reference field, $J^{-1}$ by the reference
+    linear solve, $M = Q^T P - P^T Q$ in NumPy, $n = 2, \dots, 6$, batches of 20 random ($Q$ in
+    $\mathrm{SO}(n)$, $P$ in $\mathfrak{gl}(n)$): max difference relative to the reference values'
+    size."""
     import symrb
 
     rng = np.random.default_rng(12)
@@ -248,12 +250,13 @@ def _rational(rng: np.random.Generator) -> sp.Rational:
 
 @S12.check(Level.EXACT_RATIONAL)
 def s12_classical_canonical() -> sp.Integer:
-    """The classical rigid body is Hamiltonian on T*SO(n) for the canonical symplectic
-    structure (n = 3, in a chart): with Q = (I - X)^-1 (I + X), X = hat(q)/2, canonical momenta p
-    conjugate to q and H(q, p) the Legendre transform of 1/2 <Omega, J Omega> (pairing of S1,
-    displayed J), Hamilton's equations qdot = dH/dp, pdot = -dH/dq give Qdot = Q Omega and
-    Mdot = [M, Omega] with M = J(Omega), at 3 random rational (q, p) and rational Lambda (exact).
-    The number of entries that are not 0."""
+    r"""The classical rigid body is Hamiltonian on $T^*\mathrm{SO}(n)$ for the canonical symplectic
+    structure ($n = 3$, in a chart): with $Q = (I - X)^{-1} (I + X)$, $X = \hat q/2$, canonical
+    momenta $p$ conjugate to $q$ and $H(q, p)$ the Legendre transform of $\frac12 \langle \Omega,
+    J\Omega\rangle$ (pairing of S1, displayed $J$), Hamilton's equations $\dot q = \partial
+    H/\partial p$, $\dot p = -\partial H/\partial q$ give $\dot Q = Q\Omega$ and $\dot M = [M,
+    \Omega]$ with $M = J(\Omega)$, at 3 random rational $(q, p)$ and rational $\Lambda$ (exact). The
+    number of entries that are not 0."""
     rng = np.random.default_rng(12)
     lam = [sp.Rational(5, 10), sp.Rational(8, 10), sp.Rational(14, 10)]
     bad = 0

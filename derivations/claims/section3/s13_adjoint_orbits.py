@@ -128,9 +128,9 @@ ORBIT_HAMILTONIAN = Kernel(
 
 @S13.check(Level.SYMBOLIC_GENERAL_N)
 def s13_hamiltonian_convention() -> sp.Expr:
-    """The displayed H is <p, f> - L for f the right side of the displayed dynamics and L the
-    integrand of the displayed cost (the convention under which the maximum principle maximises
-    H; trace words, every n)."""
+    r"""The displayed $H$ is $\langle p, f\rangle - L$ for $f$ the right side of the displayed
+    dynamics and $L$ the integrand of the displayed cost (the convention under which the maximum
+    principle maximises $H$; trace words, every $n$)."""
     w = Words()
     (integral,) = COST.rhs.atoms(sp.Integral)
     convention = Pair(p, ORB.rhs) - integral.function
@@ -146,8 +146,9 @@ def stationarity(control: sp.MatrixExpr) -> sp.Expr:
 
 @S13.check(Level.SYMBOLIC_GENERAL_N)
 def s13_stationary_control() -> sp.Expr:
-    """The derivative of the displayed H along a direction d of u is the displayed dH/du, and it
-    vanishes at the emitted optimal control for every d (trace words, every n)."""
+    r"""The derivative of the displayed $H$ along a direction $d$ of $u$ is the displayed $\partial
+    H/\partial u$, and it vanishes at the emitted optimal control for every $d$ (trace words, every
+    $n$)."""
     w = Words()
     dH = directional(HAMILTONIAN.rhs, {u: d}, w, linear_potential)
     r = trace_residual(dH - trace_poly(DHDU.rhs, w))
@@ -156,8 +157,9 @@ def s13_stationary_control() -> sp.Expr:
 
 @S13.check(Level.SYMBOLIC_GENERAL_N)
 def s13_optimal_hamiltonian() -> sp.Expr:
-    """H at the emitted u* minus the displayed H* (for any V) has no trace words left, and the
-    emitted H* kernel equals the displayed H* with Brockett's potential of S14 (every n)."""
+    """$H$ at the emitted $u^*$ minus the displayed $H^*$ (for any $V$) has no trace words left, and
+    the emitted $H^*$ kernel equals the displayed $H^*$ with Brockett's potential of S14 (every
+    $n$)."""
     w = Words()
     at_ustar = HAMILTONIAN.rhs.xreplace({u: OPTIMAL_CONTROL["u"]})
     r = trace_residual(trace_poly(at_ustar - HSTAR.rhs, w, linear_potential))
@@ -168,9 +170,10 @@ def s13_optimal_hamiltonian() -> sp.Expr:
 
 @S13.check(Level.SYMBOLIC_GENERAL_N)
 def s13_hamilton_equations() -> sp.Expr:
-    """Hamilton's equations of the displayed H*: dH*/dp [d] equals <xdot, d> and -dH*/dx [d]
-    equals <pdot, d> for the displayed xdot and pdot, every direction d (V through its gradient
-    V_x; trace words, every n)."""
+    r"""Hamilton's equations of the displayed $H^*$: $\partial H^*/\partial p\,[d]$ equals $\langle
+    \dot x, d\rangle$ and $-\partial H^*/\partial x\,[d]$ equals $\langle \dot p, d\rangle$ for the
+    displayed $\dot x$ and $\dot p$, every direction $d$ ($V$ through its gradient $V_x$; trace
+    words, every $n$)."""
     w = Words()
     dp = directional(HSTAR.rhs, {p: d}, w, linear_potential)
     dx = directional(HSTAR.rhs, {x: d}, w, linear_potential)
@@ -215,8 +218,10 @@ def killing_form(basis: Sequence[sp.Matrix]) -> sp.Matrix:
 
 @S13.check(Level.SYMBOLIC_FIXED_N)
 def s13_killing_forms() -> sp.Expr:
-    """kappa(e_i, e_j) from the structure constants equals the displayed (n-2) tr(e_i e_j) on
-    so(3), so(4) and 2n tr(e_i e_j) on su(2), su(3), for every pair of basis elements."""
+    r"""$\kappa(e_i, e_j)$ from the structure constants equals the displayed $(n-2)
+    \operatorname{tr}(e_i e_j)$ on $\mathfrak{so}(3)$, $\mathfrak{so}(4)$ and $2n
+    \operatorname{tr}(e_i e_j)$ on $\mathfrak{su}(2)$, $\mathfrak{su}(3)$, for every pair of basis
+    elements."""
     total = sp.Integer(0)
     for formula, basis in (
         (KILLING_SO, so_basis(3)),
@@ -339,18 +344,19 @@ def coordinate_residuals() -> dict[str, dict[str, sp.Expr]]:
 
 @S13.check(Level.SYMBOLIC_FIXED_N)
 def s13_coordinates() -> sp.Expr:
-    """In coordinates, with the costate a covector and V(x) = B(x, m)^3: solving dH/du = 0 gives
-    the emitted u*, H there is the displayed H*, and the literal Hamilton equations are the
-    displayed xdot and pdot with V_x = 3 B(x, m)^2 m (so(3) with the pairing, in an orthonormal
-    and in a non-orthogonal basis; su(2) with the negative Killing form)."""
+    r"""In coordinates, with the costate a covector and $V(x) = B(x, m)^3$: solving $\partial
+    H/\partial u = 0$ gives the emitted $u^*$, $H$ there is the displayed $H^*$, and the literal
+    Hamilton equations are the displayed $\dot x$ and $\dot p$ with $V_x = 3 B(x, m)^2 m$
+    ($\mathfrak{so}(3)$ with the pairing, in an orthonormal and in a non-orthogonal basis;
+    $\mathfrak{su}(2)$ with the negative Killing form)."""
     return sum((sum(r.values()) for r in coordinate_residuals().values()), sp.Integer(0))
 
 
 @S13.check(Level.FLOAT64, tol=1e-14)
 def s13_symrb_hamiltonian() -> float:
-    """symrb.orbits.orbit_hamiltonian against 1/2 ||[p, x]||^2 - 1/2 ||[x, N]||^2 computed in NumPy
-    with ||a||^2 = -1/2 tr(a a), n = 3..6, 20 random skew (x, p, N) each: max difference relative
-    to ||p||^2 ||x||^2 + ||x||^2 ||N||^2."""
+    r"""symrb.orbits.orbit_hamiltonian against $\frac12 \|[p, x]\|^2 - \frac12 \|[x, N]\|^2$
+    computed in NumPy with $\|a\|^2 = -\frac12 \operatorname{tr}(aa)$, $n = 3, \dots, 6$, 20 random
+    skew $(x, p, N)$ each: max difference relative to $\|p\|^2 \|x\|^2 + \|x\|^2 \|N\|^2$."""
     import symrb
 
     rng = np.random.default_rng(13)
@@ -365,10 +371,10 @@ def s13_symrb_hamiltonian() -> float:
 
 @S13.check(Level.SYMBOLIC_GENERAL_N)
 def s13_flow_stays_on_the_orbit() -> sp.Expr:
-    """The displayed control system keeps x on the adjoint orbit of x(0): for any control u(t),
-    x = g x_0 g^{-1} with gdot = -u g (so g stays in the group of u) has derivative
-    -u g x_0 g^{-1} + g x_0 g^{-1} u, which equals the displayed [x, u] (matrix symbols, every n).
-    The opposite sign of gdot leaves a nonzero residual."""
+    r"""The displayed control system keeps $x$ on the adjoint orbit of $x(0)$: for any control
+    $u(t)$, $x = g x_0 g^{-1}$ with $\dot g = -u g$ (so $g$ stays in the group of $u$) has
+    derivative $-u g x_0 g^{-1} + g x_0 g^{-1} u$, which equals the displayed $[x, u]$ (matrix
+    symbols, every $n$). The opposite sign of $\dot g$ leaves a nonzero residual."""
     g, x0, g_inv = matrix("g"), matrix("x_0"), matrix("g^{-1}")
     product_rule = (-u * g) * x0 * g_inv + g * x0 * (g_inv * u)
     difference = sp.expand(ORB.rhs.doit().xreplace({x: g * x0 * g_inv}) - product_rule)
@@ -377,11 +383,12 @@ def s13_flow_stays_on_the_orbit() -> sp.Expr:
 
 @S13.check(Level.EXACT_RATIONAL)
 def s13_so_is_compact_and_normal() -> int:
-    """so(k) is the intersection of the compact real form su(k) and the normal real form
-    sl(k, R) of sl(k, C): the conditions A^* = -A, tr A = 0 and A real on a general complex
-    k x k matrix A = B + iC (B, C real, k = 2..5) are solved exactly; the solution space is the
-    skew-symmetric real matrices, of dimension k(k-1)/2.  Residual: the number of k whose
-    solutions are not exactly so(k)."""
+    r"""$\mathfrak{so}(k)$ is the intersection of the compact real form $\mathfrak{su}(k)$ and the
+    normal real form $\mathfrak{sl}(k, \mathbb{R})$ of $\mathfrak{sl}(k, \mathbb{C})$: the
+    conditions $A^* = -A$, $\operatorname{tr} A = 0$ and $A$ real on a general complex $k \times k$
+    matrix $A = B + iC$ ($B$, $C$ real, $k = 2, \dots, 5$) are solved exactly; the solution space is
+    the skew-symmetric real matrices, of dimension $k(k-1)/2$. Residual: the number of $k$ whose
+    solutions are not exactly $\mathfrak{so}(k)$."""
     wrong = 0
     for k in range(2, 6):
         B, C = general_matrix("b", k), general_matrix("c", k)

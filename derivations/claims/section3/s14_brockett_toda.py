@@ -158,8 +158,8 @@ DOUBLE_BRACKET_RHS = Kernel(
 
 @S14.check(Level.SYMBOLIC_GENERAL_N)
 def s14_potential() -> sp.Expr:
-    """The displayed V, its displayed rewriting 1/2 <x, [N, [N, x]]> and the emitted potential
-    are the same trace polynomial (every n)."""
+    r"""The displayed $V$, its displayed rewriting $\frac12 \langle x, [N, [N, x]]\rangle$ and the
+    emitted potential are the same trace polynomial (every $n$)."""
     w = Words()
     v = trace_poly(BROCKETT.rhs, w)
     r = trace_residual(v - trace_poly(BROCKETT_REWRITTEN.rhs, w))
@@ -168,9 +168,9 @@ def s14_potential() -> sp.Expr:
 
 @S14.check(Level.SYMBOLIC_GENERAL_N)
 def s14_gradient() -> sp.Expr:
-    """The derivative of the emitted potential along every d is <V_x, d> with the displayed
-    V_x = [N, [N, x]], and S13's displayed pdot with this V_x is the displayed pdot of eq. opb
-    (trace words, every n)."""
+    r"""The derivative of the emitted potential along every $d$ is $\langle V_x, d\rangle$ with the
+    displayed $V_x = [N, [N, x]]$, and S13's displayed $\dot p$ with this $V_x$ is the displayed
+    $\dot p$ of eq. opb (trace words, every $n$)."""
     w = Words()
     dV = directional(BROCKETT_POTENTIAL["V"], {x: d}, w)
     r = trace_residual(dV - pair_poly(BROCKETT_GRADIENT.rhs, d, w))
@@ -181,9 +181,10 @@ def s14_gradient() -> sp.Expr:
 
 @S14.check(Level.SYMBOLIC_GENERAL_N)
 def s14_emitted_field_is_hamiltonian() -> sp.Expr:
-    """The emitted extremal field is Hamilton's equations of the emitted H*: dH*/dp [d] equals
-    <xdot, d> and -dH*/dx [d] equals <pdot, d> for every d, and it is the displayed eq. opb
-    (trace words, every n)."""
+    r"""The emitted extremal field is Hamilton's equations of the emitted $H^*$: $\partial
+    H^*/\partial p\,[d]$ equals $\langle \dot x, d\rangle$ and $-\partial H^*/\partial x\,[d]$
+    equals $\langle \dot p, d\rangle$ for every $d$, and it is the displayed eq. opb (trace words,
+    every $n$)."""
     w = Words()
     H = ORBIT_HAMILTONIAN["H"]
     xdot, pdot = ORBIT_EXTREMAL_RHS["xdot"], ORBIT_EXTREMAL_RHS["pdot"]
@@ -235,18 +236,19 @@ def toda_residuals(k: int) -> dict[str, sp.Expr]:
 
 @S14.check(Level.SYMBOLIC_FIXED_N)
 def s14_toda() -> sp.Expr:
-    """x = iL, N = iD, L symbolic real symmetric tridiagonal, k = 3, 4, 5: the emitted double
-    bracket field keeps L tridiagonal and equals the displayed Toda equations, the displayed
-    [B, L] with the displayed B, and B is the strictly upper minus the strictly lower part of L."""
+    """$x = iL$, $N = iD$, $L$ symbolic real symmetric tridiagonal, $k = 3, 4, 5$: the emitted
+    double bracket field keeps $L$ tridiagonal and equals the displayed Toda equations, the
+    displayed $[B, L]$ with the displayed $B$, and $B$ is the strictly upper minus the strictly
+    lower part of $L$."""
     return sum((sum(toda_residuals(k).values()) for k in (3, 4, 5)), sp.Integer(0))
 
 
 @S14.check(Level.FLOAT64, tol=1e-14)
 def s14_symrb_potential_and_double_bracket() -> float:
-    """symrb.orbits.brockett_potential against -1/2 ||[x, N]||^2 in NumPy (n = 3..6) and
-    symrb.orbits.double_bracket_rhs against hat(xi x (xi x nu)) with numpy.cross (n = 3) and NumPy
-    commutators (n = 4..6), 20 random skew pairs each: max difference relative to ||x||^2 ||N||^2
-    (potential) and ||x||^2 ||N|| (field)."""
+    r"""symrb.orbits.brockett_potential against $-\frac12 \|[x, N]\|^2$ in NumPy ($n = 3, \dots, 6$)
+    and symrb.orbits.double_bracket_rhs against $\widehat{\xi \times (\xi \times \nu)}$ with
+    numpy.cross ($n = 3$) and NumPy commutators ($n = 4, \dots, 6$), 20 random skew pairs each: max
+    difference relative to $\|x\|^2 \|N\|^2$ (potential) and $\|x\|^2 \|N\|$ (field)."""
     import symrb
 
     rng = np.random.default_rng(141)
@@ -288,10 +290,10 @@ def _complex_step_field(
 
 @S14.check(Level.FLOAT64, tol=1e-13)
 def s14_symrb_extremal_field() -> float:
-    """symrb.orbits.orbit_extremal_rhs against Hamilton's equations of the independent NumPy
-    H* = 1/2 ||[p, x]||^2 - 1/2 ||[x, N]||^2, differentiated by the complex step along an
-    orthonormal basis of so(n), n = 3..5, 20 random skew (x, p, N) each: max difference relative
-    to the largest entry of the reference field."""
+    r"""symrb.orbits.orbit_extremal_rhs against Hamilton's equations of the independent NumPy $H^* =
+    \frac12 \|[p, x]\|^2 - \frac12 \|[x, N]\|^2$, differentiated by the complex step along an
+    orthonormal basis of $\mathfrak{so}(n)$, $n = 3, \dots, 5$, 20 random skew $(x, p, N)$ each: max
+    difference relative to the largest entry of the reference field."""
     import symrb
 
     rng = np.random.default_rng(142)
@@ -307,10 +309,11 @@ def s14_symrb_extremal_field() -> float:
 
 @S14.check(Level.FLOAT64, tol=1e-8)
 def s14_toda_flow() -> float:
-    """The emitted double bracket field on x = iL, N = iD, integrated as Ldot = -[L, [L, D]]
-    (DOP853, rtol 1e-11, k = 5, t in [0, 3]), against Flaschka's Toda equations integrated on
-    (a, b): max entry difference.  It calls the generated kernel symrb._generated.adjoint_orbits
-    directly because the public symrb.orbits.double_bracket_rhs accepts skew x only (L is symmetric)."""
+    r"""The emitted double bracket field on $x = iL$, $N = iD$, integrated as $\dot L = -[L, [L,
+    D]]$ (DOP853, rtol 1e-11, $k = 5$, $t$ in $[0, 3]$), against Flaschka's Toda equations
+    integrated on $(a, b)$: max entry difference. It calls the generated kernel
+    symrb._generated.adjoint_orbits directly because the public symrb.orbits.double_bracket_rhs
+    accepts skew $x$ only ($L$ is symmetric)."""
     from scipy.integrate import solve_ivp
 
     from symrb._generated.adjoint_orbits import double_bracket_rhs
@@ -364,12 +367,12 @@ def _multiple_of_N(expr: sp.MatrixExpr, w: Words) -> sp.Expr:
 
 @S14.check(Level.SYMBOLIC_GENERAL_N)
 def s14_constant_costate_gives_toda() -> sp.Expr:
-    """As noncommutative polynomials in x and N (every n, no trace): at p = c N the costate
-    equation of the displayed eq. opb and of the emitted field has a right side vanishing for
-    every x and N exactly for the two displayed c (p = -N and p = N: the roots of the word
-    coefficients, polynomials in c); at the displayed p = -N the state equation is the displayed
-    double bracket field and at p = N the displayed reversed one; and the emitted H* vanishes on
-    both (the extremal lies on the level H* = 0)."""
+    """As noncommutative polynomials in $x$ and $N$ (every $n$, no trace): at $p = cN$ the costate
+    equation of the displayed eq. opb and of the emitted field has a right side vanishing for every
+    $x$ and $N$ exactly for the two displayed $c$ ($p = -N$ and $p = N$: the roots of the word
+    coefficients, polynomials in $c$); at the displayed $p = -N$ the state equation is the displayed
+    double bracket field and at $p = N$ the displayed reversed one; and the emitted $H^*$ vanishes
+    on both (the extremal lies on the level $H^* = 0$)."""
     w = Words()
     c = sp.Symbol("c")
     shown = {_multiple_of_N(P_TODA.rhs, w), _multiple_of_N(P_REVERSE.rhs, w)}
@@ -390,10 +393,10 @@ def s14_constant_costate_gives_toda() -> sp.Expr:
 
 @S14.check(Level.SYMBOLIC_GENERAL_N)
 def s14_toda_is_optimal() -> sp.Expr:
-    """Trace words, every n: S13's displayed cost integrand with Brockett's potential minus the
-    displayed completed square, with the displayed xdot = [x, u] of S13 put in, has no words
-    left; and the emitted optimal control at the displayed p = -N is the displayed minimising
-    control [x, N] (word by word)."""
+    r"""Trace words, every $n$: S13's displayed cost integrand with Brockett's potential minus the
+    displayed completed square, with the displayed $\dot x = [x, u]$ of S13 put in, has no words
+    left; and the emitted optimal control at the displayed $p = -N$ is the displayed minimising
+    control $[x, N]$ (word by word)."""
     w = Words()
     orb = {XDOT: ORB.rhs}
     r = trace_residual(trace_poly((SQUARE.lhs - SQUARE.rhs).xreplace(orb), w, brockett))
@@ -421,12 +424,13 @@ def _band_entry(word: tuple[str, ...], r: int, c: int) -> sp.Expr:
 
 @S14.check(Level.SYMBOLIC_GENERAL_N)
 def s14_toda_every_k() -> sp.Expr:
-    """Every k, by a symbolic row index i: the state equation of the emitted extremal field at the
-    displayed p = -N, for x = iL, N = iD (L tridiagonal with a_i, b_i, D the diagonal of the row
-    numbers, so Ldot = i times the field), has entry (i, i) equal to the displayed Toda a-equation,
-    (i, i+1) and (i+1, i) equal to the b-equation, and (i, i+2), (i, i+3) zero, as polynomials in
-    a_{i-1..i+2}, b_{i-2..i+2} and i.  Each entry is a sum over paths of indices; a path leaving
-    1..k passes through b_0 or b_k, so the k x k matrix is this with b_0 = b_k = 0."""
+    r"""Every $k$, by a symbolic row index $i$: the state equation of the emitted extremal field at
+    the displayed $p = -N$, for $x = iL$, $N = iD$ ($L$ tridiagonal with $a_i$, $b_i$, $D$ the
+    diagonal of the row numbers, so $\dot L = i$ times the field), has entry $(i, i)$ equal to the
+    displayed Toda $a$-equation, $(i, i+1)$ and $(i+1, i)$ equal to the $b$-equation, and $(i,
+    i+2)$, $(i, i+3)$ zero, as polynomials in $a_{i-1}, \dots, a_{i+2}$, $b_{i-2}, \dots, b_{i+2}$
+    and $i$. Each entry is a sum over paths of indices; a path leaving $1, \dots, k$ passes through
+    $b_0$ or $b_k$, so the $k \times k$ matrix is this with $b_0 = b_k = 0$."""
     w = Words()
     field = sp.expand(w.of(ORBIT_EXTREMAL_RHS["xdot"].xreplace({p: P_TODA.rhs}).doit()))
 
@@ -469,12 +473,13 @@ def toda_through_extremal(k: int, p0_scale: float, ts: np.ndarray) -> dict[str, 
 
 @S14.check(Level.FLOAT64, tol=1e-8)
 def s14_optimal_flow_is_toda() -> float:
-    """symrb.orbits.orbit_extremal_flow (the coupled (x, p) extremal on i Sym(k), x = iL,
-    N = iD) from a tridiagonal L_0 and the displayed costate p = -N, k = 3 and 4, t in [0, 2],
-    against Symes' QR solution of the Toda lattice (60 digits): max distance, drift of p, entries
-    off the band and drift of the eigenvalues; from p = N, t in [0, 1], against Symes' solution
-    at -t.  Any other p(0) leaves Toda at O(1) (p(0) = 0 or -1.1 N: tests/test_orbits.py); the
-    window is short because this extremal is unstable in (x, p) (errors grow like e^{10 t})."""
+    r"""symrb.orbits.orbit_extremal_flow (the coupled $(x, p)$ extremal on $i\,\mathrm{Sym}(k)$, $x
+    = iL$, $N = iD$) from a tridiagonal $L_0$ and the displayed costate $p = -N$, $k = 3$ and 4, $t$
+    in $[0, 2]$, against Symes' QR solution of the Toda lattice (60 digits): max distance, drift of
+    $p$, entries off the band and drift of the eigenvalues; from $p = N$, $t$ in $[0, 1]$, against
+    Symes' solution at $-t$. Any other $p(0)$ leaves Toda at $O(1)$ ($p(0) = 0$ or $-1.1 N$:
+    tests/test_orbits.py); the window is short because this extremal is unstable in $(x, p)$ (errors
+    grow like $e^{10 t}$)."""
     worst = 0.0
     for k in (3, 4):
         worst = max(worst, *toda_through_extremal(k, -1.0, np.linspace(0.0, 2.0, 9)).values())
@@ -484,11 +489,11 @@ def s14_optimal_flow_is_toda() -> float:
 
 @S14.check(Level.FLOAT64, tol=1e-9)
 def s14_toda_limit_sorted() -> float:
-    """The Toda solution tends to its eigenvalues sorted in decreasing order: symrb.toda_flow
-    (the x of the extremal with p = -N, integrated as the double bracket flow) from the
-    tridiagonal L_0 of k = 3, 4 at t = 0, 5, 10, 20, 40, 80 against Symes' QR solution (200
-    digits), and at t = 80 against the diagonal matrix of the eigenvalues of L_0
-    (numpy.linalg.eigvalsh) largest first: max entry difference."""
+    """The Toda solution tends to its eigenvalues sorted in decreasing order: symrb.toda_flow (the
+    $x$ of the extremal with $p = -N$, integrated as the double bracket flow) from the tridiagonal
+    $L_0$ of $k = 3, 4$ at $t = 0, 5, 10, 20, 40, 80$ against Symes' QR solution (200 digits), and
+    at $t = 80$ against the diagonal matrix of the eigenvalues of $L_0$ (numpy.linalg.eigvalsh)
+    largest first: max entry difference."""
     import symrb
 
     worst = 0.0
@@ -504,10 +509,10 @@ def s14_toda_limit_sorted() -> float:
 
 @S14.check(Level.FLOAT64, tol=1e-9)
 def s14_symrb_extremal_flow_so3() -> float:
-    """symrb.orbits.orbit_extremal_flow on so(3) (algebra "so") from a generic (x_0, p_0, N),
-    p_0 no multiple of N, against the extremal equations written with cross products and solved
-    by mpmath's Taylor-series solver in 25 digits, t = 0, 0.5, ..., 2: max entry difference
-    relative to the largest entry of (x, p)."""
+    r"""symrb.orbits.orbit_extremal_flow on $\mathfrak{so}(3)$ (algebra "so") from a generic $(x_0,
+    p_0, N)$, $p_0$ no multiple of $N$, against the extremal equations written with cross products
+    and solved by mpmath's Taylor-series solver in 25 digits, $t = 0, 0.5, \dots, 2$: max entry
+    difference relative to the largest entry of $(x, p)$."""
     import symrb
 
     x0, p0, N_ = ref.hat([0.8, 0.4, -0.3]), ref.hat([0.2, -0.5, 0.1]), ref.hat([0.3, -0.2, 1.0])
@@ -524,9 +529,9 @@ def s14_symrb_extremal_flow_so3() -> float:
 
 @S14.check(Level.SYMBOLIC_GENERAL_N)
 def s14_on_an_adjoint_orbit() -> sp.Expr:
-    """The corollary's x-equation is S13's control system on the orbit, [x, u], at the emitted
-    optimal control u* = [p, x]; so (by S13's s13_flow_stays_on_the_orbit) its x stays on the
-    adjoint orbit of x(0) (matrix symbols, every n; the spectrum is kept numerically in
+    """The corollary's $x$-equation is S13's control system on the orbit, $[x, u]$, at the emitted
+    optimal control $u^* = [p, x]$; so (by S13's s13_flow_stays_on_the_orbit) its $x$ stays on the
+    adjoint orbit of $x(0)$ (matrix symbols, every $n$; the spectrum is kept numerically in
     s14_optimal_flow_is_toda)."""
     at_ustar = ORB.rhs.xreplace({u: OPTIMAL_CONTROL["u"]}).doit()
     difference = sp.expand(OPB[0].rhs.doit() - at_ustar)

@@ -29,6 +29,16 @@ _RB_MODULES = ("continuous", "symmetric", "rigid_body", "algebra", "_validate", 
 _SYMMETRIC_MAP_MODULES = ("paper", "_stepping", "solvers", "_generated.discrete_rigid_body",
                           "_generated.symmetric_rigid_body", "_progress")  # fmt: skip
 
+#: the components of ``casimirs`` (:func:`symrb.rigid_body.casimir_traces`), for plot legends
+CASIMIR_LABELS = (r"$\mathrm{tr}\,M^2$", r"$\mathrm{tr}\,M^4$", r"$\mathrm{tr}\,M^6$")
+#: the components of ``manakov`` (:func:`symrb.rigid_body.manakov_integrals`), for plot legends
+MANAKOV_LABELS = (
+    r"$\mathrm{tr}\,M^2$", r"$3\,\mathrm{tr}(\Lambda^2M^2)$", r"$\mathrm{tr}\,M^4$",
+    r"$4\,\mathrm{tr}(\Lambda^4M^2)+2\,\mathrm{tr}(\Lambda^2M\Lambda^2M)$",
+    r"$5\,\mathrm{tr}(\Lambda^2M^4)$",
+    r"$5\,\mathrm{tr}(\Lambda^6M^2)+5\,\mathrm{tr}(\Lambda^4M\Lambda^2M)$",
+)  # fmt: skip
+
 
 class Continuous(_Model):
     """``symrb.integrate`` (``scipy.integrate.solve_ivp``) with ``method``, ``rtol``, ``atol``."""

@@ -86,6 +86,7 @@ class DoubleBracketScene(_SceneBase):
     SINGLE_SAMPLE: ClassVar[bool] = True
     STATE_OBSERVABLES = ("x",)
     OBSERVABLES = {"x": None, "potential": None, "pairing": None, "casimirs": None}
+    INVARIANTS = {"casimirs": (r"$\mathrm{tr}\,x^2$", r"$\mathrm{tr}\,x^4$", r"$\mathrm{tr}\,x^6$")}
     system: Literal["double_bracket"]
     parameters: OrbitParameters = OrbitParameters()
     integrator: DoubleBracketIVP

@@ -36,6 +36,7 @@ class McLachlanScovelScene(_BodyScene):
     """
 
     OBSERVABLES = {"Q": None, "B": None, "M": None, "energy": None, "orthogonality": None}
+    INVARIANTS = {"energy": ("energy",)}
     STATE_OBSERVABLES = ("Q", "B", "M")
     system: Literal["mclachlan_scovel"]
     parameters: BodyParameters = BodyParameters()

@@ -18,8 +18,8 @@ from ..._validate import Array
 from ...algebra import _Jinv_weights
 from ...composition import composition_coefficients
 from ...continuous import Flow
-from ...engine import MVStepper
-from ...errors import InputError, NotConvergedError, OutOfDomainError
+from ...engine import _mv_momentum_flow
+from ...errors import InputError
 from ...paper import discrete_rigid_body_flow, mv_algorithm1, mv_algorithm2, symmetric_flow
 from ...rigid_body import simulate
 from ..plan import (
@@ -37,6 +37,8 @@ from . import _rigid_body_methods as rbm
 from ._body import (
     _RB_MODULES,
     _SYMMETRIC_MAP_MODULES,
+    CASIMIR_LABELS,
+    MANAKOV_LABELS,
     BodyParameters,
     _integrate,
     _rot,
@@ -116,9 +118,9 @@ class RigidBodyScene(_ComparedBody):
     ``method`` (a key of :data:`symrb.rigid_body.METHODS`, default ``"DOP853"``) and the
     keywords that method takes (``h``, ``order``, ``rtol``, ``atol``, its options), with their
     names, defaults and meanings; the run is one call of ``simulate`` over ``(0, T)`` at the
-    observables' times.  Without the effect ``attitude``, a ``solve_ivp`` method (and ``"mv"``
-    at n != 3) propagates the momentum alone instead (:class:`RigidBodyMomentum`; ``"mv"``: its
-    step on M).  ``method = "discrete"``, ``"mv_algorithm1"`` and ``"mv_algorithm2"`` run the
+    observables' times.  Without the effect ``attitude``, a ``solve_ivp`` method and ``"mv"``
+    propagate the momentum alone instead (:class:`RigidBodyMomentum`; ``"mv"``: its steps on
+    M, at every n).  ``method = "discrete"``, ``"mv_algorithm1"`` and ``"mv_algorithm2"`` run the
     paper's algorithms (:mod:`symrb.paper`; see :mod:`._rigid_body_methods`).
 
     Examples
@@ -146,6 +148,12 @@ class RigidBodyScene(_ComparedBody):
 
     EFFECTS = ("attitude",)
     STATE_OBSERVABLES = ("Q", "M")
+    INVARIANTS = {
+        "energy": ("energy",),
+        "casimirs": CASIMIR_LABELS,
+        "manakov": MANAKOV_LABELS,
+        "lax_spectrum": (),
+    }
     OBSERVABLES = {
         "M": None, "Omega": None, "energy": None, "casimirs": None, "manakov": None,
         "lax_spectrum": None, "Q": "attitude", "orthogonality": "attitude", "M_gap": None,
@@ -241,21 +249,19 @@ def _plan_mv(
         raise _problem("integrator.order",
                        f"the preprocessed method (order {integ.order}) needs n = 3, "
                        f"got n = {n}", [2])  # fmt: skip
-    kernels: tuple[str, ...]
-    if attitude or n == 3:
+    kernels: tuple[str, ...] = ("discrete_rigid_body.mv3_cayley_step",) if n == 3 else ()
+    if attitude:
         route = _simulate_route(integ, "save_every")
         propagated: tuple[str, ...] = ("Q", "M")
-        if not attitude:
-            skipped.pop()
-            notes.append("n = 3: the generated step mv3_cayley_step updates Q and "
-                         "m together (fused), so Q is stepped but not recorded")  # fmt: skip
-        kernels = ("discrete_rigid_body.mv3_cayley_step",) if n == 3 else ()
     else:
-        route = (f"symrb.engine.MVStepper(lam).step (the step of simulate(method='mv')) with an "
-                 f"empty attitude, h={integ.h:g}: "
-                 "M_{k+1} = U^T M_k U needs only U")  # fmt: skip
+        route = (f"symrb.engine._mv_momentum_flow(M0, lam, h={integ.h:g}, order={integ.order}): "
+                 "the steps of simulate(method='mv') on M alone, M_{k+1} = U_k^T M_k U_k with "
+                 "J_D(U_k) = h M_k, which needs no Q")  # fmt: skip
         propagated = ("M",)
-        kernels = ()
+        if n == 3:
+            notes.append("n = 3: the fused kernel mv3_cayley_step is called with an empty "
+                         "attitude, so its Q part does no arithmetic; the NumPy loop (the "
+                         "compiled loop carries Q)")  # fmt: skip
     if integ.order != 2:
         kernels += ("discrete_rigid_body.mv3_preprocessed_lam",)
     per = 3e-6 if n == 3 else 8 * 2.0 * n**3 / 1.5e9 + 40e-6
@@ -433,12 +439,13 @@ def _run_continuous(
 
 
 def _run_mv(sc: RigidBodyScene, plan: Plan, x: dict[str, Any], rotation: Array | None) -> _Run:
-    """``simulate(method="mv")``; the momentum alone (n != 3, no attitude): its step on M."""
+    """``simulate(method="mv")``; without the attitude, the same steps on M alone."""
     if "Q" in plan.propagated:
         return _run_simulate(sc, plan, x, rotation)
     integ: Any = sc.integrator
-    steps, every = plan.save["steps"], plan.save["save_every"]
-    return _mv_momentum(x["M0"], x["lam"], integ.h, steps, every)
+    sol = _mv_momentum_flow(x["M0"], x["lam"], integ.h, plan.save["steps"],
+                            plan.save["save_every"], integ.backend, integ.order)  # fmt: skip
+    return sol.t, {"M": sol.y.M}, "" if sol.success else sol.message
 
 
 def _run_simulate(
@@ -524,31 +531,6 @@ def _mv_from_first_step(sc: Any, plan: Plan, x: dict[str, Any], rotation: Array 
     states = {k: a[:count] for k, a in states.items()}
     times = (np.arange(count) * every).astype(float) * h
     return times, _rotate_back(states, rotation), "" if dsol.success else dsol.message
-
-
-def _mv_momentum(
-    M0: Array, lam: Array, h: float, steps: int, every: int
-) -> tuple[Array, dict[str, Array], str]:
-    """The Moser-Veselov momentum map M -> U^T M U alone (general n): ``MVStepper.step`` with an
-    empty attitude (shape (0, n, n)), so the product Q U is skipped; the M it returns is the M
-    of ``mv_flow`` bit for bit (the same stepper, the same operations on M)."""
-    L = v.inertia(lam, positive=True)
-    Mk = v.skew(M0, "M0", L.shape[-1])
-    Mk = 0.5 * (Mk - np.swapaxes(Mk, -1, -2))
-    stepper = MVStepper(L, Mk.shape[:-2])
-    empty = np.empty((0,) + Mk.shape[-2:])
-    ks, Ms = [0], [Mk.copy()]
-    failure = ""
-    for k in range(1, steps + 1):
-        try:
-            _, Mk = stepper.step(empty, Mk, h)
-        except (OutOfDomainError, NotConvergedError) as exc:
-            failure = f"step {k} of {steps} failed: {exc}"
-            break
-        if k % every == 0:
-            ks.append(k)
-            Ms.append(Mk)
-    return np.asarray(ks, dtype=float) * h, {"M": np.stack(Ms)}, failure
 
 
 _RunFn = Callable[[RigidBodyScene, Plan, dict[str, Any], Array | None], _Run]

@@ -97,6 +97,7 @@ class SymmetricRigidBodyScene(_ComparedBody):
     EFFECTS = ("samples",)
     SINGLE_SAMPLE = False
     STATE_OBSERVABLES = ("Q", "P", "M")
+    INVARIANTS = {"energy": ("energy",)}
     OBSERVABLES = {
         "Q": None, "P": None, "M": None, "H": None, "energy": None, "orthogonality": None,
         "P_orthogonality": None, "gram_spectrum": None, "op_norm": None, "U": "samples",

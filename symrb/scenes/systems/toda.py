@@ -96,6 +96,7 @@ class TodaScene(_SceneBase):
 
     STATE_OBSERVABLES = ("L", "a", "b")
     OBSERVABLES = {"L": None, "a": None, "b": None, "spectrum": None, "off_band": None}
+    INVARIANTS = {"spectrum": ()}
     system: Literal["toda"]
     parameters: TodaParameters = TodaParameters()
     integrator: TodaIVP

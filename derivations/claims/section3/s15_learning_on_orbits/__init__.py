@@ -81,6 +81,7 @@ S15 = claim(
     "[[invariant]], and on so(3) this gives [[bound]] for every $T$, where [[beta]]: the second "
     "term does not go to zero unless the samples start on one line.",
     expected="holds after correction",
+    headline="[[endpoint_corrected]], [[shared_control]]",
     section="3.4",
     where="Section 3.4, the second corollary (several samples $x^a$ with a terminal cost, $p^a_T "
     "= \\partial\\phi/\\partial x^a_T$) and the last paragraph of the section (with $\\phi(x^a_T) "
@@ -209,15 +210,15 @@ def _two_sample_hamilton(form: str) -> sp.Expr:
 
 @S15.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def s15_printed_equations() -> sp.Expr:
-    """The displayed printed equations (per-sample control [p^a, x^a]) against Hamilton's
-    equations of the shared problem's H* with two samples (trace words, every n): must fail."""
+    """The displayed printed equations (per-sample control $[p^a, x^a]$) against Hamilton's
+    equations of the shared problem's $H^*$ with two samples (trace words, every $n$): must fail."""
     return _two_sample_hamilton("printed")
 
 
 @S15.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s15_corrected_equations() -> sp.Expr:
-    """The displayed corrected equations (shared control) are Hamilton's equations of the
-    shared problem's H* = H at the displayed u* with two samples (trace words, every n)."""
+    """The displayed corrected equations (shared control) are Hamilton's equations of the shared
+    problem's $H^* = H$ at the displayed $u^*$ with two samples (trace words, every $n$)."""
     return _two_sample_hamilton("corrected")
 
 
@@ -257,25 +258,26 @@ def _endpoint_first_variation(form: str) -> sp.Expr:
 
 @S15.check(Level.SYMBOLIC_GENERAL_N, form="printed")
 def s15_printed_endpoint() -> sp.Expr:
-    """First variation of the cost: with the displayed printed endpoint condition the boundary
-    term dphi[dx_T] + <p_T, dx_T> does not vanish (trace words, every n): must fail."""
+    r"""First variation of the cost: with the displayed printed endpoint condition the boundary term
+    $d\phi[dx_T] + \langle p_T, dx_T\rangle$ does not vanish (trace words, every $n$): must fail."""
     return _endpoint_first_variation("printed")
 
 
 @S15.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s15_corrected_endpoint() -> sp.Expr:
-    """First variation of the displayed cost (one sample, dx_0 = 0): along the linearised state
-    and the displayed costate equation dL - d/dt <p, dx> = <u - u*, du>, so
-    dJ = int <u - u*, du> dt + dphi[dx_T] + <p_T, dx_T>; with the displayed corrected endpoint
-    condition the boundary term vanishes for every dx_T (trace words, every n)."""
+    r"""First variation of the displayed cost (one sample, $dx_0 = 0$): along the linearised state
+    and the displayed costate equation $dL - \frac{d}{dt} \langle p, dx\rangle = \langle u - u^*,
+    du\rangle$, so $dJ$ is $\int \langle u - u^*, du\rangle\, dt$ plus the boundary term
+    $d\phi[dx_T] + \langle p_T, dx_T\rangle$; with the displayed corrected endpoint condition the
+    boundary term vanishes for every $dx_T$ (trace words, every $n$)."""
     return _endpoint_first_variation("corrected")
 
 
 @S15.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s15_emitted_shared_field() -> sp.Expr:
-    """Two samples: dH/du of the shared problem vanishes at the sum over samples of the emitted
-    optimal control for every direction, and the emitted state-costate field at that control is
-    the displayed corrected equations (trace words, every n)."""
+    r"""Two samples: $\partial H/\partial u$ of the shared problem vanishes at the sum over samples
+    of the emitted optimal control for every direction, and the emitted state-costate field at that
+    control is the displayed corrected equations (trace words, every $n$)."""
     w = Words()
     ustar = emitted_shared_control(2)
     moved = samples(H_SHARED, 2).xreplace({u: ustar + EPS * d})
@@ -292,9 +294,9 @@ def s15_emitted_shared_field() -> sp.Expr:
 
 @S15.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s15_one_sample_exact() -> sp.Expr:
-    """One sample: at the displayed p = -N the emitted extremal field has pdot = 0 for every x and
-    xdot equal to the emitted double bracket field (trace words, every n), so p = -N and the
-    double bracket flow solve the boundary value problem for every T."""
+    r"""One sample: at the displayed $p = -N$ the emitted extremal field has $\dot p = 0$ for every
+    $x$ and $\dot x$ equal to the emitted double bracket field (trace words, every $n$), so $p = -N$
+    and the double bracket flow solve the boundary value problem for every $T$."""
     w = Words()
     at = {p: P_ONE.rhs}
     pdot = ORBIT_EXTREMAL_RHS["pdot"].xreplace(at)
@@ -305,8 +307,9 @@ def s15_one_sample_exact() -> sp.Expr:
 
 @S15.check(Level.SYMBOLIC_GENERAL_N, form="corrected")
 def s15_shared_control_invariant() -> sp.Expr:
-    """Under one shared control the time derivative of the displayed pairing <x^1, x^2>, along
-    the emitted state field of each sample, vanishes for any control and any n (trace words)."""
+    r"""Under one shared control the time derivative of the displayed pairing $\langle x^1,
+    x^2\rangle$, along the emitted state field of each sample, vanishes for any control and any $n$
+    (trace words)."""
     w = Words()
     moves = {
         xk: kernel_of_sample(ORBIT_RHS_WITH_CONTROL["xdot"], k) for k, xk in ((1, _x1), (2, _x2))

@@ -79,15 +79,15 @@ def _endpoint_gradient(form: str) -> float:
 
 @S15.check(Level.FLOAT64, tol=1e-6, form="printed")
 def s15_printed_endpoint_gradient() -> float:
-    """The adjoint directional derivative of the cost with the printed p_T (so(3), two samples,
-    T = 1, Brockett's V from symrb.orbits.brockett_potential, emitted state-costate field) against
-    central differences of the cost: relative difference (must be large)."""
+    r"""The adjoint directional derivative of the cost with the printed $p_T$ ($\mathfrak{so}(3)$,
+    two samples, $T = 1$, Brockett's $V$ from symrb.orbits.brockett_potential, emitted state-costate
+    field) against central differences of the cost: relative difference (must be large)."""
     return _endpoint_gradient("printed")
 
 
 @S15.check(Level.FLOAT64, tol=1e-6, form="corrected")
 def s15_corrected_endpoint_gradient() -> float:
-    """The same with the corrected p_T: the adjoint directional derivative of the cost equals the
+    """The same with the corrected $p_T$: the adjoint directional derivative of the cost equals the
     central differences (relative difference)."""
     return _endpoint_gradient("corrected")
 
@@ -131,11 +131,12 @@ ONE_SAMPLE_SECOND_TERM = Kernel(
 
 @S15.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def s15_decay_exact_so3() -> sp.Expr:
-    """so(3), N = s hat(e3), x = r (sin phi e1 - cos phi e3) written in tau = tan(phi/2): with
-    tau(T) from the displayed phase, dtau/dT = -||x_0|| ||N|| tau, dx/dT equals the emitted double
-    bracket field, the squared displayed ||[N, [N, x]]|| equals the square of the displayed decay,
-    and the decay divided by tau tends to 2 s^2 r as tau tends to 0: it vanishes like
-    exp(-||x_0|| ||N|| T) (exact rational functions of tau)."""
+    r"""$\mathfrak{so}(3)$, $N = s \hat e_3$, $x = r (\sin \phi\, e_1 - \cos \phi\, e_3)$ written in
+    $\tau = \tan(\phi/2)$: with $\tau(T)$ from the displayed phase, $d\tau/dT = -\|x_0\| \|N\|
+    \tau$, $dx/dT$ equals the emitted double bracket field, the squared displayed $\|[N, [N, x]]\|$
+    equals the square of the displayed decay, and the decay divided by $\tau$ tends to $2 s^2 r$ as
+    $\tau$ tends to 0: it vanishes like $\exp(-\|x_0\| \|N\| T)$ (exact rational functions of
+    $\tau$)."""
     tau_T = _phase_tau()
     rate = sp.simplify(sp.diff(tau_T, T) / tau_T)  # -r s
     sin_t, cos_t = half_angle(_tau)
@@ -159,11 +160,11 @@ def s15_decay_exact_so3() -> sp.Expr:
 
 @S15.check(Level.FLOAT64, tol=1e-6, form="corrected")
 def s15_one_sample_bvp() -> float:
-    """One sample on so(3), T = 1, 2, 4, 8, 16: symrb.solve_orbit_bvp from the guess p = 0 against
-    the exact solution (p = -N, x the double bracket flow in closed form from the displayed
-    phase): max of |x_T - exact| / ||x_0||, |p + N| / ||N|| over the mesh and the difference of
-    ||[N, [N, x_T]]|| from the emitted closed form (symrb.orbits.one_sample_second_term) relative to
-    ||N||^2 ||x_0||."""
+    r"""One sample on $\mathfrak{so}(3)$, $T = 1, 2, 4, 8, 16$: symrb.solve_orbit_bvp from the guess
+    $p = 0$ against the exact solution ($p = -N$, $x$ the double bracket flow in closed form from
+    the displayed phase): max of $|x_T - x_T^{\mathrm{exact}}| / \|x_0\|$, $|p + N| / \|N\|$ over
+    the mesh and the difference of $\|[N, [N, x_T]]\|$ from the emitted closed form
+    (symrb.orbits.one_sample_second_term) relative to $\|N\|^2 \|x_0\|$."""
     import symrb
 
     x0, N_ = one_sample_data()
@@ -194,11 +195,12 @@ def s15_one_sample_bvp() -> float:
 
 @S15.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def s15_bound_so3() -> sp.Expr:
-    """so(3), x^a = r_a hat(a_a) with a_1, a_2 at the angles +h and -h from e1 (0 < 2h <= pi/2),
-    N = s hat(c), c a unit vector: the displayed cos beta is cos 2h, and the mean over a of the
-    squared displayed ||[N, [N, x^a]]|| / (s^2 r_a)^2 minus the squared displayed bound at unit
-    norms equals c_2^2 cos 2h + c_3^2 cos^2 h >= 0, so the larger of the two exceeds the bound
-    (polynomials in C = cos h, S = sin h and c reduced by C^2 + S^2 = 1 and |c| = 1)."""
+    r"""$\mathfrak{so}(3)$, $x^a = r_a \hat a_a$ with $a_1$, $a_2$ at the angles $+h$ and $-h$ from
+    $e_1$ ($0 < 2h \le \pi/2$), $N = s \hat c$, $c$ a unit vector: the displayed $\cos \beta$ is
+    $\cos 2h$, and the mean over $a$ of the squared displayed $\|[N, [N, x^a]]\| / (s^2 r_a)^2$
+    minus the squared displayed bound at unit norms equals $c_2^2 \cos 2h + c_3^2 \cos^2 h \ge 0$,
+    so the larger of the two exceeds the bound (polynomials in $C = \cos h$, $S = \sin h$ and $c$
+    reduced by $C^2 + S^2 = 1$ and $|c| = 1$)."""
     C, S, r1, r2 = sp.symbols("C S r_1 r_2", positive=True)
     c1, c2, c3 = sp.symbols("c1:4", real=True)
     a1, a2 = [C, S, 0], [C, -S, 0]
@@ -284,9 +286,9 @@ def two_sample_table() -> tuple[dict[str, float], ...]:
 
 @S15.check(Level.FLOAT64, tol=1e-3, form="printed")
 def s15_two_samples_second_term() -> float:
-    """Two samples on so(3) sharing the control, symrb.solve_orbit_bvp at T = 2, 4, 8: the
-    smallest over T of the displayed max_a ||[N, [N, x^a_T]]|| relative to its largest possible
-    value ||N||^2 max_a ||x^a_0|| (the printed claim: it goes to zero)."""
+    r"""Two samples on $\mathfrak{so}(3)$ sharing the control, symrb.solve_orbit_bvp at $T = 2, 4,
+    8$: the smallest over $T$ of the displayed $\max_a \|[N, [N, x^a_T]]\|$ relative to its largest
+    possible value $\|N\|^2 \max_a \|x^a_0\|$ (the printed claim: it goes to zero)."""
     X0, N_ = two_sample_data()
     size = np_norm2(N_) * np.max(np.sqrt(np_norm2(X0)))
     return float(np.min([row["second"] for row in two_sample_table()]) / size)
@@ -294,10 +296,10 @@ def s15_two_samples_second_term() -> float:
 
 @S15.check(Level.FLOAT64, tol=1e-5, form="corrected")
 def s15_two_samples_above_bound() -> float:
-    """The same solutions stay above the bound and conserve <x^1, x^2> and ||x^a||: max over T of
-    the relative shortfall below symrb.orbits.two_sample_bound (the emitted kernel) plus the relative
-    drift of the invariants, plus the relative difference of that bound (and of the emitted
-    expression) from the displayed bound evaluated on the data."""
+    r"""The same solutions stay above the bound and conserve $\langle x^1, x^2\rangle$ and
+    $\|x^a\|$: max over $T$ of the relative shortfall below symrb.orbits.two_sample_bound (the
+    emitted kernel) plus the relative drift of the invariants, plus the relative difference of that
+    bound (and of the emitted expression) from the displayed bound evaluated on the data."""
     import symrb
 
     rows = two_sample_table()

@@ -1,0 +1,122 @@
+"""One colour, one marker and one line style per method, for every figure of the book.
+
+A method keeps its look from figure to figure: DOP853 is black with squares on the accuracy page
+and wherever else it appears.  SciPy's solvers are dashed, symrb's methods solid and the paper's
+own algorithms dash-dotted.  :func:`method_style` accepts the names under which a method appears
+in the book: the benchmark's names (``MV-pre10``), the keys of :data:`symrb.rigid_body.METHODS`
+with an order (``("mv", 10)``), and function names (``mv_flow``, ``mv_algorithm2``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from symrb.errors import InputError
+
+_SCIPY = {"ls": "--"}
+_SYMRB = {"ls": "-"}
+_PAPER = {"ls": "-."}
+
+#: The style of each method by its canonical name: matplotlib keyword arguments.
+METHOD_STYLE: dict[str, dict[str, Any]] = {
+    # SciPy's solve_ivp (and symrb.integrate, which calls DOP853 on the same field)
+    "DOP853": {"color": "#000000", "marker": "s", **_SCIPY},
+    "RK45": {"color": "#7f7f7f", "marker": "o", **_SCIPY},
+    "RK23": {"color": "#c7c7c7", "marker": "o", **_SCIPY},
+    "LSODA": {"color": "#8c564b", "marker": "D", **_SCIPY},
+    "Radau": {"color": "#bcbd22", "marker": "P", **_SCIPY},
+    "BDF": {"color": "#dbdb8d", "marker": "X", **_SCIPY},
+    "integrate": {"color": "#c49c94", "marker": "x", **_SCIPY},
+    # symrb's methods
+    "MV": {"color": "#1f77b4", "marker": "v", **_SYMRB},
+    "MV-fast": {"color": "#17becf", "marker": "^", **_SYMRB},
+    "MV-comp2": {"color": "#7b4173", "marker": "<", **_SYMRB},
+    "MV-comp4": {"color": "#98df8a", "marker": "<", **_SYMRB},
+    "MV-comp6": {"color": "#2ca02c", "marker": ">", **_SYMRB},
+    "MV-comp8": {"color": "#0b5d1e", "marker": "p", **_SYMRB},
+    "MV-pre4": {"color": "#ffbb78", "marker": "h", **_SYMRB},
+    "MV-pre6": {"color": "#ff7f0e", "marker": "H", **_SYMRB},
+    "MV-pre8": {"color": "#d62728", "marker": "d", **_SYMRB},
+    "MV-pre10": {"color": "#9467bd", "marker": "*", **_SYMRB},
+    "RKMK4": {"color": "#e377c2", "marker": "8", **_SYMRB},
+    "midpoint": {"color": "#f7b6d2", "marker": "P", **_SYMRB},
+    "exact": {"color": "#393b79", "marker": "X", **_SYMRB},
+    # the paper's algorithms (symrb.paper)
+    "MV-Algorithm 1": {"color": "#aec7e8", "marker": "o", **_PAPER},
+    "MV-Algorithm 2": {"color": "#6b6ecf", "marker": "s", **_PAPER},
+    "symmetric algorithm": {"color": "#843c39", "marker": "D", **_PAPER},
+}
+
+#: Other names of the same methods: function names and the keys of symrb.rigid_body.METHODS
+#: (with their default order).
+ALIASES: dict[str, str] = {
+    "mv": "MV-fast",
+    "mv_flow": "MV-fast",
+    "composition": "MV-comp4",
+    "composed_rigid_body_flow": "MV-comp4",
+    "rkmk4": "RKMK4",
+    "rkmk4_rigid_body_flow": "RKMK4",
+    "midpoint_rigid_body_flow": "midpoint",
+    "rigid_body_exact": "exact",
+    "discrete_rigid_body_flow": "MV",
+    "mv_algorithm1": "MV-Algorithm 1",
+    "mv_algorithm2": "MV-Algorithm 2",
+    "symmetric_flow": "symmetric algorithm",
+    "symmetric_step": "symmetric algorithm",
+}
+
+#: The families whose order picks the style: (name, order) -> canonical name.
+_BY_ORDER = {"mv": "MV-pre{}", "mv_flow": "MV-pre{}", "composition": "MV-comp{}",
+             "composed_rigid_body_flow": "MV-comp{}"}  # fmt: skip
+
+
+def canonical(name: str, order: int | None = None) -> str:
+    """The canonical name of a method given by any of its names (and its order, for the
+    families ``mv`` and ``composition`` of :data:`symrb.rigid_body.METHODS`).
+
+    Raises
+    ------
+    InputError
+        For a name that has no style.
+    """
+    if order is not None and name in _BY_ORDER:
+        if name in ("mv", "mv_flow") and order == 2:
+            return "MV-fast"
+        name = _BY_ORDER[name].format(int(order))
+    name = ALIASES.get(name, name)
+    if name not in METHOD_STYLE:
+        raise InputError(
+            f"method_style: no style for the method {name!r} (order {order}); add it to "
+            "symrb_book.style.METHOD_STYLE"
+        )
+    return name
+
+
+def method_style(name: str, order: int | None = None, **overrides: Any) -> dict[str, Any]:
+    """The matplotlib keyword arguments (colour, marker, line style) of a method, with the
+    keyword arguments ``overrides`` on top.
+
+    Parameters
+    ----------
+    name : str
+        A canonical name (a key of :data:`METHOD_STYLE`), an alias (:data:`ALIASES`) or a key of
+        :data:`symrb.rigid_body.METHODS`.
+    order : int, optional
+        The order, for ``mv`` (2 the Moser-Veselov step, 4-10 preprocessed) and ``composition``.
+    **overrides
+        Keyword arguments that replace the table's (e.g. ``ls=":"`` for a second view of the
+        same method).
+
+    Returns
+    -------
+    dict
+        ``color``, ``marker``, ``ls`` and the overrides.
+
+    Examples
+    --------
+    >>> method_style("mv_flow") == method_style("MV-fast")
+    True
+    >>> method_style("mv", order=10)["marker"]
+    '*'
+    """
+    return {**METHOD_STYLE[canonical(name, order)], **overrides}
