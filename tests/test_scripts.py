@@ -352,3 +352,16 @@ def test_book_is_built_in_one_place() -> None:
     ci = _commands(ROOT / ".ci" / "run")
     assert [cmd for cmd in ci if "tools/test.sh" in cmd] == ["bash tools/test.sh"]
     assert not [cmd for cmd in ci if "book.sh" in cmd]
+
+
+def test_mutant_spec_applies_to_the_current_code() -> None:
+    """Every mutant's text occurs in its file as often as tools/mutants.toml says, so an edit
+    that moves a mutated line fails here, not only in the mutation step of the book build."""
+    root = Path(__file__).resolve().parents[1]
+    run = subprocess.run(
+        [sys.executable, str(root / "tools" / "mutate.py"), "--list"],
+        capture_output=True,
+        text=True,
+        cwd=root,
+    )
+    assert run.returncode == 0, run.stderr
