@@ -10,6 +10,8 @@ itself.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from symrb_book import discrete, smooth
@@ -323,3 +325,20 @@ def test_md_table_escapes_each_pipe_once() -> None:
 
     text = md_table(["a", "b"], [("|x|", r"already \| escaped")])
     assert text.splitlines() == ["| a | b |", "|---|---|", r"| \|x\| | already \| escaped |"]
+
+
+def test_page_titles_have_no_math() -> None:
+    """A page's title is shown in the sidebar of every page, also on pages that load no MathJax,
+    where math in it stays raw TeX (the browser test caught it on 25 pages): titles are words."""
+    book = Path(__file__).resolve().parents[1] / "book"
+    titled = []
+    for page in book.rglob("*.md"):
+        if "_build" in page.parts:
+            continue
+        in_code = False
+        for line in page.read_text().splitlines():
+            if line.startswith("```"):
+                in_code = not in_code
+            elif not in_code and line.startswith("# ") and "$" in line:
+                titled.append((page.relative_to(book), line))
+    assert not titled, titled
