@@ -80,41 +80,29 @@ class Alphabet(Words):
 
     def nc(self, e: sp.Basic) -> sp.Expr:
         """A matrix expression (symbolic sizes) as a reduced noncommutative polynomial."""
-        return self.reduce(self._nc(e))
+        return self.reduce(self._of(e, None))
 
-    def _nc(self, e: sp.Basic) -> sp.Expr:
-        if isinstance(e, sp.MatrixSymbol):
-            return self(str(e.name))
-        if isinstance(e, sp.Identity):
-            return sp.Integer(1)
-        if isinstance(e, sp.ZeroMatrix):
-            return sp.Integer(0)
-        if isinstance(e, sp.Transpose):
-            return self.T(self._nc(e.arg))
+    def _of(self, e: sp.Basic, Lam: Any) -> sp.Expr:
+        """:meth:`Words._of`, with inverses and entrywise functions (and their Hadamard products
+        with a column) as letters of their own; Words' cases recurse back through here."""
         if isinstance(e, sp.Inverse):
             base = e.arg.arg if isinstance(e.arg, sp.Transpose) else e.arg
             inv = self(f"{base.name}^{{-1}}")
             return self.T(inv) if isinstance(e.arg, sp.Transpose) else inv
-        if isinstance(e, sp.MatMul):
-            coeff, mats = e.as_coeff_matrices()
-            return coeff * sp.Mul(*[self._nc(m) for m in mats])
-        if isinstance(e, sp.MatAdd):
-            return sp.Add(*[self._nc(a) for a in e.args])
-        if isinstance(e, sp.MatPow) and e.exp.is_Integer and e.exp >= 0:
-            return self._nc(e.base) ** int(e.exp)
         if isinstance(e, (sp.HadamardProduct, ElementwiseApplyFunction)) and e.shape[0] == 1:
             # a row: the transpose of the column form (sigma(z^T) = sigma(z)^T, D diagonal)
-            return self.T(self._nc(e.func(*[_transposed(a) for a in e.args])))
+            return self.T(self._of(e.func(*[_transposed(a) for a in e.args]), Lam))
         if isinstance(e, sp.HadamardProduct) and len(e.args) == 2:
             fun = [a for a in e.args if isinstance(a, ElementwiseApplyFunction)]
             if fun:
                 other = e.args[1] if e.args[0] is fun[0] else e.args[0]
                 head = str(fun[0].function.expr.func)
-                return self._function_letter(head, self._nc(fun[0].expr), True) * self._nc(other)
+                letter = self._function_letter(head, self._of(fun[0].expr, Lam), True)
+                return letter * self._of(other, Lam)
         if isinstance(e, ElementwiseApplyFunction):
             head = str(e.function.expr.func)
-            return self._function_letter(head, self._nc(e.expr), False)
-        raise TypeError(f"no noncommutative form for {type(e).__name__} ({e})")
+            return self._function_letter(head, self._of(e.expr, Lam), False)
+        return super()._of(e, Lam)
 
 
 def _transposed(a: sp.Basic) -> sp.Basic:

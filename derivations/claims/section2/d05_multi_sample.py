@@ -14,6 +14,7 @@ constraints are always regular (no abnormal multiplier), checked on the displaye
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import sympy as sp
@@ -172,6 +173,23 @@ def _d5_variables(N: int, M: int, nx: int, nu: int, nl: int) -> dict[Any, Any]:
     return values
 
 
+def _each_displayed_equation(compare: Callable[..., Any], N: int, M: int) -> Any:
+    """The sum of ``compare(lhs, rhs, variable, sign)`` over the displayed state, costate and
+    endpoint equations of every sample and the stationarity and constraint equations of every
+    step (sign -1 for "p = dH/dx"-type equations, +1 for "... = 0")."""
+    total: Any = 0
+    for a in range(1, M + 1):
+        for k in STATE5.steps(N):
+            total += compare(*STATE5.at(k, a=a), _pa(a, k + 1), -1)
+        for k in COSTATE5.steps(N):
+            total += compare(*COSTATE5.at(k, a=a), _xa(a, k), -1)
+        total += compare(*_instance(ENDPOINT, {_a: a, _N: N}), _xa(a, N), -1)
+    for k in STATIONARY5.steps(N):
+        total += compare(*STATIONARY5.at(k, 0), _u[k], 1)
+        total += compare(*STATIONARY5.at(k, 1), _sig[k], 1)
+    return total
+
+
 @D5.check(Level.SYMBOLIC_FIXED_N, form="corrected")
 def d5_stationarity() -> sp.Expr:
     r"""The derivatives of the displayed $V$ (free endpoint) in $p^a_{k+1}$, $x^a_k$, $x^a_N$, $u_k$
@@ -191,15 +209,7 @@ def d5_stationarity() -> sp.Expr:
         side = _minus(_value(lhs, values, fn), _value(rhs, values, fn))
         return _nonzero(_minus(_grad(V, values[_key(var)]), sign * side))
 
-    for a in range(1, M + 1):
-        for k in STATE5.steps(N):
-            total += compare(*STATE5.at(k, a=a), _pa(a, k + 1), -1)
-        for k in COSTATE5.steps(N):
-            total += compare(*COSTATE5.at(k, a=a), _xa(a, k), -1)
-        total += compare(*_instance(ENDPOINT, {_a: a, _N: N}), _xa(a, N), -1)
-    for k in STATIONARY5.steps(N):
-        total += compare(*STATIONARY5.at(k, 0), _u[k], 1)
-        total += compare(*STATIONARY5.at(k, 1), _sig[k], 1)
+    total += _each_displayed_equation(compare, N, M)
     fixed = {("x", a, 0) for a in range(1, M + 1)}
     total += _coverage_defect(V, values, fixed, covered)
     return total
@@ -347,15 +357,7 @@ def d5_any_dimension_defect(N: int = 2, M: int = 2) -> int:
         side = minus(ev(lhs)[0], ev(rhs)[0])
         return any_nonzero(minus(gradient(dV, ev.deltas[key]), sign * side))
 
-    for a in range(1, M + 1):
-        for k in STATE5.steps(N):
-            total += compare(*STATE5.at(k, a=a), _pa(a, k + 1), -1)
-        for k in COSTATE5.steps(N):
-            total += compare(*COSTATE5.at(k, a=a), _xa(a, k), -1)
-        total += compare(*_instance(ENDPOINT, {_a: a, _N: N}), _xa(a, N), -1)
-    for k in STATIONARY5.steps(N):
-        total += compare(*STATIONARY5.at(k, 0), _u[k], 1)
-        total += compare(*STATIONARY5.at(k, 1), _sig[k], 1)
+    total += _each_displayed_equation(compare, N, M)
     variables = {key for key, d in ev.deltas.items() if ev.free(key) and dV.has(d)}
     return total + len(variables.symmetric_difference(covered)) + len(covered) - len(set(covered))
 
