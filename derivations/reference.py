@@ -159,6 +159,18 @@ def random_rotation(k: int, rng: np.random.Generator) -> Array:
     return q
 
 
+def so_orthonormal_basis(k: int) -> list[np.ndarray]:
+    """(E_ij - E_ji)/sqrt(2), i < j: an orthonormal basis of so(k) for the Frobenius inner
+    product."""
+    out = []
+    for i in range(k):
+        for j in range(i + 1, k):
+            E = np.zeros((k, k))
+            E[i, j], E[j, i] = 1 / np.sqrt(2), -1 / np.sqrt(2)
+            out.append(E)
+    return out
+
+
 def random_skew(k: int, rng: np.random.Generator, scale: float = 1.0) -> Array:
     a = rng.standard_normal((k, k)) * scale
     return a - a.T

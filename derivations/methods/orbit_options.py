@@ -51,17 +51,6 @@ def _db_reference(x0: np.ndarray, N: np.ndarray, ts: np.ndarray) -> np.ndarray:
     return solve_ivp(f, (0, ts[-1]), x0.ravel(), t_eval=ts, **_TIGHT).y.T.reshape(-1, k, k)
 
 
-def _so_basis(k: int) -> list[np.ndarray]:
-    """(E_ij - E_ji)/sqrt(2), i < j: an orthonormal basis of so(k) (Frobenius)."""
-    out = []
-    for i in range(k):
-        for j in range(i + 1, k):
-            E = np.zeros((k, k))
-            E[i, j], E[j, i] = 1 / math.sqrt(2), -1 / math.sqrt(2)
-            out.append(E)
-    return out
-
-
 @M10.check(Level.FLOAT64, tol=1.0)
 def m10_double_bracket_flow_and_report() -> float:
     r"""symrb.orbits.double_bracket_flow ($n = 4$, $t = 0, 0.5, 1, 2$; with return_info False and
@@ -87,9 +76,9 @@ def m10_double_bracket_flow_and_report() -> float:
     gaps = [float(np.max(actual)) / 1e-9, float(np.max(np.abs(plain - want))) / 1e-9 / size.max()]
     eps = 1e-6
     cols = [(_db_reference(x0 + eps * E, N, ts) - _db_reference(x0 - eps * E, N, ts)) / (2 * eps)
-            for E in _so_basis(k)]  # fmt: skip
+            for E in ref.so_orthonormal_basis(k)]  # fmt: skip
     for i in range(len(ts)):
-        A = np.array([[np.sum(F * c[i]) for c in cols] for F in _so_basis(k)])
+        A = np.array([[np.sum(F * c[i]) for c in cols] for F in ref.so_orthonormal_basis(k)])
         exact = np.linalg.svd(A, compute_uv=False).max() * np.linalg.norm(x0) / size[i]
         ratio = float(info.condition[i]) / exact
         gaps.append(0.0 if 1 / math.sqrt(len(A)) <= ratio <= 1 + 1e-5 else math.inf)

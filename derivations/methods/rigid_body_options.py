@@ -87,12 +87,7 @@ def _kappa(U: np.ndarray, lam: np.ndarray) -> float:
     """max lam / sigma_min of L_U(xi) = U xi Lam + Lam xi U^T on so(n), in the orthonormal basis
     (E_ij - E_ji)/sqrt(2) of the Frobenius inner product (plain NumPy)."""
     k = len(lam)
-    basis = []
-    for i in range(k):
-        for j in range(i + 1, k):
-            E = np.zeros((k, k))
-            E[i, j], E[j, i] = 1 / math.sqrt(2), -1 / math.sqrt(2)
-            basis.append(E)
+    basis = ref.so_orthonormal_basis(k)
     L = np.diag(lam)
     cols = [U @ E @ L + L @ E @ U.T for E in basis]
     A = np.array([[np.sum(B * C) for C in cols] for B in basis])
