@@ -1,7 +1,13 @@
 """Run ``jupyter-book build`` with a log that reads as plain text.
 
-Usage: ``python tools/build_book.py [jupyter-book build options] book`` (what ``tools/book.sh``
-runs). The arguments go to ``jupyter-book build`` unchanged; this wrapper only
+Usage: ``python tools/build_book.py [--jobs N] [jupyter-book build options] book`` (what
+``tools/book.sh`` runs). The arguments other than ``--jobs`` go to ``jupyter-book build``
+unchanged; this wrapper only
+
+* reads (and so executes) ``N`` pages at a time with Sphinx's parallel build (``--jobs``, default
+  ``SYMRB_BOOK_JOBS`` or the number of CPUs this process may use, at most 4). ``jupyter-book build``
+  has no such option although the function it calls takes one; ``book/_ext/book_fixes.py``
+  declares the Jupyter Book extensions that are silent about it parallel-safe,
 
 * drops the two configuration dumps Sphinx prints at start-up (``myst vX: MdParserConfig(...)``
   and ``myst-nb vX: NbParserConfig(...)``, several hundred characters each), and
@@ -13,6 +19,7 @@ Warnings, errors and tracebacks are printed as before, and the exit status is ju
 
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import re
@@ -53,9 +60,47 @@ def plain_output() -> bool:
     return bool(os.environ.get("NO_COLOR")) or not sys.stdout.isatty()
 
 
+def default_jobs() -> int:
+    """``SYMRB_BOOK_JOBS`` if set, else the CPUs this process may run on, at most 4."""
+    env = os.environ.get("SYMRB_BOOK_JOBS", "").strip()
+    if env:
+        return parse_jobs(env)
+    return max(1, min(4, len(os.sched_getaffinity(0))))
+
+
+def parse_jobs(text: str) -> int:
+    """The number of parallel Sphinx processes in ``text``: a positive integer."""
+    if not text.isdigit() or int(text) < 1:
+        raise SystemExit(f"build_book.py: --jobs must be a positive integer, got {text!r}")
+    return int(text)
+
+
+def split_jobs(argv: list[str]) -> tuple[int, list[str]]:
+    """``(jobs, rest)``: ``--jobs N`` / ``--jobs=N`` taken out of ``argv``."""
+    jobs, rest, i = default_jobs(), [], 0
+    while i < len(argv):
+        arg = argv[i]
+        if arg == "--jobs":
+            if i + 1 >= len(argv):
+                raise SystemExit("build_book.py: --jobs needs a value")
+            jobs, i = parse_jobs(argv[i + 1]), i + 2
+            continue
+        if arg.startswith("--jobs="):
+            jobs = parse_jobs(arg.partition("=")[2])
+        else:
+            rest.append(arg)
+        i += 1
+    return jobs, rest
+
+
 def main(argv: list[str]) -> int:
+    import jupyter_book.sphinx as jb_sphinx
     from jupyter_book.cli.main import main as jupyter_book
     from sphinx.util import console
+
+    jobs, argv = split_jobs(argv)
+    # the CLI imports build_sphinx when it runs and never passes ``jobs``: hand it the number
+    jb_sphinx.build_sphinx = functools.partial(jb_sphinx.build_sphinx, jobs=jobs)
 
     for name in CONFIG_LOGGERS:
         logging.getLogger(name).addFilter(lambda record: not is_config_dump(record))

@@ -28,6 +28,6 @@ step "book (tools/book.sh, with the CI subset of the mutation check)"
 SYMRB_MUTATION=ci bash tools/book.sh
 
 step "pytest (whole suite, browser test included, and the doctests of symrb)"
-"$PYTHON" -m pytest --durations=10
+"$PYTHON" -m pytest -n auto --dist loadfile --durations=10
 
 printf '\nall checks passed in %s s\n' "$(elapsed)"
