@@ -1,4 +1,4 @@
-"""A tiny Sphinx extension for the API reference: one page per public module.
+"""A tiny Sphinx extension for the API reference: one page per public module, split when long.
 
 ``.. symrb-api-index::`` (inside an ``{eval-rst}`` block, on ``api/index.md``) expands to a table
 of every public module of ``symrb``: the module (a link to its page), the first sentence of its
@@ -8,14 +8,24 @@ first sentence of its docstring, linked to its entry) and then ``.. automodule::
 members whose home is this module (:func:`home`): a name a package re-exports is documented
 once, on the page of the submodule defining it, and the package's table links there.
 
+A module page that would be too long to read (:func:`split_names`: its height estimated from
+the docstrings above 7.5 screens of 800 px) gives each of its classes, then its longest other
+members, a page of its own, ``api/<module page>/<name>.md``, holding
+``.. symrb-api-member:: symrb.scenes.RigidBodyScene``; the summary table links there.  Those pages
+are written by ``python book/_ext/symrb_api.py`` (``--check`` lists the stale ones) and reach the
+table of contents through one ``glob: api/<module page>/*`` under the module's entry.
+
 The public modules are discovered when the book is built (:func:`public_modules`); private
 modules (a name part starting with ``_``, e.g. ``symrb._generated``, ``symrb._validate``) are
 left out: they are documented through the public functions that wrap them.  ``tests/test_book_api.py``
-checks that every public module has its page, listed in ``_toc.yml``, and no other.
+checks that every public module has its page, listed in ``_toc.yml``, and no other; that the
+member pages on disk are the ones the split asks for; and that every public name is documented
+on exactly one page, whatever the split.
 """
 
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 import pkgutil
@@ -170,6 +180,7 @@ def _attribute_docs(cls: type) -> dict[str, list[str]]:
     return docs
 
 
+@functools.lru_cache(maxsize=None)
 def member_px(module: str, name: str) -> int:
     """The estimated rendered height (px) of one documented name: its docstring as napoleon
     turns it into reST, its signature, and for a class its documented methods and attributes."""
@@ -272,12 +283,9 @@ def module_lines(module: str, package: str = "symrb") -> list[str]:
         lines += [f"   ~{home(module, n)}.{n}" for n in names]
         lines.append("")
     split = split_names(module)
-    if split:
-        lines += [
-            "The classes of this module and its longest functions have a page each, linked from"
-            " the table above and listed in the sidebar.",
-            "",
-        ]
+    if split:  # the page would be too long: say which entries have pages of their own
+        linked = ", ".join(f":py:obj:`~{module}.{n}`" for n in split)
+        lines += [f"On pages of their own (as linked from the table): {linked}.", ""]
     lines.append(f".. automodule:: {module}")
     own = [n for n in own_names(module) if n not in split]
     if own:  # the others are documented on the page of their home or on their own page
