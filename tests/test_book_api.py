@@ -110,7 +110,10 @@ def test_member_pages_are_the_ones_the_split_asks_for():
         if pages:
             folders[f"api/{symrb_api.page_name(m)}"] = f"api/{symrb_api.page_name(m)}"
     assert _toc_globs() == folders
-    on_disk = [p.relative_to(BOOK / "api").with_suffix("").as_posix() for p in (BOOK / "api").glob("*/*.md")]
+    on_disk = [
+        p.relative_to(BOOK / "api").with_suffix("").as_posix()
+        for p in (BOOK / "api").glob("*/*.md")
+    ]
     # one file per page on a case-insensitive disk too (random_so, random_SO)
     assert len({p.lower() for p in on_disk}) == len(on_disk)
 

@@ -174,13 +174,15 @@ def _attribute_docs(cls: type) -> dict[str, list[str]]:
     for base in cls.__mro__:
         if base.__module__.split(".")[0] != cls.__module__.split(".")[0]:
             continue
-        for (qualname, name), lines in ModuleAnalyzer.for_module(base.__module__).find_attr_docs().items():
+        for (qualname, name), lines in (
+            ModuleAnalyzer.for_module(base.__module__).find_attr_docs().items()
+        ):
             if qualname == base.__qualname__:
                 docs.setdefault(name, list(lines))
     return docs
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def member_px(module: str, name: str) -> int:
     """The estimated rendered height (px) of one documented name: its docstring as napoleon
     turns it into reST, its signature, and for a class its documented methods and attributes."""
@@ -302,8 +304,7 @@ def member_lines(qualified: str, package: str = "symrb") -> list[str]:
     obj = getattr(importlib.import_module(module), name)
     kind = "class" if inspect.isclass(obj) else "function" if callable(obj) else "data"
     lines = [
-        f"In :doc:`{module} <../{page_name(module, package)}>`"
-        f" (``from {module} import {name}``).",
+        f"In :doc:`{module} <../{page_name(module, package)}>` (``from {module} import {name}``).",
         "",
         f".. auto{kind}:: {qualified}",
     ]
@@ -409,6 +410,7 @@ class SymrbApiMember(SphinxDirective):
 
     def run(self) -> list[nodes.Node]:
         return _parse(self, member_lines(self.arguments[0]))
+
 
 def setup(app: Any) -> dict[str, Any]:  # Sphinx extension entry point
     app.add_directive("symrb-api-index", SymrbApiIndex)
