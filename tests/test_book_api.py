@@ -192,3 +192,30 @@ def test_member_pages_expand_to_their_entry():
     stay = members.removeprefix("   :members: ").split(", ")
     assert split and stay and not set(stay) & set(split)
     assert sorted(stay + split) == sorted(symrb_api.own_names("symrb.algebra"))
+
+
+def test_attribute_comments_are_not_read_as_type_and_text():
+    """Napoleon reads a ``#:`` comment with a colon as ``type: description``: "(empty: numbered)"
+    showed as a type "... (empty" and a text "numbered) ...".  No documented comment has one."""
+    from sphinx.pycode import ModuleAnalyzer
+
+    found = []
+    for m in symrb_api.public_modules():
+        mod = importlib.import_module(m)
+        own = symrb_api.own_names(m)
+        comments = {
+            (m, k): v
+            for (cls, k), v in ModuleAnalyzer.for_module(m).find_attr_docs().items()
+            if not cls and k in own  # a documented constant
+        }
+        for n in own:
+            if inspect.isclass(getattr(mod, n)):
+                docs = symrb_api._attribute_docs(getattr(mod, n))
+                comments.update(
+                    {(f"{m}.{n}", k): v for k, v in docs.items() if not k.startswith("_")}
+                )
+        for where, lines in comments.items():
+            out = symrb_api._napoleon("\n".join(lines), "attribute", None, f"{where[0]}.{where[1]}")
+            if any(line.lstrip().startswith(":type:") for line in out):
+                found.append((where, lines[0]))
+    assert not found, found

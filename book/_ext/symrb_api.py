@@ -146,11 +146,13 @@ _PAGE_PX, _ROW_PX = 500, 45
 _WRAP = 95  # characters of docstring text on one rendered line
 
 
-def _napoleon(doc: str, what: str, obj: object) -> list[str]:
+def _napoleon(doc: str, what: str, obj: object, name: str = "") -> list[str]:
+    """A docstring as napoleon turns it into reST (``name`` given, an attribute's or constant's
+    text is read as ``type: description``, as autodoc has it read)."""
     from sphinx.ext.napoleon import Config, NumpyDocstring
 
     config = Config(napoleon_use_rtype=False, napoleon_google_docstring=False)
-    return str(NumpyDocstring(doc, config, what=what, obj=obj)).splitlines()
+    return str(NumpyDocstring(doc, config, what=what, name=name, obj=obj)).splitlines()
 
 
 def _rows(lines: list[str], width: int = _WRAP) -> int:
