@@ -219,3 +219,15 @@ def test_attribute_comments_are_not_read_as_type_and_text():
             if any(line.lstrip().startswith(":type:") for line in out):
                 found.append((where, lines[0]))
     assert not found, found
+
+
+def test_the_index_lists_the_names_documented_on_each_page():
+    """Each row names what its page documents and counts the re-exports (their homes' rows name
+    them): the top-level package's forty names are not listed twice."""
+    for m in symrb_api.public_modules():
+        own, cell = symrb_api.own_names(m), symrb_api.index_names(m)
+        again = len(symrb_api.public_names(m)) - len(own)
+        assert cell.startswith(", ".join(own)), m
+        assert cell.endswith(f"{again} re-exported" if again else ", ".join(own) or "(none)"), m
+    assert symrb_api.index_names("symrb").endswith(" re-exported")
+    assert "simulate" in symrb_api.index_names("symrb.rigid_body.entry")

@@ -366,6 +366,18 @@ def _parse(directive: SphinxDirective, lines: list[str]) -> list[nodes.Node]:
     return node.children
 
 
+def index_names(module: str) -> str:
+    """The "public names" cell of a module in the index: the names documented under it, then
+    how many more it re-exports (all of them on its page's table: listing the top-level
+    package's forty re-exports here again made the index twice as long)."""
+    own = own_names(module)
+    again = len(public_names(module)) - len(own)
+    text = ", ".join(own)
+    if again:
+        text += f"{'; ' if own else ''}{again} re-exported"
+    return text or "(none)"
+
+
 class SymrbApiIndex(SphinxDirective):
     """The table of the public modules: module (linked), purpose, public names."""
 
@@ -385,7 +397,7 @@ class SymrbApiIndex(SphinxDirective):
             "     - public names",
         ]
         for module in public_modules(package):
-            names = ", ".join(public_names(module)) or "(none)"
+            names = index_names(module)
             lines += [
                 f"   * - :doc:`{module} <{page_name(module, package)}>`",
                 f"     - {purpose(module)}",
