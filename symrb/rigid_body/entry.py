@@ -23,7 +23,10 @@ from ._request import Method, Request, RigidBodySolution
 
 __all__ = ["simulate", "METHODS"]
 
-#: method name -> how it is run and what it accepts
+#: method name -> how it is run and what it accepts (its keys are the methods of
+#: :func:`simulate`; the value, a dict of adapters, is left out of the API reference)
+#:
+#: :meta hide-value:
 METHODS: dict[str, Method] = {
     **ivp.METHODS,
     "mv": mv.METHOD,

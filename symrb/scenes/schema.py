@@ -249,10 +249,10 @@ class _SceneBase(_Model):
     #: observable -> the effect it needs (or None)
     OBSERVABLES: ClassVar[dict[str, str | None]] = {}
 
-    #: conserved observables -> the names of their components (empty: numbered), drawn as
-    #: relative drift by :meth:`~symrb.scenes.result.SceneResult.plot`
+    #: conserved observables -> the names of their components (an empty tuple numbers them),
+    #: drawn as relative drift by :meth:`~symrb.scenes.result.SceneResult.plot`
     INVARIANTS: ClassVar[dict[str, tuple[str, ...]]] = {}
-    #: observables that are state variables, not diagnostics: never listed as not asked for
+    #: observables that are state variables, not diagnostics; never listed as not asked for
     STATE_OBSERVABLES: ClassVar[tuple[str, ...]] = ()
     #: the label of the record axis in plots ("t", or "step" for training)
     RECORD_AXIS: ClassVar[str] = "t"
@@ -308,7 +308,7 @@ class _SceneBase(_Model):
 _SCENES: list[type[_SceneBase]] = []
 #: system name -> its scene model
 _SYSTEMS: dict[str, type[_SceneBase]] = {}
-#: a scene: any registered model (every one is a _SceneBase)
+#: a scene, that is any registered model (every one is a _SceneBase)
 Scene = _SceneBase
 _ADAPTERS: dict[tuple[type[_SceneBase], ...], TypeAdapter[Any]] = {}
 _HOOKS = ("_inputs", "_plan", "_run")

@@ -62,7 +62,7 @@ class NetworkParameters(_Model):
     layers: int = Field(default=4, ge=1)
     samples: int = Field(default=200, ge=1)
     seed: int = 0
-    #: the initial weights K are K0_scale times standard normal numbers from K0_seed (0: zeros)
+    #: the initial weights K are K0_scale times standard normal numbers from K0_seed (zeros when 0)
     K0_scale: float = Field(default=0.0, ge=0)
     K0_seed: int = 0
     features: int = Field(default=16, ge=1, le=64)
