@@ -24,9 +24,9 @@ import sys
 import textwrap
 import warnings
 from collections.abc import Callable, Sequence
-from typing import Any
 from importlib import metadata
 from pathlib import Path
+from typing import Any
 
 COMMANDS = ("claims", "show", "verify", "derive", "coverage")
 """The commands of :mod:`derivations.cli` (a source checkout with the 'derive' extra)."""

@@ -95,12 +95,10 @@ def default_cache_dir() -> Path:
 
     Examples
     --------
-    >>> import os
+    >>> from symrb.scenes import SceneStore
     >>> from symrb.scenes.store import default_cache_dir
-    >>> os.environ["SYMRB_CACHE_DIR"] = "/srv/shared/symrb"
-    >>> str(default_cache_dir())
-    '/srv/shared/symrb'
-    >>> del os.environ["SYMRB_CACHE_DIR"]
+    >>> SceneStore().root == default_cache_dir()
+    True
     """
     env = os.environ.get("SYMRB_CACHE_DIR")
     if env:
@@ -247,7 +245,7 @@ class SceneStore:
         return self.root / key[:2] / key
 
     def _warn(self, message: str) -> None:
-        warnings.warn(f"symrb cache {self.root}: {message}", CacheWarning, stacklevel=4)
+        warnings.warn(f"the scene cache {self.root}: {message}", CacheWarning, stacklevel=4)
 
     def get(self, key: str, scene: Any = None, plan: Plan | None = None) -> SceneResult | None:
         """The stored result of ``key``, or None when there is none or it fails a check (then
@@ -347,7 +345,7 @@ class SceneStore:
             if isinstance(entry, dict):
                 out.append(entry)
         if bad:
-            warnings.warn(f"symrb cache {self.root}: {bad} line(s) of log.jsonl are not JSON "
+            warnings.warn(f"the scene cache {self.root}: {bad} line(s) of log.jsonl are not JSON "
                           "and are skipped", CacheWarning, stacklevel=2)  # fmt: skip
         return out
 
