@@ -19,7 +19,7 @@ import pytest
 from scene_helpers import same as _same
 
 from symrb.errors import CacheWarning
-from symrb.scenes import SceneStore, parse_scene, run_scene, scene_key
+from symrb.scenes import SceneStore, parse_scene, run_scene, scene_key, sweep
 from symrb.scenes import run as scenes_run
 from symrb.scenes import store as scenes_store
 
@@ -198,6 +198,16 @@ def test_cache_path_that_is_a_file(tmp_path) -> None:
     assert not r.meta["from_cache"] and w and "not stored" in str(w[-1].message)
     _same_result(r, run_scene(sc, cache=False))
     assert path.read_text() == "not a directory"
+
+
+def test_unwritable_cache_warns_once_per_sweep(tmp_path) -> None:
+    path = tmp_path / "cache"
+    path.write_text("")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = sweep(SCENE, {"parameters.seed": [1, 2, 3]}, cache=path)
+    assert len(res.results) == 3 and all(r.meta["success"] for r in res.results)
+    assert [issubclass(w.category, CacheWarning) for w in caught] == [True]
 
 
 def _cli(*args: str, env: dict | None = None) -> subprocess.CompletedProcess:

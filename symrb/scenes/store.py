@@ -240,6 +240,7 @@ class SceneStore:
 
     def __init__(self, root: str | os.PathLike[str] | None = None) -> None:
         self.root = Path(root).expanduser() if root is not None else default_cache_dir()
+        self._unwritable = False
 
     def path(self, key: str) -> Path:
         return self.root / key[:2] / key
@@ -275,8 +276,10 @@ class SceneStore:
         try:
             self._put(key, result)
         except OSError as exc:
-            self._warn(f"the result of {key[:16]} is not stored ({exc}); it is returned as "
-                       "computed, and computed again next time")  # fmt: skip
+            if not self._unwritable:  # once per store: a sweep need not repeat it per point
+                self._warn(f"results are not stored ({exc}); they are returned as computed, "
+                           "and computed again next time")  # fmt: skip
+            self._unwritable = True
             return False
         line = json.dumps({"key": key, "pid": os.getpid(), "seconds": result.meta["seconds"],
                            "system": result.scene.system})  # fmt: skip
