@@ -94,7 +94,7 @@ def _delete(name: str) -> Damage:
 
 
 def _npz_arrays(entry: Path) -> dict[str, np.ndarray]:
-    with np.load(entry / "arrays.npz") as z:
+    with np.load(io.BytesIO((entry / "arrays.npz").read_bytes())) as z:  # no file left open
         return {k: z[k] for k in z.files}
 
 
