@@ -19,11 +19,14 @@ arguments, an unknown claim, SymPy or the derivations missing, with what to inst
 
 from __future__ import annotations
 
+import functools
 import sys
 import textwrap
+import warnings
 from collections.abc import Callable, Sequence
 from importlib import metadata
 from pathlib import Path
+from typing import Any
 
 COMMANDS = ("claims", "show", "verify", "derive", "coverage")
 """The commands of :mod:`derivations.cli` (a source checkout with the 'derive' extra)."""
@@ -164,6 +167,17 @@ def help_text() -> str:
     return "\n".join(lines)
 
 
+def _show_warning(prog: str, message: Warning | str, category: type[Warning], *rest: Any,
+                  **kwargs: Any) -> None:  # fmt: skip
+    """Print a warning as ``PROG: warning: message`` (symrb's own) or as Python would."""
+    from symrb.errors import SymrbWarning
+
+    if issubclass(category, SymrbWarning):
+        print(f"{prog}: warning: {message}", file=sys.stderr)
+    else:
+        print(warnings.formatwarning(message, category, *rest[:2]), end="", file=sys.stderr)
+
+
 def _usage_error(message: str) -> int:
     return _exit2(f"{_USAGE_LINE}\nsymrb: error: {message}")
 
@@ -204,7 +218,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if cmd in ("run", "sweep"):
         from symrb.scene_cli import main as scene_main
 
-        return int(scene_main(cmd, args[i + 1 :]))
+        with warnings.catch_warnings():  # symrb's warnings as one line each, not a source line
+            warnings.showwarning = functools.partial(_show_warning, f"symrb {cmd}")
+            return int(scene_main(cmd, args[i + 1 :]))
     run, missing = _derivations_main()
     if run is None:  # an installed wheel, or no SymPy: no derivations to run
         return _exit2(f"{_NEED.format(cmd=cmd)} ({missing})")

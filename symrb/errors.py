@@ -6,7 +6,14 @@ input never turns into a silent NaN or a wrong answer.
 
 from __future__ import annotations
 
-__all__ = ["SymrbError", "InputError", "NotConvergedError", "OutOfDomainError"]
+__all__ = [
+    "SymrbError",
+    "InputError",
+    "NotConvergedError",
+    "OutOfDomainError",
+    "SymrbWarning",
+    "CacheWarning",
+]
 
 
 class SymrbError(Exception):
@@ -88,3 +95,32 @@ class NotConvergedError(SymrbError, RuntimeError):
         super().__init__(message)
         self.residual = residual
         self.iterations = iterations
+
+
+class SymrbWarning(UserWarning):
+    """Base class of every warning issued by symrb: something went wrong that symrb worked
+    around, and the result returned is still correct.
+
+    Examples
+    --------
+    >>> import symrb.errors
+    >>> issubclass(symrb.errors.CacheWarning, symrb.errors.SymrbWarning)
+    True
+    """
+
+
+class CacheWarning(SymrbWarning):
+    """The scene cache could not be used as it should: an entry failed its checksums (it is
+    recomputed and replaced), or the cache directory cannot be read or written (the result is
+    computed and returned all the same).
+
+    Examples
+    --------
+    Turn the warnings of the cache into errors, e.g. in a test that must not recompute:
+
+    >>> import warnings
+    >>> from symrb.errors import CacheWarning
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("error", CacheWarning)
+    ...     pass
+    """

@@ -14,6 +14,14 @@ from pathlib import Path
 from .errors import InputError
 
 
+def _cache_help() -> str:
+    try:
+        from symrb.scenes.store import cache_help
+    except ImportError:  # pragma: no cover - no pydantic: main says so
+        return "the cache directory"
+    return cache_help().replace("%", "%%")
+
+
 def _parser(cmd: str) -> argparse.ArgumentParser:
     if cmd == "run":
         p = argparse.ArgumentParser(
@@ -44,7 +52,7 @@ def _parser(cmd: str) -> argparse.ArgumentParser:
         )
         p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--out", metavar="DIR", help="write the results (npz + JSON) here")
-    p.add_argument("--cache", metavar="DIR", help="the cache directory (default ~/.cache/symrb)")
+    p.add_argument("--cache", metavar="DIR", help=_cache_help())
     p.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
     return p
 

@@ -475,7 +475,8 @@ def test_damaged_entry_is_recomputed(tmp_path) -> None:
     sc = load_scene(BASE)
     a = run_scene(sc, cache=tmp_path)
     (SceneStore(tmp_path).path(a.meta["key"]) / "arrays.npz").write_bytes(b"garbage")
-    b = run_scene(sc, cache=tmp_path)
+    with pytest.warns(symrb.errors.CacheWarning, match="damaged"):
+        b = run_scene(sc, cache=tmp_path)
     assert not b.meta["from_cache"]
 
 

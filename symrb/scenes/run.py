@@ -93,8 +93,11 @@ def run_scene(
     scene : Scene, mapping, or path
         The scene (a path or TOML text is read with :func:`load_scene`).
     cache : bool, path or SceneStore, optional
-        ``True`` (default): the store at ``$SYMRB_CACHE_DIR`` or ``~/.cache/symrb/scenes``;
-        a directory or a :class:`SceneStore`; ``False``: compute and store nothing.
+        ``True`` (default): the store at :func:`~symrb.scenes.store.default_cache_dir`
+        (``$SYMRB_CACHE_DIR``, else ``$XDG_CACHE_HOME/symrb/scenes``, else
+        ``~/.cache/symrb/scenes``); a directory or a :class:`SceneStore`; ``False``: compute and
+        store nothing.  An entry that fails its checksums, or a cache that cannot be written,
+        gives a :class:`~symrb.errors.CacheWarning` and the result is computed.
 
     Returns
     -------
