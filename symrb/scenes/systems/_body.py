@@ -67,7 +67,7 @@ class BodyParameters(_Model):
 
     n: int = Field(default=3, ge=2)
     lam: Vector | None = None
-    seed: int = 0
+    seed: int = Field(default=0, ge=0)
     M0: Vector | Matrix | None = None
     momentum: float = Field(default=1.0, gt=0)
     op_norm: float | None = Field(default=None, gt=0)
