@@ -88,6 +88,20 @@ class BodyParameters(_Model):
         return self
 
 
+def body_rate(p: Any) -> float:
+    """The rate |Omega| of a body's parameters ``p``, for the cost estimate: the size of M0 (its
+    operator norm, its largest entry times n, or ``momentum``) over the smallest ``lam`` (0.5
+    when lam is drawn; a lam that is not positive is refused with the inputs)."""
+    if p.op_norm is not None:
+        size = float(p.op_norm)
+    elif p.M0 is not None:
+        size = float(np.abs(np.asarray(p.M0, dtype=float)).max(initial=0.0)) * p.n
+    else:
+        size = float(p.momentum)
+    small = min(p.lam) if p.lam else 0.5
+    return size / (small if small > 0 else 0.5)
+
+
 def body_inputs(p: Any, boundary: bool = False) -> dict[str, Any]:
     """``lam``, ``Q0`` and ``M0`` from a body's parameters ``p``; on the boundary start of the
     symmetric rigid body no momentum is drawn (``M0`` is None)."""
@@ -207,7 +221,7 @@ def body_continuous_plan(
         save={"t_eval": [float(t) for t in t_eval]},
         index=index,
         cost=_est_continuous(
-            sc.horizon.T, integ.rtol, 2.0 * p.momentum, 10.0 * p.samples * p.n**3
+            sc.horizon.T, integ.rtol, body_rate(p), 10.0 * p.samples * p.n**3
         ),  # fmt: skip
         modules=modules + ("_generated.symmetric_rigid_body",),
     )
