@@ -45,7 +45,7 @@ class Budget:
     def refuse(self, what: str, estimate: float, how: str, key: str = "") -> SceneError:
         """The error of an estimate over the limit ``what`` ("seconds" or "memory")."""
         limit = self.seconds if what == "seconds" else self.memory
-        fmt = _fmt_seconds if what == "seconds" else _fmt_bytes
+        fmt = (lambda x: f"{x:.3g} s") if what == "seconds" else _fmt_bytes
         option = "--max-seconds" if what == "seconds" else "--max-memory"
         return SceneError([{
             "key": key or f"(estimated {'cost' if what == 'seconds' else 'memory'})",
