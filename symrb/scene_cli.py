@@ -197,9 +197,11 @@ def _sweep(args: argparse.Namespace) -> int:
     except ImportError:  # pragma: no cover
         progress = False
     scene = scenes.load_scene(Path(args.scene))
+    budget = _budget(args)
     res = scenes.sweep(scene, args.grid, cache=cache,  # type: ignore[arg-type]
                        scheduler=args.scheduler, local_cluster=args.local_cluster,
-                       progress=progress, **_budget(args))  # fmt: skip
+                       progress=progress, max_seconds=budget["max_seconds"],
+                       max_memory=budget["max_memory"])  # fmt: skip
     import pandas as pd
 
     with pd.option_context("display.width", 120, "display.max_columns", 20):

@@ -39,12 +39,22 @@ CASES = [
     ("momentum inf", _rb("momentum = inf"), "parameters.momentum", 3, "finite"),
     ("M0 1e300", _rb("M0 = [1e300, 1.0, 2.0]"), "parameters.M0", 3, "1e+12"),
     ("op_norm 1e300", _rb("op_norm = 1e300"), "parameters.op_norm", 3, "1e+12"),
-    ("ragged M0", _rb("M0 = [[0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]"),
-     "parameters.M0", 3, "rows of one length"),  # fmt: skip
+    (
+        "ragged M0",
+        _rb("M0 = [[0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]"),
+        "parameters.M0",
+        3,
+        "rows of one length",
+    ),  # fmt: skip
     ("T inf mv", _rb("", 'method = "mv"\nh = 0.1', "inf"), "horizon.T", 8, "finite"),
     ("h 1e-300", _rb("", 'method = "mv"\nh = 1e-300'), "horizon.T", 8, "--max-seconds"),
-    ("points 1e9", _rb(obs="energy = {points = 1000000000}"), "observables.energy", 9,
-     "--max-memory"),  # fmt: skip
+    (
+        "points 1e9",
+        _rb(obs="energy = {points = 1000000000}"),
+        "observables.energy",
+        9,
+        "--max-memory",
+    ),  # fmt: skip
     ("n 5000 continuous", _rb("n = 5000"), "(estimated cost)", None, "--max-seconds"),
     ("seed -1", _rb("seed = -1"), "parameters.seed", 3, "greater than or equal to 0"),
     ("T string", _rb(T='"5"'), "horizon.T", 7, "the string '5'"),
