@@ -96,6 +96,9 @@ def main(cmd: str, argv: Sequence[str]) -> int:
     except ImportError as exc:  # pragma: no cover - depends on the environment
         print(f"symrb {cmd} needs pydantic: pip install pydantic ({exc})", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C while importing
+        print(f"interrupted; 0 of 1 point{'s' * (cmd == 'sweep')} kept", file=sys.stderr)
+        return 130
     try:
         return _run(args) if cmd == "run" else _sweep(args)
     except KeyboardInterrupt as exc:
