@@ -102,7 +102,12 @@ def documents(draw: st.DrawFn, broken: bool) -> dict[str, Any]:
     """A small book scene; ``broken``: then one to three of its keys set (to a value the schema
     allows, an extreme number or a wrong type), dropped, or an unknown key added."""
     doc = json.loads(json.dumps(SMALL[draw(st.sampled_from(BASES))]))
-    if not broken:
+    if not broken:  # another seed, where the scene has one
+        params = doc.get("parameters", {})
+        if "seed" in params or any(k.key == "seed" and k.table == "parameters" and
+                                   k.system == doc["system"] for k in KEYS):  # fmt: skip
+            params["seed"] = draw(st.integers(0, 2**32))
+            doc["parameters"] = params
         return doc
     keys = [k for k in KEYS if k.system == doc["system"]]
     for _ in range(draw(st.integers(1, 3))):

@@ -208,7 +208,7 @@ def test_a_closed_pipe_prints_no_traceback(tmp_path) -> None:
 
 
 def _interrupt(args: list[str], tmp_path: Path, stored: Path | None = None) -> tuple[int, str]:
-    """Start symrb, wait until it prints its first line (or stores a first result under
+    """Start symrb, wait until it prints its first line (or logs a first stored result under
     ``stored``), let it work a moment, send SIGINT."""
     p = subprocess.Popen([*_CMD, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          env=_ENV, cwd=tmp_path)  # fmt: skip
@@ -218,7 +218,7 @@ def _interrupt(args: list[str], tmp_path: Path, stored: Path | None = None) -> t
         time.sleep(1.0)
     else:
         deadline = time.monotonic() + 120
-        while not any(stored.rglob("*.npz")) and time.monotonic() < deadline:
+        while not (stored / "log.jsonl").is_file() and time.monotonic() < deadline:
             time.sleep(0.05)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=120)
