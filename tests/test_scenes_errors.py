@@ -207,11 +207,17 @@ def test_a_closed_pipe_prints_no_traceback(tmp_path) -> None:
     assert p.returncode in (0, 141)
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupt(args: list[str], tmp_path: Path, stored: Path | None = None) -> tuple[int, str]:
     """Start symrb, wait until it prints its first line (or logs a first stored result under
     ``stored``), let it work a moment, send SIGINT."""
+    # SIGINT as a terminal sends it: a test runner started in the background ignores SIGINT,
+    # and a child that inherits that would never see it
     p = subprocess.Popen([*_CMD, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         env=_ENV, cwd=tmp_path)  # fmt: skip
+                         env=_ENV, cwd=tmp_path, preexec_fn=_default_sigint)  # fmt: skip
     assert p.stdout is not None
     if stored is None:
         p.stdout.readline()
