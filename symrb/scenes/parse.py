@@ -156,7 +156,7 @@ def _kind_tags() -> set[str]:
 def _clean_loc(loc: Sequence[Any], system: str | None) -> tuple[str, ...]:
     # the members of a union (a reduction or a list of them; a seed or a matrix; one [compare]
     # table or an array of them) are not keys
-    out = [str(x) for x in loc if not re.match(r"^(literal|tuple)\[", str(x))
+    out = [str(x) for x in loc if not re.match(r"^(literal|tuple|function-[a-z]+)\[", str(x))
            and str(x) not in ("int", "[compare]", "[[compare]]") and not _FAMILY.match(str(x))]  # fmt: skip
     if out and system is not None and out[0] == system:
         out = out[1:]
@@ -175,6 +175,7 @@ def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: st
     model = _SYSTEMS.get(system) if isinstance(system, str) else None
     lines = _toml_lines(text) if text is not None else {}
     problems: list[dict[str, Any]] = []
+    generic: list[bool] = []  # per problem: only a type error
     for err in exc.errors():
         loc = _clean_loc(err["loc"], system if model is not None else None)
         # a bad key of the observables table: pydantic reports (observables, name, [key])
@@ -206,10 +207,46 @@ def _from_pydantic(exc: ValidationError, data: Any, text: str | None, source: st
         elif err["type"] in ("union_tag_invalid", "union_tag_not_found"):
             got = (err.get("ctx") or {}).get("tag")
             msg = f"unknown system {got!r}" if got is not None else "system is required"
-        if any(q["key"] == ".".join(loc) for q in problems):
-            continue  # one problem per key: the first member of a union that failed
-        problems.append({"key": ".".join(loc), "line": line, "message": msg, "allowed": allowed})
+        loc, entry = _split_entry(loc)
+        problem = {"key": ".".join(loc), "line": line, "allowed": allowed,
+                   "message": entry + _with_input(err, msg)}  # fmt: skip
+        # one problem per key: the first member of a union that failed, unless a later one
+        # says more than that the value has the wrong type
+        same = [i for i, q in enumerate(problems) if q["key"] == problem["key"]]
+        if same and generic[same[0]] and not _generic(err):
+            problems[same[0]], generic[same[0]] = problem, False
+        elif not same:
+            problems.append(problem)
+            generic.append(_generic(err))
     return SceneError(problems, source)
+
+
+def _generic(err: Mapping[str, Any]) -> bool:
+    """An error that says only that a value has the wrong type (one member of a union)."""
+    return str(err.get("type", "")).endswith("_type")
+
+
+def _split_entry(loc: tuple[str, ...]) -> tuple[tuple[str, ...], str]:
+    """(the key, "entry i: " or "row i, entry j: ") of a location inside an array value."""
+    idx: list[str] = []
+    while len(loc) > 1 and loc[-1].isdigit():
+        idx.insert(0, loc[-1])
+        loc = loc[:-1]
+    if not idx:
+        return loc, ""
+    names = ["entry"] if len(idx) == 1 else ["row", "entry"] + ["index"] * (len(idx) - 2)
+    return loc, ", ".join(f"{n} {i}" for n, i in zip(names, idx, strict=False)) + ": "
+
+
+def _with_input(err: Mapping[str, Any], msg: str) -> str:
+    """A type error's message with the value given (a string is not a number)."""
+    if not _generic(err) or "input" not in err:
+        return msg
+    got = err["input"]
+    if isinstance(got, str) and err["type"] in ("float_type", "int_type", "bool_type"):
+        return f"{msg}, got the string {got!r} (a TOML string; write a number without quotes)"
+    text = repr(got)
+    return f"{msg}, got {text if len(text) <= 60 else text[:57] + '...'}"
 
 
 def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
@@ -260,7 +297,9 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
               "allowed": None}], source)  # fmt: skip
     else:
         try:
-            scene = _adapter().validate_python(dict(data))
+            # strict: a string is not a number, nor a boolean an integer; TOML arrays arrive as
+            # lists, which strict mode takes only as tuples (the schema's arrays)
+            scene = _adapter().validate_python(_tuples(dict(data)), strict=True)
         except ValidationError as exc:
             raise _from_pydantic(exc, data, text, source) from None
     # the checks across keys, for a model built in Python as for a table
@@ -269,6 +308,15 @@ def parse_scene(data: Mapping[str, Any] | Scene, *, text: str | None = None,
     if problems:
         raise SceneError(problems, source)
     return scene  # type: ignore[no-any-return]
+
+
+def _tuples(value: Any) -> Any:
+    """``value`` with every list (a TOML array) turned into a tuple, through tables."""
+    if isinstance(value, list | tuple):
+        return tuple(_tuples(x) for x in value)
+    if isinstance(value, Mapping):
+        return {k: _tuples(x) for k, x in value.items()}
+    return value
 
 
 def _cross_key_problems(scene: Any, lines: Mapping[tuple[str, ...], int]) -> list[dict[str, Any]]:
@@ -355,14 +403,23 @@ def load_scene(path_or_text: str | os.PathLike[str]) -> Scene:
             key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
             if key in _LOADED:  # validated before, and unchanged since (scenes are frozen)
                 return _LOADED[key]
-            text = path.read_text()
+            text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise InputError(f"scene file {str(path)!r} cannot be read: {exc}") from None
+        except UnicodeDecodeError as exc:
+            raise SceneError([{"key": "", "line": text_line(path.read_bytes(), exc.start),
+                               "message": f"not a TOML text (not UTF-8 at byte {exc.start})",
+                               "allowed": None}], path.name) from None  # fmt: skip
         source = path.name
         scene = _load_text(text, source)
         _LOADED[key] = scene
         return scene
     return _load_text(str(path_or_text), "scene")
+
+
+def text_line(data: bytes, offset: int) -> int:
+    """The 1-based line of byte ``offset`` of ``data``."""
+    return data[:offset].count(b"\n") + 1
 
 
 #: scene files validated in this process, by (path, modification time, size)

@@ -18,7 +18,51 @@ import numpy as np
 
 from .._validate import Array
 from .parse import parse_scene
-from .schema import Scene, When, _problem
+from .schema import Scene, SceneError, TimeHorizon, When, _problem
+
+#: the default limits of a run: ten minutes and 2 GiB of recorded states (``symrb run
+#: --max-seconds / --max-memory``, ``run_scene(max_seconds=..., max_memory=...)``)
+MAX_SECONDS = 600.0
+MAX_MEMORY = 2 * 2**30
+#: the least a fixed step or training step costs (a few NumPy calls), for a bound before planning
+_LEAST_PER_STEP = 1e-6
+
+
+@dataclasses.dataclass(frozen=True)
+class Budget:
+    """The limits a scene's estimated cost must keep: ``seconds`` and ``memory`` (bytes).
+
+    Examples
+    --------
+    >>> from symrb.scenes.plan import Budget
+    >>> Budget().seconds, Budget().memory / 2**30
+    (600.0, 2.0)
+    """
+
+    seconds: float = MAX_SECONDS
+    memory: float = MAX_MEMORY
+
+    def refuse(self, what: str, estimate: float, how: str, key: str = "") -> SceneError:
+        """The error of an estimate over the limit ``what`` ("seconds" or "memory")."""
+        limit = self.seconds if what == "seconds" else self.memory
+        fmt = (lambda x: f"{x:.3g} s") if what == "seconds" else _fmt_bytes
+        option = "--max-seconds" if what == "seconds" else "--max-memory"
+        return SceneError([{
+            "key": key or f"(estimated {'cost' if what == 'seconds' else 'memory'})",
+            "line": None, "allowed": None,
+            "message": f"the estimate, ~{fmt(estimate)} ({how}), is over the limit of "
+                       f"{fmt(limit)}; nothing was run. Raise the limit with {option} "
+                       f"(run_scene(max_{what}=...)) or ask for less",
+        }])  # fmt: skip
+
+    def check(self, plan: Plan) -> None:
+        """Refuse (:class:`SceneError`) a plan whose estimated seconds or memory is over."""
+        c = plan.cost
+        if not c["seconds"] <= self.seconds:
+            raise self.refuse("seconds", c["seconds"], c["formula"])
+        if not c.get("bytes", 0.0) <= self.memory:
+            raise self.refuse("memory", c["bytes"], c.get("bytes_formula", ""))
+
 
 #: the modules of the scene machinery a run goes through (their source enters the cache key)
 _CORE_MODULES = ("scenes.schema", "scenes.parse", "scenes.plan", "scenes.run")
@@ -54,7 +98,8 @@ class Plan:
     index : dict
         Observable -> indices of its records among the saved states.
     cost : dict
-        ``flops`` and ``seconds`` (estimates) and ``formula`` (how they were estimated).
+        ``flops`` and ``seconds`` (estimates) and ``formula`` (how they were estimated);
+        ``bytes`` (the saved states, an estimate) and ``bytes_formula``.
     notes : tuple of str
         Further remarks (e.g. what changes against a scene with more effects).
     modules : tuple of str
@@ -129,6 +174,8 @@ class Plan:
             f"cost        ~{c['flops']:.2g} flops, ~{_fmt_seconds(c['seconds'])} (estimate: "
             f"{c['formula']})"
         )
+        if "bytes" in c:
+            out.append(f"memory      ~{_fmt_bytes(c['bytes'])} (estimate: {c['bytes_formula']})")
         out += [f"note        {n}" for n in self.notes]
         return "\n".join(out)
 
@@ -168,6 +215,63 @@ def _brief_list(val: Any) -> str:
 
 def _fmt_seconds(s: float) -> str:
     return f"{s * 1e3:.2g} ms" if s < 1 else f"{s:.2g} s"
+
+
+def _fmt_bytes(b: float) -> str:
+    for unit, size in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if b >= size:
+            return f"{b / size:.3g} {unit}"
+    return f"{b:.0f} bytes"
+
+
+def _numbers_per_state(sc: Any) -> float:
+    """The numbers of one saved state (an estimate: samples x n x n of each state variable)."""
+    p = getattr(sc, "parameters", None)
+    n = float(getattr(p, "n", 1) or 1)
+    return float(getattr(p, "samples", 1) or 1) * n * n
+
+
+def _steps_asked(sc: Any) -> float | None:
+    """The steps a fixed-step or training scene takes (T / h, or horizon.steps); None if adaptive."""
+    h = getattr(sc.integrator, "h", None)
+    if isinstance(sc.horizon, TimeHorizon):
+        return float(sc.horizon.T) / float(h) if isinstance(h, float) and h > 0 else None
+    return float(getattr(sc.horizon, "steps", 0))
+
+
+def _precheck(sc: Any, budget: Budget) -> None:
+    """Refuse, before anything is allocated, a scene whose steps or records are over the budget
+    (what planning itself would allocate: the save times, the step indices)."""
+    steps = _steps_asked(sc)
+    if steps is not None and steps * _LEAST_PER_STEP > budget.seconds:
+        key = "horizon.T" if isinstance(sc.horizon, TimeHorizon) else "horizon.steps"
+        raise budget.refuse("seconds", steps * _LEAST_PER_STEP,
+                            f"{steps:.3g} steps of at least {_fmt_seconds(_LEAST_PER_STEP)}", key)  # fmt: skip
+    per = 8.0 * (1.0 + _numbers_per_state(sc))
+    for name, when in sc.observables.items():
+        if when.end:
+            records = 1.0
+        elif when.points is not None:
+            records = float(when.points)
+        elif when.times is not None:
+            records = float(len(when.times))
+        else:
+            records = (steps or 0.0) / float(when.every or 1) + 1.0
+        if records * per > budget.memory:
+            key = f"observables.{name}"
+            raise budget.refuse("memory", records * per,
+                                f"{records:.3g} records of {_fmt_bytes(per)}", key)  # fmt: skip
+
+
+def _memory(sc: Any, part: Any) -> tuple[float, str]:
+    """The bytes of the saved states of a plan (an estimate) and how it was estimated."""
+    save = part.save
+    if "t_eval" in save:
+        saved = float(len(save["t_eval"]))
+    else:
+        saved = float(save.get("steps", 0)) / float(save.get("save_every", 1) or 1) + 1.0
+    per = 8.0 * len(part.propagated or ("x",)) * _numbers_per_state(sc)
+    return saved * per, f"{saved:.3g} saved states of ~{_fmt_bytes(per)}"
 
 
 def _json_default(o: Any) -> Any:
@@ -280,7 +384,7 @@ def diagnostic_kernels(asked: Iterable[str]) -> tuple[str, ...]:
     return tuple(DIAGNOSTIC_KERNELS[o] for o in sorted(asked) if o in DIAGNOSTIC_KERNELS)
 
 
-def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
+def plan_scene(scene: Scene | Mapping[str, Any], *, budget: Budget | None = None) -> Plan:
     """Plan a scene: the state to propagate, the kernels, the save times and a cost estimate.
 
     Rules: the attitude is propagated only with the effect ``attitude`` (and by the routes whose
@@ -293,6 +397,10 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     ----------
     scene : Scene or mapping
         The scene (a mapping is validated first).
+    budget : Budget, optional
+        The limits (default: :data:`MAX_SECONDS`, :data:`MAX_MEMORY`); planning refuses a scene
+        whose steps or records alone are over them before it allocates their times.  The plan's
+        estimate itself is checked by :meth:`Budget.check` (``run_scene`` does).
 
     Returns
     -------
@@ -303,7 +411,8 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     ------
     SceneError
         Requests the integrator cannot meet (``every`` with an adaptive integrator, times that
-        are not multiples of a fixed step, a horizon that is not a whole number of steps).
+        are not multiples of a fixed step, a horizon that is not a whole number of steps), or
+        more steps or records than the budget allows.
 
     Examples
     --------
@@ -326,8 +435,10 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
     if not_asked:
         skipped.append((", ".join(not_asked), "not asked for (no diagnostic is evaluated unless "
                         "it is an observable)"))  # fmt: skip
+    _precheck(sc, budget or Budget())
     part: SystemPlan = sc._plan(skipped, notes)
     windows = _windows(obs, part.index)
+    memory, how = _memory(sc, part)
     record = {name: (obs[name].describe(), windows.get(name, ((), len(part.index[name])))[1])
               for name in obs}  # fmt: skip
     return Plan(
@@ -339,7 +450,7 @@ def plan_scene(scene: Scene | Mapping[str, Any]) -> Plan:
         record=record,
         save=part.save,
         index=part.index,
-        cost=part.cost,
+        cost={**part.cost, "bytes": memory, "bytes_formula": how},
         notes=tuple(notes),
         modules=tuple(dict.fromkeys(_CORE_MODULES + part.modules)),
         windows=windows,

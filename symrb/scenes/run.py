@@ -4,6 +4,7 @@ run through the system's hook ``_run``, reduce the windowed observables, store).
 from __future__ import annotations
 
 import os
+import re
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -11,10 +12,11 @@ from typing import Any
 import numpy as np
 
 from .._validate import Array
+from ..errors import InputError
 from .parse import load_scene, parse_scene
-from .plan import Plan, plan_scene
+from .plan import MAX_MEMORY, MAX_SECONDS, Budget, Plan, plan_scene
 from .result import SceneResult
-from .schema import Scene
+from .schema import Scene, SceneError
 from .store import SceneStore, _store, _versions, scene_key
 
 
@@ -45,7 +47,48 @@ def scene_inputs(scene: Scene) -> dict[str, Any]:
     >>> x["lam"].shape, x["M0"].shape
     ((4,), (4, 4))
     """
-    return scene._inputs()  # type: ignore[no-any-return]
+    try:
+        x = scene._inputs()
+    except SceneError:
+        raise
+    except InputError as exc:  # a check of symrb's functions: name the scene's key
+        raise as_scene_error(exc, scene) from None
+    bad = [k for k, a in x.items() if _not_finite(a)]
+    if bad:
+        raise SceneError([{"key": f"parameters ({bad[0]})", "line": None, "allowed": None,
+                           "message": f"the initial {bad[0]} made of the parameters is not "
+                           "finite"}])  # fmt: skip
+    return x  # type: ignore[no-any-return]
+
+
+def _not_finite(a: Any) -> bool:
+    """Whether an input or a result array holds NaN or infinity (non-numeric arrays: no)."""
+    if not isinstance(a, np.ndarray) or a.dtype.kind not in "fc":
+        return False
+    return not bool(np.isfinite(a).all())
+
+
+def _keys(data: Any, prefix: str = "") -> list[str]:
+    """The dotted keys of a dumped scene, the deepest first."""
+    out: list[str] = []
+    if isinstance(data, dict):
+        for k, val in data.items():
+            out += _keys(val, f"{prefix}{k}.") + [f"{prefix}{k}"]
+    return out
+
+
+def as_scene_error(exc: InputError, scene: Any) -> SceneError:
+    """A :class:`SceneError` of an :class:`InputError` raised by the functions a scene calls:
+    the key is the scene's key the message names (``parameters.lam``, or ``lam`` alone)."""
+    if isinstance(exc, SceneError):
+        return exc
+    msg = str(exc)
+    keys = _keys(scene.model_dump(mode="json"))
+    key = next((k for k in keys if k in msg), None)
+    if key is None:
+        key = next((k for k in keys if re.search(rf"\b{re.escape(k.rsplit('.', 1)[-1])}\b", msg)
+                    and "." in k), "")  # fmt: skip
+    return SceneError([{"key": key, "line": None, "allowed": None, "message": msg}])
 
 
 def _window_reduce(
@@ -85,6 +128,8 @@ def run_scene(
     scene: Scene | Mapping[str, Any] | str | os.PathLike[str],
     *,
     cache: bool | str | os.PathLike[str] | SceneStore | None = True,
+    max_seconds: float = MAX_SECONDS,
+    max_memory: float = MAX_MEMORY,
 ) -> SceneResult:
     """Plan and run a scene, or load its result from the cache.
 
@@ -98,12 +143,23 @@ def run_scene(
         ``~/.cache/symrb/scenes``); a directory or a :class:`SceneStore`; ``False``: compute and
         store nothing.  An entry that fails its checksums, or a cache that cannot be written,
         gives a :class:`~symrb.errors.CacheWarning` and the result is computed.
+    max_seconds, max_memory : float, optional
+        The budget: a scene whose estimated seconds or bytes of saved states
+        (``plan.cost``) are over it is refused before anything is computed (default ten
+        minutes and 2 GiB).
 
     Returns
     -------
     SceneResult
         ``meta["from_cache"]`` tells whether anything was computed.  A run whose integrator
-        stopped early has ``meta["success"]`` False and is not stored.
+        stopped early, or whose observables are not finite, has ``meta["success"]`` False (and
+        ``meta["message"]`` says why) and is not stored.
+
+    Raises
+    ------
+    SceneError
+        An invalid scene, initial data its functions refuse (naming the key), or an estimate
+        over the budget.
 
     Examples
     --------
@@ -118,7 +174,9 @@ def run_scene(
         sc: Any = load_scene(scene)
     else:
         sc = parse_scene(scene)
-    plan = plan_scene(sc)
+    budget = Budget(float(max_seconds), float(max_memory))
+    plan = plan_scene(sc, budget=budget)
+    budget.check(plan)
     store = _store(cache)
     key = scene_key(sc, plan)
     if store is not None:
@@ -127,8 +185,17 @@ def run_scene(
             hit.meta["from_cache"] = True
             return hit
     start = time.perf_counter()
-    times, data, failure = _execute(sc, plan)
+    try:
+        times, data, failure = _execute(sc, plan)
+    except InputError as exc:
+        raise as_scene_error(exc, sc) from None
     seconds = time.perf_counter() - start
+    bad = [name for name, a in data.items() if _not_finite(np.asarray(a))]
+    if bad and not failure:
+        a = np.asarray(data[bad[0]])
+        first = int(np.argmax(~np.isfinite(a.reshape(a.shape[0], -1)).all(axis=1)))
+        failure = (f"observables.{bad[0]} is not finite from record {first} on (an overflow: "
+                   "smaller initial data, a smaller step or a shorter horizon)")  # fmt: skip
     meta = {"key": key, "versions": _versions(), "seconds": seconds, "from_cache": False,
             "success": not failure, "message": failure or "ok"}  # fmt: skip
     result = SceneResult(sc, plan, times, data, meta)

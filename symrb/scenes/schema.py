@@ -16,6 +16,7 @@ from typing import Annotated, Any, ClassVar, Literal, Union
 
 import numpy as np
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
@@ -71,8 +72,35 @@ class SceneError(InputError):
 # the schema
 
 
+#: the largest magnitude of a number in a scene: larger ones overflow the observables (the
+#: sixth power of a momentum in ``casimirs``, a square in an energy) or the plan's arithmetic
+LARGEST = 1e12
+
+
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # no NaN or infinity anywhere (pydantic names the key); strings are not numbers (parse_scene
+    # validates in strict mode)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @model_validator(mode="after")
+    def _not_too_large(self) -> Any:
+        for name in type(self).model_fields:
+            big = _largest(getattr(self, name))
+            if big is not None:
+                raise _invalid((name,), f"numbers in a scene lie within +-{LARGEST:g}; got {big:g}")
+        return self
+
+
+def _largest(value: Any) -> float | None:
+    """The first float of ``value`` (a float or nested tuples of them) beyond +-LARGEST."""
+    if isinstance(value, float):
+        return value if abs(value) > LARGEST else None
+    if isinstance(value, tuple):
+        for x in value:
+            big = _largest(x)
+            if big is not None:
+                return big
+    return None
 
 
 def _invalid(loc: tuple[str, ...], message: str, allowed: Sequence[Any] | None = None) -> Any:
@@ -208,7 +236,14 @@ class When(_Model):
         return what
 
 
-Matrix = tuple[tuple[float, ...], ...]
+def _rectangular(rows: tuple[tuple[float, ...], ...]) -> tuple[tuple[float, ...], ...]:
+    lengths = sorted({len(r) for r in rows})
+    if len(lengths) > 1:
+        raise InputError(f"a matrix has rows of one length; got rows of lengths {lengths}")
+    return rows
+
+
+Matrix = Annotated[tuple[tuple[float, ...], ...], AfterValidator(_rectangular)]
 Vector = tuple[float, ...]
 
 

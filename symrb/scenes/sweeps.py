@@ -20,9 +20,9 @@ from .. import _validate as v
 from .._progress import _Bar
 from ..errors import InputError
 from .parse import load_scene, parse_scene
-from .plan import plan_scene
+from .plan import MAX_MEMORY, MAX_SECONDS, Budget, plan_scene
 from .result import SceneResult
-from .run import run_scene
+from .run import run_scene, scene_inputs
 from .schema import Scene, SceneError
 from .store import SceneStore, _store
 
@@ -32,6 +32,29 @@ def _parse_value(text: str) -> Any:
         return tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
+
+
+def _parse_grid(items: Sequence[str]) -> dict[str, list[Any]]:
+    """The grid of ``key=v1,v2,...`` strings; a key given twice, a missing ``=`` or an empty
+    value is refused (:class:`SceneError`, naming the grid item)."""
+    parsed: dict[str, list[Any]] = {}
+    for item in items:
+        key, sep, vals = str(item).partition("=")
+        key = key.strip()
+        values = [x.strip() for x in vals.split(",")]
+        problem = None
+        if not sep or not key:
+            problem = "not of the form KEY=V1,V2,... (a dotted key, =, comma-separated values)"
+        elif not all(values):
+            problem = f"an empty value in {vals!r}: give KEY=V1,V2,... with every value"
+        elif key in parsed:
+            problem = (f"{key} is on the grid twice; give its values once: "
+                       f"--grid {key}={','.join(map(str, parsed[key]))},{vals}")  # fmt: skip
+        if problem:
+            raise SceneError([{"key": f"--grid {item}", "line": None, "message": problem,
+                               "allowed": None}], "grid")  # fmt: skip
+        parsed[key] = [_parse_value(x) for x in values]
+    return parsed
 
 
 def expand_grid(
@@ -56,7 +79,8 @@ def expand_grid(
     Raises
     ------
     SceneError
-        A grid point that makes an invalid scene (the key is named).
+        A grid point that makes an invalid scene (the key is named); a grid string without
+        ``=`` or with an empty value; a key given twice.
 
     Examples
     --------
@@ -71,13 +95,7 @@ def expand_grid(
     # must not follow a grid point to another kind that has no such key
     base = parse_scene(scene).model_dump(mode="json", exclude_unset=True)
     if not isinstance(grid, Mapping):
-        parsed: dict[str, list[Any]] = {}
-        for item in grid:
-            key, sep, vals = str(item).partition("=")
-            if not sep or not key.strip() or not vals.strip():
-                raise InputError(f"grid must be key=v1,v2,... got {item!r}")
-            parsed[key.strip()] = [_parse_value(s.strip()) for s in vals.split(",")]
-        grid = parsed
+        grid = _parse_grid(grid)
     keys = list(grid)
     out = []
     for combo in itertools.product(*(list(grid[k]) for k in keys)):
@@ -138,10 +156,36 @@ def _summary(point: Mapping[str, Any], r: SceneResult) -> dict[str, Any]:
     return row
 
 
-def _run_chunk(scenes: list[Any], cache_root: str | None) -> list[SceneResult]:
+def _run_chunk(scenes: list[Any], cache_root: str | None, budget: Budget | None = None
+               ) -> list[SceneResult]:  # fmt: skip
     """Run a chunk of scenes in a worker (the store makes a retried chunk resume)."""
+    budget = budget or Budget()
     store: Any = SceneStore(cache_root) if cache_root is not None else False
-    return [run_scene(s, cache=store) for s in scenes]
+    return [run_scene(s, cache=store, max_seconds=budget.seconds, max_memory=budget.memory)
+            for s in scenes]  # fmt: skip
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """A sweep stopped by Ctrl-C: ``kept`` of ``total`` points finished (and were stored)."""
+
+    def __init__(self, kept: int, total: int) -> None:
+        super().__init__(f"interrupted; {kept} of {total} points kept")
+        self.kept, self.total = kept, total
+
+
+def _check_points(points: Sequence[tuple[dict[str, Any], Any]], budget: Budget) -> Any:
+    """Plan every grid point and check its budget and its initial data before any runs: the
+    first point's plan."""
+    first = None
+    for point, sc in points:
+        try:
+            plan = plan_scene(sc, budget=budget)
+            budget.check(plan)
+            scene_inputs(sc)
+        except SceneError as exc:
+            raise SceneError(exc.problems, f"grid point {point}") from None
+        first = first or plan
+    return first
 
 
 def sweep(
@@ -156,6 +200,8 @@ def sweep(
     chunk_size: int | None = None,
     retries: int = 3,
     progress: bool = False,
+    max_seconds: float = MAX_SECONDS,
+    max_memory: float = MAX_MEMORY,
 ) -> SweepResult:
     """Run a scene over a grid of parameters, in-process or on Dask.
 
@@ -187,12 +233,22 @@ def sweep(
         How often Dask retries a failed task.
     progress : bool, optional
         A tqdm progress bar over the points.
+    max_seconds, max_memory : float, optional
+        The budget of each point (see :func:`run_scene`); every point is planned, checked
+        against it and its initial data made before the first runs.
 
     Returns
     -------
     SweepResult
         The table (pandas) and the results, in grid order.  Results equal a serial run's bit
         for bit: each point runs the same code on the same inputs.
+
+    Raises
+    ------
+    SceneError
+        A grid point that is invalid, over the budget or whose initial data are refused.
+    SweepInterrupted
+        Ctrl-C (a KeyboardInterrupt): how many points finished (and were stored).
 
     Examples
     --------
@@ -207,19 +263,26 @@ def sweep(
 
     base = load_scene(scene) if isinstance(scene, str | os.PathLike) else parse_scene(scene)
     points = expand_grid(base, grid)
+    budget = Budget(float(max_seconds), float(max_memory))
+    first = _check_points(points, budget)
     store = _store(cache)
     results: list[SceneResult | None] = [None] * len(points)
     given = sum(x is not None for x in (scheduler, local_cluster, client))
     if given > 1:
         raise InputError("give at most one of scheduler, local_cluster and client")
-    if given == 0:
-        with _Bar(len(points), "sweep", bool(progress), unit="point") as bar:
-            for i, (_pt, sc) in enumerate(points):
-                results[i] = run_scene(sc, cache=store if store is not None else False)
-                bar.step()
-    else:
-        _dask_sweep(points, results, store, scheduler, local_cluster, client, chunk_seconds,
-                    chunk_size, retries, progress)  # fmt: skip
+    try:
+        if given == 0:
+            with _Bar(len(points), "sweep", bool(progress), unit="point") as bar:
+                for i, (_pt, sc) in enumerate(points):
+                    results[i] = run_scene(sc, cache=store if store is not None else False,
+                                           max_seconds=budget.seconds, max_memory=budget.memory)  # fmt: skip
+                    bar.step()
+        else:
+            _dask_sweep(points, results, store, scheduler, local_cluster, client,
+                        (chunk_seconds, chunk_size, first.cost["seconds"]), retries, progress,
+                        budget)  # fmt: skip
+    except KeyboardInterrupt:
+        raise SweepInterrupted(sum(r is not None for r in results), len(points)) from None
     done = [r for r in results if r is not None]
     table = pd.DataFrame([_summary(pt, r) for (pt, _), r in zip(points, done, strict=True)])
     return SweepResult(table, done)
@@ -232,11 +295,12 @@ def _dask_sweep(
     scheduler: str | None,
     local_cluster: int | None,
     client: Any,
-    chunk_seconds: float,
-    chunk_size: int | None,
+    chunking: tuple[float, int | None, float],
     retries: int,
     progress: bool,
+    budget: Budget,
 ) -> None:
+    chunk_seconds, chunk_size, est = chunking
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError:  # pragma: no cover - depends on the environment
@@ -254,7 +318,7 @@ def _dask_sweep(
             else:
                 client = stack.enter_context(Client(scheduler))
         nworkers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})) or 1)
-        est = max(plan_scene(points[0][1]).cost["seconds"], 1e-6)
+        est = max(est, 1e-6)
         size = max(1, math.ceil(chunk_seconds / est))
         size = min(size, max(1, len(points) // (2 * nworkers)))
         if chunk_size is not None:
@@ -262,8 +326,8 @@ def _dask_sweep(
         chunks = [list(range(i, min(i + size, len(points)))) for i in range(0, len(points), size)]
         root = str(store.root) if store is not None else None
         futures = {
-            client.submit(_run_chunk, [points[i][1] for i in idx], root, retries=retries,
-                          pure=False): idx
+            client.submit(_run_chunk, [points[i][1] for i in idx], root, budget,
+                          retries=retries, pure=False): idx
             for idx in chunks
         }  # fmt: skip
         with _Bar(len(points), "sweep", bool(progress), unit="point") as bar:

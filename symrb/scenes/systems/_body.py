@@ -67,7 +67,7 @@ class BodyParameters(_Model):
 
     n: int = Field(default=3, ge=2)
     lam: Vector | None = None
-    seed: int = 0
+    seed: int = Field(default=0, ge=0)
     M0: Vector | Matrix | None = None
     momentum: float = Field(default=1.0, gt=0)
     op_norm: float | None = Field(default=None, gt=0)
@@ -86,6 +86,20 @@ class BodyParameters(_Model):
             raise InputError("give the size of M0 once: momentum (the pairing norm) or op_norm "
                              "(the operator norm), not both")  # fmt: skip
         return self
+
+
+def body_rate(p: Any) -> float:
+    """The rate |Omega| of a body's parameters ``p``, for the cost estimate: the size of M0 (its
+    operator norm, its largest entry times n, or ``momentum``) over the smallest ``lam`` (0.5
+    when lam is drawn; a lam that is not positive is refused with the inputs)."""
+    if p.op_norm is not None:
+        size = float(p.op_norm)
+    elif p.M0 is not None:
+        size = float(np.abs(np.asarray(p.M0, dtype=float)).max(initial=0.0)) * p.n
+    else:
+        size = float(p.momentum)
+    small = min(p.lam) if p.lam else 0.5
+    return size / (small if small > 0 else 0.5)
 
 
 def body_inputs(p: Any, boundary: bool = False) -> dict[str, Any]:
@@ -207,7 +221,7 @@ def body_continuous_plan(
         save={"t_eval": [float(t) for t in t_eval]},
         index=index,
         cost=_est_continuous(
-            sc.horizon.T, integ.rtol, 2.0 * p.momentum, 10.0 * p.samples * p.n**3
+            sc.horizon.T, integ.rtol, body_rate(p), 10.0 * p.samples * p.n**3
         ),  # fmt: skip
         modules=modules + ("_generated.symmetric_rigid_body",),
     )

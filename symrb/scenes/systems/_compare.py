@@ -59,7 +59,7 @@ class Compare(_Model):
 
     system: Literal["rigid_body", "symmetric_rigid_body"] | None = None
     integrator: CompareIntegrator
-    rotation: int | Matrix | None = None
+    rotation: Annotated[int, Field(ge=0)] | Matrix | None = None
     shift: int = Field(default=0, ge=0)
     label: str = ""
 

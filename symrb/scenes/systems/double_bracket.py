@@ -35,7 +35,7 @@ class OrbitParameters(_Model):
     standard deviation ``scale``, N drawn first)."""
 
     n: int = Field(default=3, ge=2)
-    seed: int = 0
+    seed: int = Field(default=0, ge=0)
     x0: Vector | Matrix | tuple[Matrix, ...] | None = None
     N: Vector | Matrix | None = None
     samples: int = Field(default=1, ge=1)

@@ -61,10 +61,10 @@ class NetworkParameters(_Model):
     data: Literal["toy", "digits"] = "toy"
     layers: int = Field(default=4, ge=1)
     samples: int = Field(default=200, ge=1)
-    seed: int = 0
+    seed: int = Field(default=0, ge=0)
     #: the initial weights K are K0_scale times standard normal numbers from K0_seed (zeros when 0)
     K0_scale: float = Field(default=0.0, ge=0)
-    K0_seed: int = 0
+    K0_seed: int = Field(default=0, ge=0)
     features: int = Field(default=16, ge=1, le=64)
     test_fraction: float = Field(default=0.3, gt=0, lt=1)
 

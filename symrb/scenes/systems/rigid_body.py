@@ -44,6 +44,7 @@ from ._body import (
     _rot,
     _rotate_back,
     body_inputs,
+    body_rate,
 )
 from ._compare import _Q_ONLY, Compares, _ComparedBody
 
@@ -214,7 +215,7 @@ def _plan_continuous(sc: RigidBodyScene, notes: list[str]) -> SystemPlan:
     integ: Any = sc.integrator
     p = sc.parameters
     attitude = "attitude" in sc.effects
-    rate = p.momentum / 0.5 if p.M0 is None else 2.0
+    rate = body_rate(p)
     t_eval, index = _continuous_save(sc)
     flow = "RigidBody" if attitude else "symrb.scenes.RigidBodyMomentum"
     if not attitude:

@@ -37,7 +37,7 @@ class SONetworkParameters(_Model):
     samples: int = Field(default=32, ge=1)
     angle: float = 0.6
     noise: float = Field(default=0.05, ge=0)
-    seed: int = 0
+    seed: int = Field(default=0, ge=0)
     layers: int = Field(default=4, ge=1)
     lam: Vector | None = None
     alpha: float | None = Field(default=None, gt=0)

@@ -28,7 +28,7 @@ class TodaParameters(_Model):
     k: int = Field(default=5, ge=2)
     a: tuple[float, ...] | None = None
     b: tuple[float, ...] | None = None
-    seed: int = 0
+    seed: int = Field(default=0, ge=0)
 
     @field_validator("a")
     @classmethod
