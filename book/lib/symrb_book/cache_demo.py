@@ -1,8 +1,11 @@
-"""The hard-cases page's demonstration of the scene cache: damage one stored number, run again."""
+"""The hard-cases page's demonstrations of the scene tool: what ``symrb run`` says about a
+mistaken scene file, and the cache: damage one stored number, run again."""
 
 from __future__ import annotations
 
+import contextlib
 import io
+import tempfile
 import warnings
 from pathlib import Path
 from typing import Any
@@ -33,3 +36,18 @@ def run_noting_warnings(run: Any, *args: Any, **kwargs: Any) -> tuple[Any, list[
         result = run(*args, **kwargs)
     return result, [str(w.message).split(": ", 1)[-1] for w in caught
                     if issubclass(w.category, SymrbWarning)]  # fmt: skip
+
+
+def run_cli(document: str) -> tuple[int, str]:
+    """``symrb run`` (in this process, without the cache) on the scene file ``document``: its
+    exit status and what it printed to standard error, with the file's temporary directory left
+    out."""
+    from symrb import scene_cli
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "scene.toml"
+        path.write_text(document)
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            status = scene_cli.main("run", [str(path), "--no-cache"])
+    return status, err.getvalue().replace(tmp + "/", "")
