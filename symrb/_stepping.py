@@ -101,6 +101,7 @@ def _prepare(
             arrays.append(v.skew(x, name, nn))
         else:
             arrays.append(v.square(x, name, nn))
+        v.bounded(arrays[-1], name)
     try:
         batch = np.broadcast_shapes(L.shape[:-1], *[a.shape[:-2] for a in arrays])
     except ValueError:

@@ -72,7 +72,7 @@ def _prepare(
     L = _lam(lam)
     nn = L.shape[-1]
     Q = v.orthogonal(Q0, "Q0", nn)
-    M = v.skew(M0, "M0", nn)
+    M = v.bounded(v.skew(M0, "M0", nn), "M0")
     hv = v.real_scalar(h, "h")
     if not hv > 0:
         raise InputError(f"h must be a finite number > 0, got {h!r}")

@@ -279,8 +279,8 @@ def _exact_input(
     if check:
         L = v.inertia(lam)
         Qa = v.orthogonal(Q0, "Q0")
-        Ma = v.skew(M0, "M0")
-        tt = v.as_float_array(t, "t")
+        Ma = v.bounded(v.skew(M0, "M0"), "M0")
+        tt = v.bounded(v.as_float_array(t, "t"), "t")
     else:
         L, Qa, Ma, tt = (np.asarray(x, dtype=float) for x in (lam, Q0, M0, t))
     for name, x, want in (("lam", L, (3,)), ("Q0", Qa, (3, 3)), ("M0", Ma, (3, 3))):

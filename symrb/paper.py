@@ -275,7 +275,9 @@ def _symmetric_run(
         if run.k[-1] != k - 1:
             run.save(k - 1, Q=Q, P=P)
     out = run.result(h)
-    out.y["M"] = np.asarray(_srb.symmetric_momentum(out.y["Q"], out.y["P"]), dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow: check_finite says so
+        out.y["M"] = np.asarray(_srb.symmetric_momentum(out.y["Q"], out.y["P"]), dtype=float)
+    out.check_finite()
     return out
 
 

@@ -449,8 +449,14 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
-    A = v.skew(M, "M", nn)
-    batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
+    A = v.bounded(v.skew(M, "M", nn), "M")
+    try:
+        batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
+    except ValueError:
+        raise InputError(
+            f"the batch axes do not broadcast: M {A.shape}, lam {L.shape}; pass arrays whose "
+            "leading axes broadcast (numpy rules)"
+        ) from None
     Ab = np.broadcast_to(A, batch + (nn, nn)).reshape(-1, nn, nn)
     Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
     out = np.array([_fold_scale_one(Ab[i], Lb[i]) for i in range(Ab.shape[0])])
@@ -692,7 +698,7 @@ def solve_moser_veselov(
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
-    A = v.skew(M, "M", nn)
+    A = v.bounded(v.skew(M, "M", nn), "M")
     if tol is not None and not v.real_scalar(tol, "tol") >= 0:
         raise InputError(
             f"tol must be a finite number >= 0, got {tol!r}; pass a float >= 0 or None"
