@@ -24,6 +24,7 @@ from ._validate import Array
 #: for the flows of symrb; the longest runs of the claims take about 10^5).
 MAX_NFEV = 1_000_000
 
+
 class _OutOfBudget(Exception):
     def __init__(self, t: float) -> None:
         self.t = t

@@ -9,6 +9,21 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._validate import Array
+from .errors import NotConvergedError, OutOfDomainError, SymrbError
+
+#: What ends a step of a flow early: no solution (past the fold, no convergence), or float64
+#: arithmetic that overflowed or divided by zero on the way (extreme finite input).
+STEP_FAILURES = (OutOfDomainError, NotConvergedError, ArithmeticError, np.linalg.LinAlgError)
+
+
+def step_failure(exc: Exception) -> str:
+    """Why a step failed, in words (a symrb error says it itself)."""
+    if isinstance(exc, SymrbError):
+        return str(exc)
+    return (
+        f"float64 arithmetic failed ({type(exc).__name__}: {exc}): the step's numbers overflow "
+        "or vanish; take a step nearer 1/|M| or rescale the input"
+    )
 
 
 class Trajectory(dict):
@@ -54,7 +69,9 @@ def first_nonfinite(t: Array, y: Mapping[str, Array]) -> tuple[int, list[str]] |
 
 def cut(t: Array, y: Trajectory, i: int) -> Trajectory:
     """The states of ``y`` before time index ``i``."""
-    return Trajectory({name: x[:i] if np.shape(x)[:1] == t.shape[:1] else x for name, x in y.items()})
+    return Trajectory(
+        {name: x[:i] if np.shape(x)[:1] == t.shape[:1] else x for name, x in y.items()}
+    )
 
 
 @dataclass

@@ -465,9 +465,7 @@ def integrate(
         traj.update(fl.derived({name: traj[name] for name in fl.state}, L))
     kappa = err = None
     if condition and sol.success and nt:
-        kappa, err = _flow_condition(
-            fl, L, shape, y_init, sol, span, method, rtol, atol, max_nfev
-        )
+        kappa, err = _flow_condition(fl, L, shape, y_init, sol, span, method, rtol, atol, max_nfev)
     return FlowSolution(
         t=sol.t,
         y=traj,

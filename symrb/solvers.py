@@ -383,7 +383,12 @@ def _fold_scale_one(M: Array, lam: Array, rtol: float = 1e-13) -> float:
         while hi is None:
             s *= 1.5
             if s > 1e3 * s_max:  # pragma: no cover - no solution can exist there
-                raise RuntimeError("fold_scale: no fold found along the ray")
+                raise NotConvergedError(
+                    f"fold_scale: no fold found along the ray up to {s:.4g} (||M||_op = "
+                    f"{opn:.4g}, lam = {lam}): the eigenvalues lost their accuracy",
+                    float("nan"),
+                    0,
+                )
             if _has_imaginary_eigenvalue(M, lam, s, thresh):
                 hi = s
             else:
@@ -715,9 +720,17 @@ def solve_moser_veselov(
     Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
     normM = _fro(Ab)
     tolb = np.full(Ab.shape[0], float(tol)) if tol is not None else 10.0 * _EPS * normM
-    U, iters, res, margin, start, tolb = _solve_batch(
-        Ab, Lb, tolb, int(maxiter), G, floor=tol is None
-    )
+    try:
+        U, iters, res, margin, start, tolb = _solve_batch(
+            Ab, Lb, tolb, int(maxiter), G, floor=tol is None
+        )
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:
+        raise OutOfDomainError(
+            f"solve_moser_veselov: float64 arithmetic failed ({type(exc).__name__}: {exc}) for "
+            f"max ||M||_F = {float(normM.max(initial=0.0)):.4g} against min lam_i = "
+            f"{float(Lb.min()):.4g}: M is far past the fold of J_D or the scales overflow; "
+            "scale M down (see fold_scale)"
+        ) from None
     U = U.reshape(batch + (nn, nn))
     if not return_info:
         return U

@@ -14,8 +14,8 @@ from scipy.optimize import OptimizeResult
 from .. import _conditioning as _cond
 from .. import _validate as v
 from .._docs import fill_doc
-from .._ivp import MAX_NFEV, check_budget, solve_ivp_budget
 from .._generated import adjoint_orbits as _gen
+from .._ivp import MAX_NFEV, check_budget, solve_ivp_budget
 from .._validate import Array
 from ..errors import InputError, NotConvergedError
 from ._common import DOC, pair_xN

@@ -10,9 +10,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _validate as v
-from .._ivp import MAX_NFEV, check_budget, solve_ivp_budget
 from .._docs import fill_doc
 from .._generated import adjoint_orbits as _gen
+from .._ivp import MAX_NFEV, check_budget, solve_ivp_budget
 from .._validate import Array
 from ..errors import InputError, NotConvergedError
 from ._common import DOC, pair_xN, symmetric
