@@ -55,11 +55,11 @@ def first_nonfinite(t: Array, y: Mapping[str, Array]) -> tuple[int, list[str]] |
     """The first index of the time axis at which ``t`` or a state of ``y`` (time first) holds a
     non-finite number, with the names of what is not finite there; None when all is finite."""
     K = t.shape[0]
-    rows = {"t": np.isfinite(t)}
+    rows: dict[str, NDArray[np.bool_]] = {"t": np.asarray(np.isfinite(t))}
     for name, x in y.items():
         a = np.asarray(x)
         if a.dtype.kind in "fc" and a.shape[:1] == (K,):
-            rows[f"y.{name}"] = np.isfinite(a.reshape(K, -1)).all(axis=1)
+            rows[f"y.{name}"] = np.asarray(np.isfinite(a.reshape(K, -1)).all(axis=1))
     ok = np.logical_and.reduce(list(rows.values()))
     if ok.all():
         return None

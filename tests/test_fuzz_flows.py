@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import symrb
@@ -206,6 +206,13 @@ def test_orbit_flows(a, b, scale, T) -> None:
     outcome(lambda: symrb.orbits.orbit_extremal_flow(x0, -N, N, [0.0, T], max_nfev=NFEV))
 
 
+@settings(max_examples=12)  # a boundary value solve costs up to a second
+@given(a=st.lists(st.floats(-1, 1), min_size=3, max_size=3), scale=magnitudes, T=magnitudes)
+def test_orbit_bvp(a, scale, T) -> None:
+    outcome(lambda: symrb.solve_orbit_bvp(scale * symrb.hat(a), symrb.hat([0.0, 0.0, 1.0]), T,
+                                          nodes=11))  # fmt: skip
+
+
 # ---------------------------------------------------------------------------------------------
 # the cases of issue 22, each of which failed before the fix
 
@@ -247,6 +254,12 @@ def test_issue22_overflow_is_an_input_error(call: Callable[[], Any]) -> None:
 def test_issue22_hangs_end_with_a_message(call: Callable[[int], Any]) -> None:
     with pytest.raises(symrb.NotConvergedError, match="budget of max_nfev = 500|not finite"):
         call(500)
+
+
+def test_orbit_bvp_continuation_is_bounded() -> None:
+    """T = 1e300 took 1700 boundary value solves (a hang); now refused before any."""
+    with pytest.raises(symrb.InputError, match="more than 100"):
+        symrb.solve_orbit_bvp(1e-300 * BIG, BIG, 1e300)
 
 
 def test_budget_of_integrate_is_reported() -> None:
