@@ -213,13 +213,15 @@ def symmetric_flow(
     )
 
 
-_MAX_HALVINGS = 30
+#: The most halvings of one step: 2^12 substeps at most (the work doubles with each halving;
+#: j up to 30 meant up to 2^30 solves, a hang, for an h far past the fold).
+_MAX_HALVINGS = 12
 
 
 def _halved_step(
     stepper: _Stepper, run: _Run, Q: Array, P: Array, h: float
 ) -> tuple[Array, Array, int]:
-    """One step of length h, as 2^j steps of h/2^j with the smallest j that works (j <= 30)."""
+    """One step of length h, as 2^j steps of h/2^j with the smallest j that works (j <= 12)."""
     for j in range(_MAX_HALVINGS + 1):
         Qj, Pj, hj = Q, P, h / 2.0**j
         try:

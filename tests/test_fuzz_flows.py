@@ -256,6 +256,13 @@ def test_issue22_hangs_end_with_a_message(call: Callable[[int], Any]) -> None:
         call(500)
 
 
+def test_halving_is_bounded() -> None:
+    """A step 1e7 times past the fold with halve=True took up to 2^30 substeps (a hang); now at
+    most 2^12, then the step fails with the fold diagnosis."""
+    sol = symrb.discrete_rigid_body_flow(np.eye(3), BIG, LAM, 1e7, 1, halve=True)
+    assert sol.success is False and sol.failed_step == 1 and "past the fold" in sol.message
+
+
 def test_orbit_bvp_continuation_is_bounded() -> None:
     """T = 1e300 took 1700 boundary value solves (a hang); now refused before any."""
     with pytest.raises(symrb.InputError, match="more than 100"):
