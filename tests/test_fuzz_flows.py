@@ -264,7 +264,7 @@ def test_halving_is_bounded() -> None:
 
 
 def test_orbit_bvp_continuation_is_bounded() -> None:
-    """T = 1e300 took 1700 boundary value solves (a hang); now refused before any."""
+    """T = 1e300 meant about 1700 boundary value solves; now refused before the first."""
     with pytest.raises(symrb.InputError, match="more than 100"):
         symrb.solve_orbit_bvp(1e-300 * BIG, BIG, 1e300)
 
