@@ -45,7 +45,7 @@ FRAGMENTS: dict[str, str] = {
         "    When a step has no solution on the branch (:math:`h` times the momentum past the "
         "fold of\n"
         "    :math:`J_D`) or Newton fails, take it as :math:`2^j` steps of :math:`h/2^j` with the\n"
-        "    smallest such :math:`j \\le 30` (for the continuous-time use, where :math:`h` is "
+        "    smallest such :math:`j \\le 12` (for the continuous-time use, where :math:`h` is "
         "only a\n"
         "    resolution); ``halvings`` and ``message`` say which steps were halved.  Without it "
         "such\n"

@@ -2,12 +2,28 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ._validate import Array
+from .errors import NotConvergedError, OutOfDomainError, SymrbError
+
+#: What ends a step of a flow early: no solution (past the fold, no convergence), or float64
+#: arithmetic that overflowed or divided by zero on the way (extreme finite input).
+STEP_FAILURES = (OutOfDomainError, NotConvergedError, ArithmeticError, np.linalg.LinAlgError)
+
+
+def step_failure(exc: Exception) -> str:
+    """Why a step failed, in words (a symrb error says it itself)."""
+    if isinstance(exc, SymrbError):
+        return str(exc)
+    return (
+        f"float64 arithmetic failed ({type(exc).__name__}: {exc}): the step's numbers overflow "
+        "or vanish; take a step nearer 1/|M| or rescale the input"
+    )
 
 
 class Trajectory(dict):
@@ -35,6 +51,29 @@ class Trajectory(dict):
         return sorted(set(super().__dir__()) | {str(k) for k in self})
 
 
+def first_nonfinite(t: Array, y: Mapping[str, Array]) -> tuple[int, list[str]] | None:
+    """The first index of the time axis at which ``t`` or a state of ``y`` (time first) holds a
+    non-finite number, with the names of what is not finite there; None when all is finite."""
+    K = t.shape[0]
+    rows: dict[str, NDArray[np.bool_]] = {"t": np.asarray(np.isfinite(t))}
+    for name, x in y.items():
+        a = np.asarray(x)
+        if a.dtype.kind in "fc" and a.shape[:1] == (K,):
+            rows[f"y.{name}"] = np.asarray(np.isfinite(a.reshape(K, -1)).all(axis=1))
+    ok = np.logical_and.reduce(list(rows.values()))
+    if ok.all():
+        return None
+    i = int(np.argmin(ok))
+    return i, [name for name, row in rows.items() if not row[i]]
+
+
+def cut(t: Array, y: Trajectory, i: int) -> Trajectory:
+    """The states of ``y`` before time index ``i``."""
+    return Trajectory(
+        {name: x[:i] if np.shape(x)[:1] == t.shape[:1] else x for name, x in y.items()}
+    )
+
+
 @dataclass
 class DiscreteFlowSolution:
     r"""Result of the discrete flows (:func:`symmetric_flow`, :func:`mv_algorithm1`,
@@ -53,7 +92,9 @@ class DiscreteFlowSolution:
     iterations : ndarray of int, shape (number of solves,)
         Newton iterations of each solve of :math:`J_D(U) = M`, in order (summed over a batch).
     success : bool
-        True when every step was taken.
+        True when every step was taken and every number of ``t``, ``y``, ``residual`` and
+        ``tol`` is finite (``condition`` is NaN unless computed).  A run whose state, residual
+        or tolerance overflowed is never a success (see :meth:`check_finite`).
     status : int
         0 when every step was taken, -1 when a step failed (then ``message`` says why and the
         last state reached is the last saved one).
@@ -116,6 +157,39 @@ class DiscreteFlowSolution:
     fold: float | None = None
     h_max: float | None = None
     halvings: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def __post_init__(self) -> None:
+        self.check_finite()
+
+    def check_finite(self) -> None:
+        """Mark a successful result holding a non-finite number as failed.
+
+        The states are cut before the first saved state with a non-finite entry (whose step
+        becomes ``failed_step``); ``message`` names that step and every solve whose residual or
+        tolerance is not finite.  Called on construction, and again by a flow that adds states
+        to ``y`` afterwards.
+        """
+        if not self.success:
+            return
+        notes = []
+        bad = first_nonfinite(self.t, self.y)
+        if bad is not None:
+            i, names = bad
+            step = int(self.k[i])
+            notes.append(f"{', '.join(names)} not finite from step {step} on (cut there)")
+            self.y, self.t, self.k = cut(self.t, self.y, i), self.t[:i], self.k[:i]
+            self.failed_step = step
+        for name in ("residual", "tol"):
+            values = np.asarray(getattr(self, name))
+            if not np.isfinite(values).all():
+                j = int(np.argmin(np.isfinite(values)))
+                notes.append(f"the {name} of solve {j} (of J_D(U) = M, in order) is {values[j]}")
+        if notes:
+            self.success, self.status = False, -1
+            self.message += (
+                "; but " + "; ".join(notes) + ": the numbers overflowed float64 (inputs or step "
+                "too large), so the run is not a success"
+            )
 
     @property
     def nit(self) -> int:

@@ -8,9 +8,9 @@ from numpy.typing import ArrayLike
 
 from . import _validate as v
 from ._progress import progress_bar
-from ._results import DiscreteFlowSolution, Trajectory
+from ._results import DiscreteFlowSolution, Trajectory, step_failure
 from ._validate import Array
-from .errors import InputError
+from .errors import InputError, SymrbError
 from .solvers import _EPS, _condition, _fold_scale_one, _solve_batch, _warm_single
 
 _MAXITER = 30
@@ -79,8 +79,11 @@ class _Stepper:
         self._record(U, res, tol)
         return U.reshape(M.shape)
 
-    def fold(self, M: Array) -> float:
-        """The smallest fold_scale over the batch of M (for the failure report)."""
+    def fold(self, M: Array, exc: Exception | None = None) -> float | None:
+        """The smallest fold_scale over the batch of M (for the failure report); None after a
+        failure of the arithmetic (``exc`` not a symrb error), or for M that is not finite."""
+        if (exc is not None and not isinstance(exc, SymrbError)) or not np.isfinite(M).all():
+            return None
         Mf = M.reshape(self.lam.shape[0], *M.shape[-2:])
         Mf = 0.5 * (Mf - np.swapaxes(Mf, -1, -2))
         return min(
@@ -101,6 +104,7 @@ def _prepare(
             arrays.append(v.skew(x, name, nn))
         else:
             arrays.append(v.square(x, name, nn))
+        v.bounded(arrays[-1], name)
     try:
         batch = np.broadcast_shapes(L.shape[:-1], *[a.shape[:-2] for a in arrays])
     except ValueError:
@@ -172,7 +176,7 @@ class _Run:
                 note = (
                     f" (the step's momentum is inside the fold by {(1.0 - 1.0 / fold) * 100:.4g} %)"
                 )
-        self.failure = f"step {k} of {self.steps} failed: {exc}{note}"
+        self.failure = f"step {k} of {self.steps} failed: {step_failure(exc)}{note}"
 
     def result(self, t_scale: float | None) -> DiscreteFlowSolution:
         self.bar.close()

@@ -13,6 +13,11 @@ Array = NDArray[np.float64]
 #: Integers up to this size convert to float64 exactly.
 _EXACT_INT = 2**53
 
+#: The largest magnitude of an entry the flows accept: sums of squares of larger entries
+#: overflow float64 (about 1.8e308) inside a step, and then no number of the result means
+#: anything.  The smallest pairwise sum of an inertia is its reciprocal.
+MAGNITUDE = 1e150
+
 
 def as_float_array(x: ArrayLike, name: str) -> Array:
     """``x`` as a float64 array (a copy only when needed).
@@ -180,6 +185,28 @@ def inertia(lam: ArrayLike, name: str = "lam", positive: bool = False) -> Array:
             f"{name} must satisfy lam_i + lam_j > 0 for i != j (J positive definite); "
             f"min lam_i + lam_j = {worst:.6g}, lam = {_brief(a)}{hint}; pass a lam whose "
             "pairwise sums are positive"
+        )
+    if worst < 1.0 / MAGNITUDE:
+        raise InputError(
+            f"{name} must have pairwise sums lam_i + lam_j >= {1.0 / MAGNITUDE:g} (J^-1 "
+            f"overflows float64 otherwise), got min lam_i + lam_j = {worst:.4g}, lam = "
+            f"{_brief(a)}; rescale lam (a common factor c scales time by c)"
+        )
+    return bounded(a, name, hint="rescale lam (a common factor c scales time by c)")
+
+
+_RESCALE = "rescale the problem (for the rigid body, M and t -> M/c and c t give the same orbit)"
+
+
+def bounded(a: Array, name: str, limit: float = MAGNITUDE, hint: str = _RESCALE) -> Array:
+    """``a`` unchanged when every entry has magnitude at most ``limit`` (default
+    :data:`MAGNITUDE`); an :class:`InputError` naming the largest entry and saying ``hint``
+    otherwise."""
+    big = float(np.max(np.abs(a), initial=0.0))
+    if big > limit:
+        raise InputError(
+            f"{name} must have entries of magnitude <= {limit:g} (their squares overflow float64 "
+            f"otherwise), got max |{name}| = {big:.4g}; {hint}"
         )
     return a
 

@@ -49,12 +49,12 @@ from numpy.typing import ArrayLike
 from . import _validate as v
 from ._docs import fill
 from ._progress import progress_bar
-from ._results import DiscreteFlowSolution, Trajectory
+from ._results import STEP_FAILURES, DiscreteFlowSolution, Trajectory, step_failure
 from ._validate import Array
 from .base_steps import BaseStep, MidpointStep, RKMK4Step, _lam, _skew
 from .composition import _DEFAULT_KIND, compose_steps, composition_coefficients
 from .engine import MVStepper
-from .errors import InputError, NotConvergedError, OutOfDomainError
+from .errors import InputError
 
 __all__ = [
     "composed_rigid_body_flow",
@@ -72,7 +72,7 @@ def _prepare(
     L = _lam(lam)
     nn = L.shape[-1]
     Q = v.orthogonal(Q0, "Q0", nn)
-    M = v.skew(M0, "M0", nn)
+    M = v.bounded(v.skew(M0, "M0", nn), "M0")
     hv = v.real_scalar(h, "h")
     if not hv > 0:
         raise InputError(f"h must be a finite number > 0, got {h!r}")
@@ -115,8 +115,8 @@ def _run(
                 Qs.append(Q)
                 Ms.append(M)
             bar.step()
-    except (OutOfDomainError, NotConvergedError) as exc:
-        failure = f"step {k} of {steps} failed: {exc}"
+    except STEP_FAILURES as exc:
+        failure = f"step {k} of {steps} failed: {step_failure(exc)}"
         if ks[-1] != k - 1:
             ks.append(k - 1)
             Qs.append(Q)

@@ -16,12 +16,12 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
 
 from . import _conditioning as _cond
 from . import _validate as v
 from ._generated import rigid_body as _rb
-from ._results import Trajectory
+from ._ivp import MAX_NFEV, check_budget, solve_ivp_budget
+from ._results import Trajectory, cut, first_nonfinite
 from ._validate import Array
 from .algebra import _Jinv_weights
 from .errors import InputError
@@ -130,7 +130,8 @@ class FlowSolution:
         Each state variable and each derived quantity of the flow, time first: shape
         ``(K, ..., n, n)`` for matrices.
     success : bool
-        False when the solver stopped early.
+        False when the solver stopped early, or when a number of ``t`` or ``y`` is not finite
+        (an overflow: the states are then cut before the first such time).
     status : int
         ``solve_ivp``'s status (0: reached the end, -1: failed).
     message : str
@@ -169,6 +170,21 @@ class FlowSolution:
     condition: Array | None = None
     error_estimate: Array | None = None
 
+    def __post_init__(self) -> None:
+        bad = first_nonfinite(self.t, self.y) if self.success else None
+        if bad is None:
+            return
+        i, names = bad
+        at = float(self.t[i]) if np.isfinite(self.t[i]) else i
+        self.y, self.t = cut(self.t, self.y, i), self.t[:i]
+        if self.condition is not None and self.error_estimate is not None:
+            self.condition, self.error_estimate = self.condition[:i], self.error_estimate[:i]
+        self.success, self.status = False, -1
+        self.message += (
+            f"; but {', '.join(names)} not finite from t = {at!r} on (cut there): the numbers "
+            "overflowed float64, so the run is not a success"
+        )
+
 
 def _as_flow(flow: Any) -> Flow:
     if isinstance(flow, type) and issubclass(flow, Flow):
@@ -191,6 +207,7 @@ def _solve_flat(
     rtol: float,
     atol: float,
     te: Array | None,
+    max_nfev: int = MAX_NFEV,
 ) -> tuple[Any, bool]:
     """``solve_ivp`` on the flat state (the variables of ``fl.state``, each of ``shape``,
     concatenated); returns the result and whether the vector field overflowed."""
@@ -212,7 +229,8 @@ def _solve_flat(
         # overflow is reported through ``success``/``message`` by the caller, not as warnings;
         # NumPy reports it through on_overflow, which costs nothing while no overflow happens
         with np.errstate(over="call", invalid="call", call=on_overflow):
-            sol = solve_ivp(f_checked, span, y_init, method=method, rtol=rtol, atol=atol, t_eval=te)
+            sol = solve_ivp_budget(f_checked, span, y_init, max_nfev=max_nfev, method=method,
+                                   rtol=rtol, atol=atol, t_eval=te)  # fmt: skip
     except ValueError as exc:
         raise InputError(f"integrate: {exc}") from None
     return sol, overflow
@@ -232,6 +250,7 @@ def _flow_condition(
     method: str,
     rtol: float,
     atol: float,
+    max_nfev: int = MAX_NFEV,
 ) -> tuple[Array, Array]:
     """(kappa, error estimate) at the output times ``sol.t`` of a successful solve (see
     :func:`integrate`): the sensitivity of the batch of perturbed copies integrated with one
@@ -242,7 +261,7 @@ def _flow_condition(
     def batch(Y0: Array) -> Array:
         b = Y0.shape[0]
         flat = Y0.reshape(b, nvar, size).transpose(1, 0, 2).reshape(-1)
-        run, _ = _solve_flat(fl, L, (b,) + shape, flat, span, method, rtol, atol, sol.t)
+        run, _ = _solve_flat(fl, L, (b,) + shape, flat, span, method, rtol, atol, sol.t, max_nfev)
         if not run.success:
             return np.full((sol.t.size, b, y_init.size), np.nan)
         return np.asarray(run.y.T.reshape(-1, nvar, b, size).transpose(0, 2, 1, 3)).reshape(
@@ -252,7 +271,9 @@ def _flow_condition(
     with np.errstate(over="ignore", invalid="ignore"):
         kappa = _cond.sensitivity(batch, y_init)
         tight = max(rtol / _cond.TIGHTER, _MIN_RTOL)
-        ref, _ = _solve_flat(fl, L, shape, y_init, span, method, tight, atol / _cond.TIGHTER, sol.t)
+        ref, _ = _solve_flat(
+            fl, L, shape, y_init, span, method, tight, atol / _cond.TIGHTER, sol.t, max_nfev
+        )
         err = _cond.relative_difference(y, ref.y.T) if ref.success else np.full(sol.t.size, np.nan)
     return kappa, err
 
@@ -311,6 +332,7 @@ def integrate(
     atol: float = 1e-12,
     t_eval: ArrayLike | None = None,
     condition: bool = False,
+    max_nfev: int = MAX_NFEV,
 ) -> FlowSolution:
     r"""Integrate a :class:`Flow` with :func:`scipy.integrate.solve_ivp`.
 
@@ -340,6 +362,10 @@ def integrate(
         Also estimate the condition number of the flow and the error of the solution
         (``FlowSolution.condition`` and ``error_estimate``; see Notes).  Costs about five more
         integrations of the flow; nothing of it is computed by default.
+    max_nfev : int, optional
+        The budget of each integration: at most this many evaluations of the vector field
+        (default 10^6, about a minute for the rigid body).  A stiff or long run that needs more
+        stops with ``success`` False, no output times and the message saying where it stopped.
 
     Returns
     -------
@@ -423,10 +449,11 @@ def integrate(
     te = None if t_eval is None else v.as_float_array(t_eval, "t_eval")
     if not isinstance(condition, bool | np.bool_):
         raise InputError(f"condition must be True or False, got {condition!r}; pass a bool")
+    max_nfev = check_budget(max_nfev)
     size = int(np.prod(shape))
     y_init = np.concatenate([state0[name].ravel() for name in fl.state])
     span = (float(ts[0]), float(ts[1]))
-    sol, overflow = _solve_flat(fl, L, shape, y_init, span, method, rtol, atol, te)
+    sol, overflow = _solve_flat(fl, L, shape, y_init, span, method, rtol, atol, te, max_nfev)
     message = str(sol.message)
     if overflow and not sol.success:
         message += " (the vector field overflowed to inf/NaN: the state is too large)"
@@ -438,7 +465,7 @@ def integrate(
         traj.update(fl.derived({name: traj[name] for name in fl.state}, L))
     kappa = err = None
     if condition and sol.success and nt:
-        kappa, err = _flow_condition(fl, L, shape, y_init, sol, span, method, rtol, atol)
+        kappa, err = _flow_condition(fl, L, shape, y_init, sol, span, method, rtol, atol, max_nfev)
     return FlowSolution(
         t=sol.t,
         y=traj,

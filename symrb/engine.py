@@ -63,10 +63,10 @@ from . import _compiled
 from . import _validate as v
 from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
-from ._results import DiscreteFlowSolution, Trajectory
+from ._results import STEP_FAILURES, DiscreteFlowSolution, Trajectory, step_failure
 from ._stepping import _check_h, _check_steps, _prepare
 from ._validate import Array
-from .errors import InputError, NotConvergedError, OutOfDomainError
+from .errors import InputError, OutOfDomainError
 from .solvers import solve_moser_veselov
 
 __all__ = ["MVStepper", "mv_flow"]
@@ -640,8 +640,8 @@ def mv_flow(
                 )
         else:
             run.loop_n(h)
-    except (OutOfDomainError, NotConvergedError) as exc:
-        failure = f"step {run.k} of {steps} failed: {exc}"
+    except STEP_FAILURES as exc:
+        failure = f"step {run.k} of {steps} failed: {step_failure(exc)}"
         run.k -= 1
         if run.ks[-1] != run.k:  # the state before the failed step
             run.save()
@@ -662,8 +662,8 @@ def _mv_momentum_flow(M0: ArrayLike, lam: ArrayLike, h: float, steps: int, save_
     try:
         run.loop3(h, order, False) if run.n == 3 else run.loop_n(h)
         failure = ""
-    except (OutOfDomainError, NotConvergedError) as exc:
-        failure, run.k = f"step {run.k} of {steps} failed: {exc}", run.k - 1
+    except STEP_FAILURES as exc:
+        failure, run.k = f"step {run.k} of {steps} failed: {step_failure(exc)}", run.k - 1
         if run.ks[-1] != run.k:
             run.save()
     return run.result(h, order, failure)

@@ -79,7 +79,7 @@ from . import _validate as v
 from ._results import Trajectory
 from ._validate import Array
 from .algebra import _Jinv_weights
-from .errors import InputError
+from .errors import InputError, OutOfDomainError
 
 __all__ = ["ExactSolution", "rigid_body_exact"]
 
@@ -279,8 +279,8 @@ def _exact_input(
     if check:
         L = v.inertia(lam)
         Qa = v.orthogonal(Q0, "Q0")
-        Ma = v.skew(M0, "M0")
-        tt = v.as_float_array(t, "t")
+        Ma = v.bounded(v.skew(M0, "M0"), "M0")
+        tt = v.bounded(v.as_float_array(t, "t"), "t")
     else:
         L, Qa, Ma, tt = (np.asarray(x, dtype=float) for x in (lam, Q0, M0, t))
     for name, x, want in (("lam", L, (3,)), ("Q0", Qa, (3, 3)), ("M0", Ma, (3, 3))):
@@ -340,7 +340,11 @@ def rigid_body_exact(
     InputError
         If n != 3, ``Q0`` is not in SO(3), ``M0`` is not skew-symmetric, ``lam`` has a
         non-positive :math:`\lambda_i+\lambda_j`, the batch shapes do not broadcast, or ``t`` is
-        not a finite scalar or 1-D array.
+        not a finite scalar or 1-D array (or ``M0``, ``t`` have entries above 1e150).
+    OutOfDomainError
+        If the phase :math:`\nu t` of the elliptic functions exceeds 10^15 (its
+        rounding alone is then of order 0.1) or the formulas overflow float64 (extreme ``M0``
+        against ``lam``).
 
     Examples
     --------
@@ -358,6 +362,38 @@ def rigid_body_exact(
     True
     """
     L, Qa, Ma, tt, batch = _exact_input(Q0, M0, lam, t, check)
+    what = f"M0 up to {float(np.abs(Ma).max(initial=0.0)):.4g}, lam {L.ravel()[:3]}, t up to"
+    what += f" {float(np.abs(tt).max(initial=0.0)):.4g}"
+    try:
+        with np.errstate(all="ignore"):
+            sol = _exact(L, Qa, Ma, tt, batch)
+    except (ArithmeticError, ValueError) as exc:
+        raise OutOfDomainError(
+            f"rigid_body_exact: the formulas overflow float64 ({type(exc).__name__}: {exc}) for "
+            f"{what}; rescale M0 and t (M0/c at time c t is the same motion)"
+        ) from None
+    phase = float(np.max(np.abs(sol.nu), initial=0.0)) * float(np.abs(tt).max(initial=0.0))
+    if not phase <= MAX_PHASE:
+        raise OutOfDomainError(
+            f"rigid_body_exact: the phase nu t = {phase:.4g} of the elliptic functions exceeds "
+            f"{MAX_PHASE:g} (its rounding alone is about {phase * 1.1e-16:.2g}) for {what}; "
+            "take shorter times"
+        )
+    if not all(np.isfinite(x).all() for x in sol.y.values()):
+        raise OutOfDomainError(
+            f"rigid_body_exact: the solution is not finite in float64 for {what} (an overflow); "
+            "rescale M0 and t (M0/c at time c t is the same motion)"
+        )
+    return sol
+
+
+#: The largest phase :math:`\nu t` of the elliptic functions that :func:`rigid_body_exact`
+#: evaluates: beyond it the rounding of the phase alone (about 1e-16 of it) exceeds 0.1.
+MAX_PHASE = 1e15
+
+
+def _exact(L: Array, Qa: Array, Ma: Array, tt: Array, batch: tuple[int, ...]) -> ExactSolution:
+    """The formulas of :func:`rigid_body_exact` on validated input."""
     if batch == () and len(tt) <= _SCALAR_MAX_TIMES:
         one = _one_body(Qa, Ma, L, tt)
         if one is not None:

@@ -47,10 +47,9 @@ from . import _validate as v
 from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
 from ._generated import symmetric_rigid_body as _srb
-from ._results import DiscreteFlowSolution
+from ._results import STEP_FAILURES, DiscreteFlowSolution
 from ._stepping import _check_h, _check_steps, _prepare, _Run, _Stepper
 from ._validate import Array
-from .errors import NotConvergedError, OutOfDomainError
 
 __all__ = [
     "jd_residual",
@@ -214,13 +213,15 @@ def symmetric_flow(
     )
 
 
-_MAX_HALVINGS = 30
+#: The most halvings of one step: 2^12 substeps at most (the work doubles with each halving;
+#: j up to 30 meant up to 2^30 solves, a hang, for an h far past the fold).
+_MAX_HALVINGS = 12
 
 
 def _halved_step(
     stepper: _Stepper, run: _Run, Q: Array, P: Array, h: float
 ) -> tuple[Array, Array, int]:
-    """One step of length h, as 2^j steps of h/2^j with the smallest j that works (j <= 30)."""
+    """One step of length h, as 2^j steps of h/2^j with the smallest j that works (j <= 12)."""
     for j in range(_MAX_HALVINGS + 1):
         Qj, Pj, hj = Q, P, h / 2.0**j
         try:
@@ -228,7 +229,7 @@ def _halved_step(
                 U = stepper.solve(hj * _srb.symmetric_momentum(Qj, Pj))
                 run.count(stepper)
                 Qj, Pj = Qj @ U, Pj @ U
-        except (OutOfDomainError, NotConvergedError):
+        except STEP_FAILURES:
             if j == _MAX_HALVINGS:
                 raise
             stepper.U_prev = None  # the extrapolation assumes a fixed step
@@ -269,13 +270,15 @@ def _symmetric_run(
             if k % save_every == 0:
                 run.save(k, Q=Q, P=P)
             run.bar.step()
-    except (OutOfDomainError, NotConvergedError) as exc:
+    except STEP_FAILURES as exc:
         scale = h / 2.0**_MAX_HALVINGS if halve else h
-        run.fail(k, exc, stepper.fold(scale * _srb.symmetric_momentum(Q, P)), scale)
+        run.fail(k, exc, stepper.fold(scale * _srb.symmetric_momentum(Q, P), exc), scale)
         if run.k[-1] != k - 1:
             run.save(k - 1, Q=Q, P=P)
     out = run.result(h)
-    out.y["M"] = np.asarray(_srb.symmetric_momentum(out.y["Q"], out.y["P"]), dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow: check_finite says so
+        out.y["M"] = np.asarray(_srb.symmetric_momentum(out.y["Q"], out.y["P"]), dtype=float)
+    out.check_finite()
     return out
 
 
@@ -348,8 +351,8 @@ def mv_algorithm1(
             if k % save_every == 0:
                 run.save(k, Q=Qb)
             run.bar.step()
-    except (OutOfDomainError, NotConvergedError) as exc:
-        run.fail(k - 1, exc, stepper.fold(pending))
+    except STEP_FAILURES as exc:
+        run.fail(k - 1, exc, stepper.fold(pending, exc))
         if run.k[-1] != k - 1:
             run.save(k - 1, Q=Qb)
     return run.result(None)
@@ -426,8 +429,8 @@ def mv_algorithm2(
             if k % save_every == 0:
                 run.save(k, Q=Qk, M=Mk)
             run.bar.step()
-    except (OutOfDomainError, NotConvergedError) as exc:
-        run.fail(k, exc, stepper.fold(pending))
+    except STEP_FAILURES as exc:
+        run.fail(k, exc, stepper.fold(pending, exc))
         if run.k[-1] != k - 1:
             run.save(k - 1, Q=Qk, M=Mk)
     return run.result(None)

@@ -383,7 +383,12 @@ def _fold_scale_one(M: Array, lam: Array, rtol: float = 1e-13) -> float:
         while hi is None:
             s *= 1.5
             if s > 1e3 * s_max:  # pragma: no cover - no solution can exist there
-                raise RuntimeError("fold_scale: no fold found along the ray")
+                raise NotConvergedError(
+                    f"fold_scale: no fold found along the ray up to {s:.4g} (||M||_op = "
+                    f"{opn:.4g}, lam = {lam}): the eigenvalues lost their accuracy",
+                    float("nan"),
+                    0,
+                )
             if _has_imaginary_eigenvalue(M, lam, s, thresh):
                 hi = s
             else:
@@ -449,8 +454,14 @@ def fold_scale(M: ArrayLike, lam: ArrayLike) -> Array:
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
-    A = v.skew(M, "M", nn)
-    batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
+    A = v.bounded(v.skew(M, "M", nn), "M")
+    try:
+        batch = np.broadcast_shapes(A.shape[:-2], L.shape[:-1])
+    except ValueError:
+        raise InputError(
+            f"the batch axes do not broadcast: M {A.shape}, lam {L.shape}; pass arrays whose "
+            "leading axes broadcast (numpy rules)"
+        ) from None
     Ab = np.broadcast_to(A, batch + (nn, nn)).reshape(-1, nn, nn)
     Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
     out = np.array([_fold_scale_one(Ab[i], Lb[i]) for i in range(Ab.shape[0])])
@@ -692,7 +703,7 @@ def solve_moser_veselov(
     """
     L = v.inertia(lam, positive=True)
     nn = L.shape[-1]
-    A = v.skew(M, "M", nn)
+    A = v.bounded(v.skew(M, "M", nn), "M")
     if tol is not None and not v.real_scalar(tol, "tol") >= 0:
         raise InputError(
             f"tol must be a finite number >= 0, got {tol!r}; pass a float >= 0 or None"
@@ -709,9 +720,17 @@ def solve_moser_veselov(
     Lb = np.broadcast_to(L, batch + (nn,)).reshape(-1, nn)
     normM = _fro(Ab)
     tolb = np.full(Ab.shape[0], float(tol)) if tol is not None else 10.0 * _EPS * normM
-    U, iters, res, margin, start, tolb = _solve_batch(
-        Ab, Lb, tolb, int(maxiter), G, floor=tol is None
-    )
+    try:
+        U, iters, res, margin, start, tolb = _solve_batch(
+            Ab, Lb, tolb, int(maxiter), G, floor=tol is None
+        )
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:
+        raise OutOfDomainError(
+            f"solve_moser_veselov: float64 arithmetic failed ({type(exc).__name__}: {exc}) for "
+            f"max ||M||_F = {float(normM.max(initial=0.0)):.4g} against min lam_i = "
+            f"{float(Lb.min()):.4g}: M is far past the fold of J_D or the scales overflow; "
+            "scale M down (see fold_scale)"
+        ) from None
     U = U.reshape(batch + (nn, nn))
     if not return_info:
         return U

@@ -5,6 +5,7 @@ conditioning constant of the problem at a solution."""
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -34,7 +35,8 @@ class OrbitBVPResult:
     u : ndarray, shape (m, n, n)
         The shared optimal control.
     success : bool
-        Whether ``solve_bvp`` converged (and the solution is finite).
+        Whether ``solve_bvp`` converged and the solution, the control and the residuals are
+        finite.
     message : str
         ``solve_bvp``'s message.
     residual : float
@@ -189,7 +191,9 @@ def solve_orbit_bvp(
     continuation_start : float, optional
         The horizon below which no continuation is needed, > 0.
     continuation_growth : float, optional
-        The factor between successive horizons of the continuation, > 1.
+        The factor between successive horizons of the continuation, > 1.  At most 100
+        horizons (boundary value solves) are taken: a ``T`` further from
+        ``continuation_start`` than ``continuation_growth**100`` is refused (InputError).
     condition : bool, optional
         Also compute the conditioning constant of the problem at the solution
         (``OrbitBVPResult.condition``; see Notes); costs one integration of the linearised
@@ -294,15 +298,17 @@ def solve_orbit_bvp(
     u = _gen.optimal_control(x, p).sum(axis=1)
     bcr = float(np.max(np.abs(bc(sol.y[:, 0], sol.y[:, -1]))))
     res = float(np.max(sol.rms_residuals)) if sol.rms_residuals is not None else float("inf")
-    ok = bool(sol.success) and np.all(np.isfinite(sol.y))
+    finite = all(np.isfinite(a).all() for a in (sol.x, sol.y, u, res, bcr))
+    ok = bool(sol.success) and finite
     kappa = _bvp_condition(rhs, sol, half) if condition and ok else None
+    note = "" if finite else "; but the solution or its residual is not finite (an overflow)"
     return OrbitBVPResult(
         t=sol.x,
         x=x,
         p=p,
         u=u,
         success=bool(ok),
-        message=str(sol.message),
+        message=str(sol.message) + note,
         residual=res,
         bc_residual=bcr,
         costate=costate,
@@ -349,6 +355,18 @@ def _check_bvp_options(
         )
     if int(nodes) < 3:
         raise InputError(f"nodes must be >= 3, got {nodes}; pass an int >= 3")
+    count = math.log(max(T / continuation_start, 1.0)) / math.log(continuation_growth)
+    if not count <= MAX_HORIZONS:
+        raise InputError(
+            f"the continuation from continuation_start = {continuation_start!r} to T = {T!r} at "
+            f"continuation_growth = {continuation_growth!r} takes {count:.4g} boundary value "
+            f"solves, more than {MAX_HORIZONS}; pass a larger continuation_start or "
+            "continuation_growth (or a shorter T)"
+        )
+
+
+#: The most horizons (boundary value solves) the continuation of :func:`solve_orbit_bvp` takes.
+MAX_HORIZONS = 100
 
 
 def _horizons(T: float, start: float, growth: float) -> list[float]:

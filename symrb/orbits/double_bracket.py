@@ -9,13 +9,13 @@ from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
 from scipy.optimize import OptimizeResult
 
 from .. import _conditioning as _cond
 from .. import _validate as v
 from .._docs import fill_doc
 from .._generated import adjoint_orbits as _gen
+from .._ivp import MAX_NFEV, check_budget, solve_ivp_budget
 from .._validate import Array
 from ..errors import InputError, NotConvergedError
 from ._common import DOC, pair_xN
@@ -89,6 +89,7 @@ def double_bracket_flow(
     atol: float = ...,
     *,
     return_info: Literal[False] = False,
+    max_nfev: int = ...,
 ) -> Array: ...
 
 
@@ -101,6 +102,7 @@ def double_bracket_flow(
     atol: float = ...,
     *,
     return_info: Literal[True],
+    max_nfev: int = ...,
 ) -> tuple[Array, DoubleBracketInfo]: ...
 
 
@@ -113,6 +115,7 @@ def double_bracket_flow(
     atol: float = 1e-12,
     *,
     return_info: bool = False,
+    max_nfev: int = MAX_NFEV,
 ) -> Array | tuple[Array, DoubleBracketInfo]:
     r"""Integrate the double bracket flow :math:`\dot x = [x, [x, N]]` from ``x0``.
 
@@ -132,6 +135,10 @@ def double_bracket_flow(
         Also return a :class:`~symrb.orbits.DoubleBracketInfo`: the condition number of the flow
         and an error estimate at each output time (costs about four more integrations; none by
         default).
+    max_nfev : int, optional
+        The budget of each integration: at most this many evaluations of the vector field
+        (default 10^6, seconds of work).  A stiff run (a large ``x0`` or ``N``) or a long one
+        that needs more raises :class:`~symrb.errors.NotConvergedError` saying where it stopped.
 
     Returns
     -------
@@ -143,7 +150,8 @@ def double_bracket_flow(
     Raises
     ------
     NotConvergedError
-        If the integrator fails.
+        If the integrator fails, runs out of its budget ``max_nfev`` or meets a vector field
+        that overflows float64.
 
     Notes
     -----
@@ -181,8 +189,9 @@ def double_bracket_flow(
     ts = _output_times(t)
     if not isinstance(return_info, bool | np.bool_):
         raise InputError(f"return_info must be True or False, got {return_info!r}; pass a bool")
+    max_nfev = check_budget(max_nfev)
     k = xx.shape[-1]
-    sol = _db_solve(xx.reshape(1, k * k), nn, ts, rtol, atol)
+    sol = _db_solve(xx.reshape(1, k * k), nn, ts, rtol, atol, max_nfev)
     if not sol.success:
         raise NotConvergedError(f"double_bracket_flow: {sol.message}", float("nan"), sol.nfev)
     xs = sol.y.T.reshape(-1, k, k)
@@ -190,7 +199,7 @@ def double_bracket_flow(
         return xs
 
     def batch(X0: Array) -> Array:
-        run = _db_solve(X0, nn, ts, rtol, atol)
+        run = _db_solve(X0, nn, ts, rtol, atol, max_nfev)
         if not run.success:
             return np.full((ts.size, X0.shape[0], k * k), np.nan)
         return np.asarray(run.y.T.reshape(ts.size, X0.shape[0], k * k))
@@ -201,7 +210,7 @@ def double_bracket_flow(
 
     kappa = _cond.sensitivity(batch, xx.ravel(), tangent=skew)
     tight = max(rtol / _cond.TIGHTER, 100 * float(np.finfo(float).eps))
-    ref = _db_solve(xx.reshape(1, k * k), nn, ts, tight, atol / _cond.TIGHTER)
+    ref = _db_solve(xx.reshape(1, k * k), nn, ts, tight, atol / _cond.TIGHTER, max_nfev)
     err = _cond.relative_difference(sol.y.T, ref.y.T) if ref.success else np.full(ts.size, np.nan)
     return xs, DoubleBracketInfo(condition=kappa, error_estimate=err, nfev=int(sol.nfev))
 
@@ -217,28 +226,39 @@ def _output_times(t: ArrayLike) -> Array:
     return ts
 
 
-def _db_solve(X0: Array, nn: Array, ts: Array, rtol: float, atol: float) -> Any:
+def _db_solve(
+    X0: Array, nn: Array, ts: Array, rtol: float, atol: float, max_nfev: int = MAX_NFEV
+) -> Any:
     """``solve_ivp`` (DOP853) of the double bracket flow for the batch ``X0`` of shape (b, k k),
-    one step-size sequence for the batch; the result's ``y`` has shape (b k k, len(ts))."""
+    one step-size sequence for the batch, at most ``max_nfev`` evaluations of the field; the
+    result's ``y`` has shape (b k k, len(ts))."""
     b, kk = X0.shape
     k = nn.shape[-1]
     if ts[-1] == 0.0:  # t = [0]: solve_ivp returns no output on an empty interval
         return OptimizeResult(y=X0.reshape(-1, 1).copy(), t=ts, success=True, message="t = [0]",
                               nfev=0)  # fmt: skip
-    return solve_ivp(
-        lambda _t, y: _gen.double_bracket_rhs(y.reshape(b, k, k), nn).ravel(),
-        (0.0, float(ts[-1])),
-        X0.ravel(),
-        t_eval=ts,
-        method="DOP853",
-        rtol=rtol,
-        atol=atol,
-    )
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow ends the run (message)
+        return solve_ivp_budget(
+            lambda _t, y: _gen.double_bracket_rhs(y.reshape(b, k, k), nn).ravel(),
+            (0.0, float(ts[-1])),
+            X0.ravel(),
+            max_nfev=max_nfev,
+            t_eval=ts,
+            method="DOP853",
+            rtol=rtol,
+            atol=atol,
+        )
 
 
 @fill_doc(DOC)
 def toda_flow(
-    a0: ArrayLike, b0: ArrayLike, t: ArrayLike, rtol: float = 1e-11, atol: float = 1e-12
+    a0: ArrayLike,
+    b0: ArrayLike,
+    t: ArrayLike,
+    rtol: float = 1e-11,
+    atol: float = 1e-12,
+    *,
+    max_nfev: int = MAX_NFEV,
 ) -> Array:
     r"""The Toda lattice, integrated as the double bracket flow :math:`\dot L = -[L, [L, D]]`.
 
@@ -266,6 +286,10 @@ def toda_flow(
         The off-diagonal of :math:`L(0)`.
     %(times)s
     %(tolerances)s
+    max_nfev : int, optional
+        The budget: at most this many evaluations of the vector field (default 10^6, seconds
+        of work).  A stiff run (large entries: the rates grow with them) or a long one
+        that needs more raises :class:`~symrb.errors.NotConvergedError` saying where it stopped.
 
     Returns
     -------
@@ -278,7 +302,8 @@ def toda_flow(
         If ``a0``, ``b0`` are not real 1-D arrays of k >= 2 and k - 1 entries, or ``t`` is not
         increasing and >= 0.
     NotConvergedError
-        If the integrator fails.
+        If the integrator fails, runs out of its budget ``max_nfev`` or meets a vector field
+        that overflows float64.
 
     Examples
     --------
@@ -299,10 +324,12 @@ def toda_flow(
             f"{b.shape}; pass the diagonal and the off-diagonal of L(0)"
         )
     ts = _output_times(t)
+    max_nfev = check_budget(max_nfev)
     k = a.size
     L0 = np.diag(a) + np.diag(b, 1) + np.diag(b, -1)
     # the field is linear in N: -[L, [L, D]] = [L, [L, -D]], the double bracket solve with -D
-    sol = _db_solve(L0.reshape(1, k * k), -np.diag(np.arange(1.0, k + 1)), ts, rtol, atol)
+    D = -np.diag(np.arange(1.0, k + 1))
+    sol = _db_solve(L0.reshape(1, k * k), D, ts, rtol, atol, max_nfev)
     if not sol.success:
         raise NotConvergedError(f"toda_flow: {sol.message}", float("nan"), sol.nfev)
     return np.asarray(sol.y.T.reshape(-1, k, k))

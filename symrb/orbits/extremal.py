@@ -8,11 +8,11 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
 
 from .. import _validate as v
 from .._docs import fill_doc
 from .._generated import adjoint_orbits as _gen
+from .._ivp import MAX_NFEV, check_budget, solve_ivp_budget
 from .._validate import Array
 from ..errors import InputError, NotConvergedError
 from ._common import DOC, pair_xN, symmetric
@@ -121,6 +121,7 @@ def orbit_extremal_flow(
     atol: float = 1e-12,
     *,
     algebra: Literal["so", "isym"] = "so",
+    max_nfev: int = MAX_NFEV,
 ) -> tuple[Array, Array]:
     r"""Integrate the extremal equations with Brockett's potential from :math:`(x_0, p_0)`.
 
@@ -143,6 +144,9 @@ def orbit_extremal_flow(
         the Toda lattice; the field keeps :math:`i\,\mathrm{Sym}(n)` and on the symmetric
         matrices :math:`(L, P, D)` it reads :math:`\dot L = -[L, [P, L]]`,
         :math:`\dot P = -[P, [P, L]] + [D, [D, L]]`.
+    max_nfev : int, optional
+        The budget: at most this many evaluations of the vector field (default 10^6, seconds
+        of work); a run that needs more raises :class:`~symrb.errors.NotConvergedError`.
 
     Returns
     -------
@@ -157,7 +161,8 @@ def orbit_extremal_flow(
         (``"isym"``), ``algebra`` is not one of those, ``t`` is not increasing and >= 0, or the
         tolerances are not positive.
     NotConvergedError
-        If the integrator fails (e.g. the solution blows up).
+        If the integrator fails (e.g. the solution blows up or overflows float64) or runs out
+        of its budget ``max_nfev``.
 
     Notes
     -----
@@ -206,6 +211,7 @@ def orbit_extremal_flow(
             f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}; pass values in those "
             "ranges"
         )
+    max_nfev = check_budget(max_nfev)
     k, sign = nn.shape[-1], _ALGEBRAS[algebra]
     y0 = np.concatenate([xx.ravel(), pp.ravel()])
     if ts[-1] == 0.0:  # t = [0]: solve_ivp returns no output on an empty interval
@@ -216,8 +222,8 @@ def orbit_extremal_flow(
         return sign * np.concatenate([xdot.ravel(), pdot.ravel()])
 
     with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is reported below
-        sol = solve_ivp(field, (0.0, float(ts[-1])), y0, t_eval=ts, method="DOP853", rtol=rtol,
-                        atol=atol)  # fmt: skip
+        sol = solve_ivp_budget(field, (0.0, float(ts[-1])), y0, max_nfev=max_nfev, t_eval=ts,
+                               method="DOP853", rtol=rtol, atol=atol)  # fmt: skip
     if not sol.success or not np.all(np.isfinite(sol.y)):
         raise NotConvergedError(f"orbit_extremal_flow: {sol.message}", float("nan"), sol.nfev)
     ys = sol.y.T
