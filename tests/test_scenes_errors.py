@@ -238,7 +238,8 @@ _SLOW = _rb("n = 12", 'method = "mv"\nh = 0.001', "10.0")
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_ctrl_c_ends_a_run_with_one_line(tmp_path) -> None:
     path = tmp_path / "s.toml"
-    path.write_text(_SLOW)
+    # ten times _SLOW: the run must still be going a second after its first line, loaded or not
+    path.write_text(_rb("n = 12", 'method = "mv"\nh = 0.001', "100.0"))
     rc, err = _interrupt(["run", str(path), "--no-cache"], tmp_path)
     assert rc == 130 and err.strip() == "interrupted; 0 of 1 point kept", err
 
