@@ -608,5 +608,11 @@ def test_dtype_policy(dtype, n, rng):
 
 
 def test_exception_classes_are_all_symrb_errors():
+    """Every exception symrb.errors exports is a SymrbError, every warning a SymrbWarning."""
     for name in errors.__all__:
-        assert issubclass(getattr(errors, name), errors.SymrbError)
+        cls = getattr(errors, name)
+        if issubclass(cls, Warning):
+            assert issubclass(cls, errors.SymrbWarning), name
+        else:
+            assert issubclass(cls, errors.SymrbError), name
+    assert issubclass(errors.CacheWarning, errors.SymrbWarning)
