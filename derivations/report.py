@@ -1,8 +1,10 @@
 """How the book shows claims: one module, so every page renders them the same way.
 
-``check("S4")`` displays a claim's statement, the printed and corrected forms of an erratum, the
-note, a table of its evidence and, in a collapsed dropdown, the map of the paper's sentences to that
-evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the build makes
+``check("S4")`` displays a claim verdict first (:func:`claim_markdown`): its outcome with an
+erratum's correction in one line, a summary of its evidence by form (:func:`evidence_summary`),
+then its statement, the printed and corrected forms of an erratum, the note, the table of its
+evidence (collapsed when long) and, in a collapsed dropdown, the map of the paper's sentences to
+that evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the build makes
 (``symrb verify --output book/_build/verify.json``, reused when it was written for the current
 code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
 which fails the book build; it also places the label ``claim-s4`` (:func:`anchor_of`) there, the
@@ -43,6 +45,9 @@ __all__ = [
     "short_where",
     "breakable",
     "evidence_table",
+    "evidence_summary",
+    "OPEN_EVIDENCE",
+    "FORM_ROWS",
     "claim_markdown",
     "check",
     "load_results",
@@ -264,21 +269,122 @@ def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> st
     return "\n".join(rows)
 
 
+#: A claim with at most this many checks shows its evidence table open under the verdict; a
+#: longer one is collapsed (its summary by form stays in view, so the page stays short).
+OPEN_EVIDENCE = 5
+
+#: The rows of the verdict's summary: each form of evidence, what it checks and what it must do.
+FORM_ROWS = {
+    "claim": ("the statement as printed", "pass"),
+    "printed": ("the erratum as printed (must fail)", "fail"),
+    "corrected": ("the correction", "pass"),
+}
+
+
+def _ratio(e: EvidenceResult) -> tuple[float, float]:
+    """How close a check came to its tolerance: residual over tolerance (an exact check, tol 0,
+    is 0 when it holds and infinite when not), then the residual; an error is infinitely far."""
+    if e.error is not None or e.residual != e.residual:
+        return float("inf"), float("inf")
+    if e.tol:
+        return e.residual / e.tol, e.residual
+    return (0.0 if e.residual == 0 else float("inf")), e.residual
+
+
+def _tex_number(x: float) -> str:
+    """``x`` as typeset math: ``8.1\\times10^{-16}``, ``10^{-13}``, ``3`` (a number in a table
+    cell neither breaks at its exponent's minus nor reads as ``e-16``)."""
+    if x == 0 or 0.01 <= abs(x) < 100:
+        return f"{x:.2g}"
+    mantissa, exponent = f"{x:.1e}".split("e")
+    power = f"10^{{{int(exponent)}}}"
+    return power if mantissa == "1.0" else f"{mantissa}\\times{power}"
+
+
+def _call(k: int, e: EvidenceResult) -> str:
+    """``#19: $8.1\\times10^{-16} \\le 10^{-13}$``: check ``k`` (its number in the evidence
+    table) against its tolerance."""
+    if e.error is not None:
+        return f"#{k}: error"
+    if e.tol == 0:
+        return f"#{k}: exact (0)" if e.residual == 0 else f"#{k}: ${_tex_number(e.residual)} > 0$"
+    sign = r"\le" if e.passed else ">"
+    return f"#{k}: ${_tex_number(e.residual)} {sign} {_tex_number(e.tol)}$"
+
+
+def evidence_summary(evidence: Sequence[EvidenceResult]) -> str:
+    """The verdict's evidence in a few lines: a Markdown table with one row per form of evidence
+    (the statement as printed, the printed form of an erratum, the correction), the number of
+    checks by level, whether they pass or fail as they must, and the decisive check: of those
+    that must pass the closest to its tolerance, of those that must fail the closest to passing,
+    by its number in the full evidence table; a check not as it must be is named in bold."""
+    rows = [
+        "| checks of | checks by level | result | closest call (# in the table) |",
+        "|---|---|---|---|",
+    ]
+    numbered = list(enumerate(evidence, 1))
+    for form, (what, must) in FORM_ROWS.items():
+        mine = [(k, e) for k, e in numbered if e.form == form]
+        if not mine:
+            continue
+        levels = _levels_cell([{"level": e.level} for _k, e in mine])
+        wrong = [k for k, e in mine if not e.as_expected]
+        verb = "pass" if must == "pass" else "fail"
+        if wrong:
+            result = (
+                f"**{len(wrong)} of {len(mine)} do not {verb}: #{', #'.join(map(str, wrong))}**"
+            )
+        else:
+            result = {1: f"it {verb}{'es' if verb == 'pass' else 's'}", 2: f"both {verb}"}.get(
+                len(mine), f"all {len(mine)} {verb}"
+            )
+        if must == "pass":
+            k, e = max(mine, key=lambda ke: _ratio(ke[1]))
+        else:
+            k, e = min(mine, key=lambda ke: _ratio(ke[1]))
+        rows.append(f"| {what} | {levels} | {result} | {_call(k, e)} |")
+    return "\n".join(rows)
+
+
+def _verdict(result: ClaimResult) -> str:
+    """``**Verdict on D7: holds after correction.** **Corrected:** ...``: the outcome (for an erratum a
+    link to its page of the errata, and its correction in one line) and the recorded outcome
+    when they differ."""
+    outcome = _outcome_cell({"id": result.id, "outcome": result.outcome,
+                             "expected": result.expected})  # fmt: skip
+    text = f"**Verdict on {result.id}: {outcome}.**"
+    fixed = correction_line(result.id)
+    if fixed:
+        text += f" **Corrected:** {breakable(fixed)}."
+    return text
+
+
 def claim_markdown(result: ClaimResult) -> str:
-    """Statement, erratum (printed/corrected), note, outcome and evidence table of a claim."""
+    """A claim as the book shows it, the verdict first: the verdict (with an erratum's correction
+    in one line), the evidence summary by form (:func:`evidence_summary`), then where the claim is
+    in the paper and its statement, the printed and corrected forms, the note,
+    the full evidence table (collapsed for more than :data:`OPEN_EVIDENCE` checks) and the
+    map of the paper's sentences (:func:`sentences_markdown`)."""
     claim = get_claim(result.id)
     pieces = [prose(short_where(claim.where))] if claim.where else []
     if claim.label:  # a method check of symrb's own has no label in the paper
         pieces.append(f"LaTeX label `{claim.label}`")
     head = f"**{claim.id}** ({'; '.join(pieces)})" if pieces else f"**{claim.id}**"
-    parts = [f"{head}: {breakable(claim.render('statement'))}"]
+    parts = [_verdict(result), evidence_summary(result.evidence)]
+    parts.append(f"{head}: {breakable(claim.render('statement'))}")
     if claim.printed:
         parts.append(f"*Printed in the paper:* {breakable(claim.render('printed'))}")
         parts.append(f"*Corrected:* {breakable(claim.render('corrected'))}")
     if claim.note:
         parts.append(f"*Note:* {prose(claim.note)}")
-    parts.append(f"Outcome: **{result.outcome}** (recorded: {claim.expected}).")
-    parts.append(evidence_table(result.evidence))
+    n = len(result.evidence)
+    if n:
+        counts = Counter(e.form for e in result.evidence)
+        by_form = ", ".join(f"{counts[f]} of {FORM_ROWS[f][0]}" for f in FORM_ROWS if counts[f])
+        title = f"The evidence: {n} check{'s' * (n != 1)} ({by_form}), each with its residual"
+        open_ = [":open:"] if n <= OPEN_EVIDENCE else []
+        parts.append("\n".join([f":::{{dropdown}} {title}", *open_, "",
+                                evidence_table(result.evidence), ":::"]))  # fmt: skip
     if claim.sentences:
         parts.append(sentences_markdown(claim.id))
     return "\n\n".join(parts)
