@@ -281,14 +281,17 @@ FORM_ROWS = {
 }
 
 
-def _ratio(e: EvidenceResult) -> tuple[float, float]:
-    """How close a check came to its tolerance: residual over tolerance (an exact check, tol 0,
-    is 0 when it holds and infinite when not), then the residual; an error is infinitely far."""
-    if e.error is not None or e.residual != e.residual:
+def _ratio(e: EvidenceResult | Mapping[str, Any]) -> tuple[float, float]:
+    """How close a check (a result or its dict) came to its tolerance: residual over tolerance
+    (an exact check, tol 0, is 0 when it holds and infinite when not), then the residual; an
+    error is infinitely far."""
+    d = e.to_dict() if isinstance(e, EvidenceResult) else e
+    residual, tol = d["residual"], d["tol"]
+    if d.get("error") is not None or residual is None or residual != residual:
         return float("inf"), float("inf")
-    if e.tol:
-        return e.residual / e.tol, e.residual
-    return (0.0 if e.residual == 0 else float("inf")), e.residual
+    if tol:
+        return residual / tol, residual
+    return (0.0 if residual == 0 else float("inf")), residual
 
 
 def _tex_number(x: float) -> str:
@@ -515,23 +518,37 @@ def _levels_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
     return ", ".join(f"{counts[lv]} {short}" for lv, short in SHORT_LEVELS.items() if counts[lv])
 
 
+#: The levels whose checks involve no rounding.
+EXACT_LEVELS = ("symbolic, general n", "symbolic, fixed n", "exact rational")
+
+
+def _checks_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
+    """``21 checks, 14 without rounding``: how many checks, and how many are symbolic or in
+    exact rational arithmetic (the levels are on the claim's page)."""
+    exact = sum(e["level"] in EXACT_LEVELS for e in evidence)
+    n = len(evidence)
+    return f"{n} check{'s' * (n != 1)}, {exact} without rounding"
+
+
 def _margin_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
-    """The closest call: the largest residual/tolerance among checks that must pass."""
-
-    def ratio(e: Mapping[str, Any]) -> float:
-        if e["tol"]:
-            return float(e["residual"] / e["tol"])
-        return 0.0 if e["residual"] == 0 else float("inf")
-
-    worst = max((e for e in evidence if e["form"] != "printed"), key=ratio)
+    """The closest call: the largest residual/tolerance among checks that must pass, typeset
+    (``$1.1\\times10^{-15} \\le 10^{-13}$``, which never breaks inside a number)."""
+    worst = max((e for e in evidence if e["form"] != "printed"), key=_ratio)
     if worst["tol"] == 0:
         return "exact\N{NO-BREAK SPACE}(0)"
-    return f"{worst['residual']:.1e} ≤ {worst['tol']:.0e}"
+    return f"${_tex_number(worst['residual'])} \\le {_tex_number(worst['tol'])}$"
 
 
 def _where_cell(cid: str) -> str:
+    """Where claim ``cid`` is: for a claim of the paper its section (the item is on the claim's
+    page), for a method check the symrb function it backs."""
     text = get_claim(cid).where
-    return prose(short_where(text) if text else "(not recorded)", cell=True)
+    if not text:
+        return "(not recorded)"
+    section = re.match(r"Section [\d.]+", text)
+    if GROUPS[cid[0]] == "paper" and section:
+        return section.group()
+    return prose(short_where(text), cell=True)
 
 
 def _outcome_cell(r: Mapping[str, Any]) -> str:
@@ -546,12 +563,13 @@ def _outcome_cell(r: Mapping[str, Any]) -> str:
 
 def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
     """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID
-    (a link to the claim's check, :func:`claim_link`), title with where it is in the paper (for
+    (a link to the claim's check, :func:`claim_link`), title with its section of the paper (for
     a method check: the symrb function it backs), outcome (an erratum's links to its page of the
     errata), for the paper's claims the sentences covered (:func:`sentences_cell`), and the
-    evidence: checks by level, the closest call and the time."""
+    evidence: how many checks and how many without rounding, the closest call and the time
+    (the checks by level are on the claim's page)."""
     paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
-    where = "where in the paper" if paper else "what it backs in symrb"
+    where = "section of the paper" if paper else "what it backs in symrb"
     sentences = " sentences |" if paper else ""
     rows = [
         f"| ID | claim ({where}) | outcome |{sentences} evidence: checks; closest call "
@@ -562,7 +580,7 @@ def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
         covered = f" {sentences_cell(r['id'])} |" if paper else ""
         rows.append(
             f"| {claim_link(r['id'])} | {prose(r['title'], cell=True)} ({_where_cell(r['id'])}) "
-            f"| {_outcome_cell(r)} |{covered} {_levels_cell(r['evidence'])}; closest "
+            f"| {_outcome_cell(r)} |{covered} {_checks_cell(r['evidence'])}; closest "
             f"{_margin_cell(r['evidence'])}; {_seconds_cell(r['seconds'])} |"
         )
     return "\n".join(rows)

@@ -285,7 +285,7 @@ def test_work_precision_panels_use_the_style_and_stay_above_the_floor():
 
 #: Words that make a plotted series a method's.
 _METHOD_WORDS = ("DOP853", "RK45", "LSODA", "Radau", "BDF", "mv_flow", "mv_algorithm", "MV-",
-                 "RKMK4", "rkmk4", "symmetric vs")  # fmt: skip
+                 "RKMK4", "rkmk4", "symmetric vs", "gradient descent", "MSA", "shooting")  # fmt: skip
 
 
 def test_book_figures_of_methods_take_their_style_from_the_table():
