@@ -445,5 +445,5 @@ def test_the_evidence_summary_names_the_decisive_and_the_wrong_checks() -> None:
         f" do not pass: #{first_corrected}**"
     )
     # the closest call of the correction is now the failing check, of the printed form the pass
-    assert rows["the correction"][3].startswith(f"#{first_corrected}: $5 >")
+    assert rows["the correction"][3].startswith(f"#{first_corrected}: $5$ $>")
     assert rows["the erratum as printed (must fail)"][3].startswith(f"#{first_printed}: ")
