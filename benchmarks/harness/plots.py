@@ -131,6 +131,8 @@ def _cost_vs_n_figure(plt: Any, ms: Mapping[str, Any], style: Style = plain_styl
     if comp:
         ax.loglog([3], [comp["matmul_equivalents"]], ms=9, label="mv_flow (compiled, numba; n = 3)",
                   **style("mv_flow", marker="v", ls="none"))  # fmt: skip
+    ax.set_xticks(ns, [str(n) for n in ns])  # the sizes measured, in plain numbers
+    ax.xaxis.set_minor_locator(plt.NullLocator())
     ax.set_xlabel("n")
     ax.set_ylabel("CPU time in units of one n x n matmul")
     ax.set_title("per-step cost against n (single body)")
