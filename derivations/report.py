@@ -1,12 +1,12 @@
 """How the book shows claims: one module, so every page renders them the same way.
 
-``check("S4")`` displays a claim verdict first (:func:`claim_markdown`): its outcome with an
+``check("S4")`` displays a claim, the verdict first (:func:`claim_markdown`): its outcome with an
 erratum's correction in one line, a summary of its evidence by form (:func:`evidence_summary`),
 then its statement, the printed and corrected forms of an erratum, the note, the table of its
 evidence (collapsed when long) and, in a collapsed dropdown, the map of the paper's sentences to
-that evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the build makes
-(``symrb verify --output book/_build/verify.json``, reused when it was written for the current
-code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
+that evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the
+build makes (``symrb verify --output book/_build/verify.json``, reused when it was written for the
+current code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
 which fails the book build; it also places the label ``claim-s4`` (:func:`anchor_of`) there, the
 target of every link to the claim's check (:func:`claim_link`).  :func:`claims_table` and
 :func:`claims_summary` are the claims page, one table per claim group (:func:`by_group`: the
@@ -292,7 +292,7 @@ def _ratio(e: EvidenceResult | Mapping[str, Any]) -> tuple[float, float]:
 def _tex_number(x: float) -> str:
     """``x`` as typeset math: ``8.1\\times10^{-16}``, ``10^{-13}``, ``3`` (a number in a table
     cell neither breaks at its exponent's minus nor reads as ``e-16``)."""
-    if x == 0 or 0.01 <= abs(x) < 100:
+    if (x == 0 or 0.01 <= abs(x) < 100) and "e" not in f"{x:.2g}":
         return f"{x:.2g}"
     mantissa, exponent = f"{x:.1e}".split("e")
     power = f"10^{{{int(exponent)}}}"
@@ -353,9 +353,9 @@ def evidence_summary(evidence: Sequence[EvidenceResult]) -> str:
 
 
 def _verdict(result: ClaimResult) -> str:
-    """``**Verdict on D7: holds after correction.** **Corrected:** ...``: the outcome (for an erratum a
-    link to its page of the errata, and its correction in one line) and the recorded outcome
-    when they differ."""
+    """``**Verdict on D7: holds after correction.** **Corrected:** ...``: the outcome (for an
+    erratum a link to its page of the errata, and its correction in one line) and the recorded
+    outcome when they differ."""
     outcome = _outcome_cell({"id": result.id, "outcome": result.outcome,
                              "expected": result.expected})  # fmt: skip
     text = f"**Verdict on {result.id}: {outcome}.**"
