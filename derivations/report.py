@@ -299,17 +299,19 @@ def _tex_number(x: float) -> str:
     return power if mantissa == "1.0" else f"{mantissa}\\times{power}"
 
 
-def _against(e: Mapping[str, Any]) -> str:
+def _against(e: Mapping[str, Any], one_line: bool = False) -> str:
     """``$8.1\\times10^{-16}$ $\\le 10^{-13}$``: a check's residual against its tolerance, typeset
-    (``exact (0)`` for a zero residual at tolerance 0, the message for an error)."""
+    (``exact (0)`` for a zero residual at tolerance 0, the message for an error).  Two formulas,
+    so that a narrow column may break the line before the sign (never inside a number); one
+    with ``one_line``, which keeps a column of a wide table from narrowing below it."""
     if e.get("error"):
         return "error: " + plain(str(e["error"]))
     residual, tol = e["residual"], e["tol"]
+    join = " " if one_line else "$ $"
     if tol == 0:
-        return "exact (0)" if residual == 0 else f"${_tex_number(residual)}$ $> 0$"
+        return "exact (0)" if residual == 0 else f"${_tex_number(residual)}{join}> 0$"
     sign = r"\le" if residual <= tol else ">"
-    # two formulas: a narrow column may break the line before the sign, never inside a number
-    return f"${_tex_number(residual)}$ ${sign} {_tex_number(tol)}$"
+    return f"${_tex_number(residual)}{join}{sign} {_tex_number(tol)}$"
 
 
 def _call(k: int, e: EvidenceResult) -> str:
@@ -535,11 +537,11 @@ def _checks_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
 
 def _margin_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
     """The closest call: the largest residual/tolerance among checks that must pass, typeset
-    (``$1.1\\times10^{-15}$ $\\le 10^{-13}$``, which never breaks inside a number)."""
+    (``$1.1\\times10^{-15} \\le 10^{-13}$``, one formula: it holds the column at its width)."""
     worst = max((e for e in evidence if e["form"] != "printed"), key=_ratio)
     if worst["tol"] == 0:
         return "exact\N{NO-BREAK SPACE}(0)"
-    return _against(worst)
+    return _against(worst, one_line=True)
 
 
 def _where_cell(cid: str) -> str:
