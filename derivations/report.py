@@ -1,10 +1,12 @@
 """How the book shows claims: one module, so every page renders them the same way.
 
-``check("S4")`` displays a claim's statement, the printed and corrected forms of an erratum, the
-note, a table of its evidence and, in a collapsed dropdown, the map of the paper's sentences to that
-evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the build makes
-(``symrb verify --output book/_build/verify.json``, reused when it was written for the current
-code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
+``check("S4")`` displays a claim, the verdict first (:func:`claim_markdown`): its outcome with an
+erratum's correction in one line, a summary of its evidence by form (:func:`evidence_summary`),
+then its statement, the printed and corrected forms of an erratum, the note, the table of its
+evidence (collapsed when long) and, in a collapsed dropdown, the map of the paper's sentences to
+that evidence (:func:`sentences_markdown`), from the one run of every claim's evidence that the
+build makes (``symrb verify --output book/_build/verify.json``, reused when it was written for the
+current code), and raises ``AssertionError`` when the computed outcome differs from the recorded one,
 which fails the book build; it also places the label ``claim-s4`` (:func:`anchor_of`) there, the
 target of every link to the claim's check (:func:`claim_link`).  :func:`claims_table` and
 :func:`claims_summary` are the claims page, one table per claim group (:func:`by_group`: the
@@ -43,6 +45,9 @@ __all__ = [
     "short_where",
     "breakable",
     "evidence_table",
+    "evidence_summary",
+    "OPEN_EVIDENCE",
+    "FORM_ROWS",
     "claim_markdown",
     "check",
     "load_results",
@@ -243,42 +248,151 @@ def breakable(text: str, limit: int = 24) -> str:
     return re.sub(r"(?<![$\\])\$([^$]+)\$(?!\$)", cut, text)
 
 
-def _fmt_residual(e: Mapping[str, Any]) -> str:
-    if e.get("error"):
-        return "error: " + plain(str(e["error"]))
-    return f"{e['residual']:.2e}"
-
-
 def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> str:
-    """A Markdown table of evidence results (objects or the dicts of ``verify --json``)."""
+    """A Markdown table of evidence results (objects or the dicts of ``verify --json``): number,
+    form and level, what is checked and the residual against the tolerance (typeset); four
+    columns, so that it fits the content column inside a dropdown (the time a claim's checks
+    take is on the claims page, by level on the evidence page)."""
     rows = [
-        "| # | form | level | evidence | residual | tol | time |",
-        "|---|---|---|---|---|---|---|",
+        "| # | form, level | what is checked | residual vs tolerance |",
+        "|---|---|---|---|",
     ]
     for k, ev in enumerate(evidence, 1):
         e = ev.to_dict() if isinstance(ev, EvidenceResult) else ev
-        rows.append(
-            f"| {k} | {e['form']} | {e['level']} | {plain(e['description'])} | {_fmt_residual(e)} "
-            f"| {e['tol']:.0e} | {e['seconds']:.3f} s |"
-        )
+        level = SHORT_LEVELS.get(e["level"], e["level"])
+        rows.append(f"| {k} | {e['form']}, {level} | {plain(e['description'])} | {_against(e)} |")
     return "\n".join(rows)
 
 
+#: A claim with at most this many checks shows its evidence table open under the verdict; a
+#: longer one is collapsed (its summary by form stays in view, so the page stays short).
+OPEN_EVIDENCE = 5
+
+#: The rows of the verdict's summary: each form of evidence, what it checks and what it must do.
+FORM_ROWS = {
+    "claim": ("the statement as printed", "pass"),
+    "printed": ("the erratum as printed (must fail)", "fail"),
+    "corrected": ("the correction", "pass"),
+}
+
+
+def _ratio(e: EvidenceResult | Mapping[str, Any]) -> tuple[float, float]:
+    """How close a check (a result or its dict) came to its tolerance: residual over tolerance
+    (an exact check, tol 0, is 0 when it holds and infinite when not), then the residual; an
+    error is infinitely far."""
+    d = e.to_dict() if isinstance(e, EvidenceResult) else e
+    residual, tol = d["residual"], d["tol"]
+    if d.get("error") is not None or residual is None or residual != residual:
+        return float("inf"), float("inf")
+    if tol:
+        return residual / tol, residual
+    return (0.0 if residual == 0 else float("inf")), residual
+
+
+def _tex_number(x: float) -> str:
+    """``x`` as typeset math: ``8.1\\times10^{-16}``, ``10^{-13}``, ``3`` (a number in a table
+    cell neither breaks at its exponent's minus nor reads as ``e-16``)."""
+    if (x == 0 or 0.01 <= abs(x) < 100) and "e" not in f"{x:.2g}":
+        return f"{x:.2g}"
+    mantissa, exponent = f"{x:.1e}".split("e")
+    power = f"10^{{{int(exponent)}}}"
+    return power if mantissa == "1.0" else f"{mantissa}\\times{power}"
+
+
+def _against(e: Mapping[str, Any], one_line: bool = False) -> str:
+    """``$8.1\\times10^{-16}$ $\\le 10^{-13}$``: a check's residual against its tolerance, typeset
+    (``exact (0)`` for a zero residual at tolerance 0, the message for an error).  Two formulas,
+    so that a narrow column may break the line before the sign (never inside a number); one
+    with ``one_line``, which keeps a column of a wide table from narrowing below it."""
+    if e.get("error"):
+        return "error: " + plain(str(e["error"]))
+    residual, tol = e["residual"], e["tol"]
+    join = " " if one_line else "$ $"
+    if tol == 0:
+        return "exact (0)" if residual == 0 else f"${_tex_number(residual)}{join}> 0$"
+    sign = r"\le" if residual <= tol else ">"
+    return f"${_tex_number(residual)}{join}{sign} {_tex_number(tol)}$"
+
+
+def _call(k: int, e: EvidenceResult) -> str:
+    """``#19: $8.1\\times10^{-16}$ $\\le 10^{-13}$``: check ``k`` (its number in the evidence
+    table) against its tolerance."""
+    return f"#{k}: error" if e.error is not None else f"#{k}: {_against(e.to_dict())}"
+
+
+def evidence_summary(evidence: Sequence[EvidenceResult]) -> str:
+    """The verdict's evidence in a few lines: a Markdown table with one row per form of evidence
+    (the statement as printed, the printed form of an erratum, the correction), the number of
+    checks by level, whether they pass or fail as they must, and the decisive check: of those
+    that must pass the closest to its tolerance, of those that must fail the closest to passing,
+    by its number in the full evidence table; a check not as it must be is named in bold."""
+    rows = [
+        "| checks of | checks by level | result | closest call (# in the table) |",
+        "|---|---|---|---|",
+    ]
+    numbered = list(enumerate(evidence, 1))
+    for form, (what, must) in FORM_ROWS.items():
+        mine = [(k, e) for k, e in numbered if e.form == form]
+        if not mine:
+            continue
+        levels = _levels_cell([{"level": e.level} for _k, e in mine])
+        wrong = [k for k, e in mine if not e.as_expected]
+        verb = "pass" if must == "pass" else "fail"
+        if wrong:
+            result = (
+                f"**{len(wrong)} of {len(mine)} do not {verb}: #{', #'.join(map(str, wrong))}**"
+            )
+        else:
+            result = {1: f"it {verb}{'es' if verb == 'pass' else 's'}", 2: f"both {verb}"}.get(
+                len(mine), f"all {len(mine)} {verb}"
+            )
+        if must == "pass":
+            k, e = max(mine, key=lambda ke: _ratio(ke[1]))
+        else:
+            k, e = min(mine, key=lambda ke: _ratio(ke[1]))
+        rows.append(f"| {what} | {levels} | {result} | {_call(k, e)} |")
+    return "\n".join(rows)
+
+
+def _verdict(result: ClaimResult) -> str:
+    """``**Verdict on D7: holds after correction.** **Corrected:** ...``: the outcome (for an
+    erratum a link to its page of the errata, and its correction in one line) and the recorded
+    outcome when they differ."""
+    outcome = _outcome_cell({"id": result.id, "outcome": result.outcome,
+                             "expected": result.expected})  # fmt: skip
+    text = f"**Verdict on {result.id}: {outcome}.**"
+    fixed = correction_line(result.id)
+    if fixed:
+        text += f" **Corrected:** {breakable(fixed)}."
+    return text
+
+
 def claim_markdown(result: ClaimResult) -> str:
-    """Statement, erratum (printed/corrected), note, outcome and evidence table of a claim."""
+    """A claim as the book shows it, the verdict first: the verdict (with an erratum's correction
+    in one line), the evidence summary by form (:func:`evidence_summary`), then where the claim is
+    in the paper and its statement, the printed and corrected forms, the note,
+    the full evidence table (collapsed for more than :data:`OPEN_EVIDENCE` checks) and the
+    map of the paper's sentences (:func:`sentences_markdown`)."""
     claim = get_claim(result.id)
     pieces = [prose(short_where(claim.where))] if claim.where else []
     if claim.label:  # a method check of symrb's own has no label in the paper
         pieces.append(f"LaTeX label `{claim.label}`")
     head = f"**{claim.id}** ({'; '.join(pieces)})" if pieces else f"**{claim.id}**"
-    parts = [f"{head}: {breakable(claim.render('statement'))}"]
+    parts = [_verdict(result), evidence_summary(result.evidence)]
+    parts.append(f"{head}: {breakable(claim.render('statement'))}")
     if claim.printed:
         parts.append(f"*Printed in the paper:* {breakable(claim.render('printed'))}")
         parts.append(f"*Corrected:* {breakable(claim.render('corrected'))}")
     if claim.note:
         parts.append(f"*Note:* {prose(claim.note)}")
-    parts.append(f"Outcome: **{result.outcome}** (recorded: {claim.expected}).")
-    parts.append(evidence_table(result.evidence))
+    n = len(result.evidence)
+    if n:
+        counts = Counter(e.form for e in result.evidence)
+        by_form = ", ".join(f"{counts[f]} of {FORM_ROWS[f][0]}" for f in FORM_ROWS if counts[f])
+        title = f"The evidence: {n} check{'s' * (n != 1)} ({by_form}), each with its residual"
+        open_ = [":open:"] if n <= OPEN_EVIDENCE else []
+        parts.append("\n".join([f":::{{dropdown}} {title}", *open_, "",
+                                evidence_table(result.evidence), ":::"]))  # fmt: skip
     if claim.sentences:
         parts.append(sentences_markdown(claim.id))
     return "\n\n".join(parts)
@@ -409,23 +523,37 @@ def _levels_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
     return ", ".join(f"{counts[lv]} {short}" for lv, short in SHORT_LEVELS.items() if counts[lv])
 
 
+#: The levels whose checks involve no rounding.
+EXACT_LEVELS = ("symbolic, general n", "symbolic, fixed n", "exact rational")
+
+
+def _checks_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
+    """``21 checks, 14 without rounding``: how many checks, and how many are symbolic or in
+    exact rational arithmetic (the levels are on the claim's page)."""
+    exact = sum(e["level"] in EXACT_LEVELS for e in evidence)
+    n = len(evidence)
+    return f"{n} check{'s' * (n != 1)}, {exact} without rounding"
+
+
 def _margin_cell(evidence: Sequence[Mapping[str, Any]]) -> str:
-    """The closest call: the largest residual/tolerance among checks that must pass."""
-
-    def ratio(e: Mapping[str, Any]) -> float:
-        if e["tol"]:
-            return float(e["residual"] / e["tol"])
-        return 0.0 if e["residual"] == 0 else float("inf")
-
-    worst = max((e for e in evidence if e["form"] != "printed"), key=ratio)
+    """The closest call: the largest residual/tolerance among checks that must pass, typeset
+    (``$1.1\\times10^{-15} \\le 10^{-13}$``, one formula: it holds the column at its width)."""
+    worst = max((e for e in evidence if e["form"] != "printed"), key=_ratio)
     if worst["tol"] == 0:
         return "exact\N{NO-BREAK SPACE}(0)"
-    return f"{worst['residual']:.1e} ≤ {worst['tol']:.0e}"
+    return _against(worst, one_line=True)
 
 
 def _where_cell(cid: str) -> str:
+    """Where claim ``cid`` is: for a claim of the paper its section (the item is on the claim's
+    page), for a method check the symrb function it backs."""
     text = get_claim(cid).where
-    return prose(short_where(text) if text else "(not recorded)", cell=True)
+    if not text:
+        return "(not recorded)"
+    section = re.match(r"Section [\d.]+", text)
+    if GROUPS[cid[0]] == "paper" and section:
+        return section.group()
+    return prose(short_where(text), cell=True)
 
 
 def _outcome_cell(r: Mapping[str, Any]) -> str:
@@ -440,12 +568,13 @@ def _outcome_cell(r: Mapping[str, Any]) -> str:
 
 def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
     """The Markdown table of the claims page for ``results`` (dicts of ``verify --json``): ID
-    (a link to the claim's check, :func:`claim_link`), title with where it is in the paper (for
+    (a link to the claim's check, :func:`claim_link`), title with its section of the paper (for
     a method check: the symrb function it backs), outcome (an erratum's links to its page of the
     errata), for the paper's claims the sentences covered (:func:`sentences_cell`), and the
-    evidence: checks by level, the closest call and the time."""
+    evidence: how many checks and how many without rounding, the closest call and the time
+    (the checks by level are on the claim's page)."""
     paper = all(GROUPS[r["id"][0]] == "paper" for r in results)
-    where = "where in the paper" if paper else "what it backs in symrb"
+    where = "section of the paper" if paper else "what it backs in symrb"
     sentences = " sentences |" if paper else ""
     rows = [
         f"| ID | claim ({where}) | outcome |{sentences} evidence: checks; closest call "
@@ -456,7 +585,7 @@ def claims_table(results: Sequence[Mapping[str, Any]]) -> str:
         covered = f" {sentences_cell(r['id'])} |" if paper else ""
         rows.append(
             f"| {claim_link(r['id'])} | {prose(r['title'], cell=True)} ({_where_cell(r['id'])}) "
-            f"| {_outcome_cell(r)} |{covered} {_levels_cell(r['evidence'])}; closest "
+            f"| {_outcome_cell(r)} |{covered} {_checks_cell(r['evidence'])}; closest "
             f"{_margin_cell(r['evidence'])}; {_seconds_cell(r['seconds'])} |"
         )
     return "\n".join(rows)

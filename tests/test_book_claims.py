@@ -370,3 +370,80 @@ def test_every_erratum_has_its_page_and_its_label() -> None:
     assert [r[0] for r in summary] == [f"{{ref}}`{c.id} <erratum-{c.id.lower()}>`" for c in ERRATA]
     with pytest.raises(ext.ExtensionError, match="not an erratum"):
         ext.errata_page(list(results.values()), "D4")
+
+
+# ---------------------------------------------------------------------------------------------
+# a claim's display: the verdict and the evidence by form first, the full table collapsed when long
+
+
+def _claim_result(cid: str, residuals: dict[str, float] | None = None) -> Any:
+    """Claim ``cid``'s result with its recorded outcome (printed-form checks failing), or with
+    the residuals ``{evidence name: residual}`` given."""
+    from derivations.registry import ClaimResult, EvidenceResult, get_claim
+
+    c = get_claim(cid)
+    residuals = residuals or {}
+    evidence = [
+        EvidenceResult(
+            level=str(e.level),
+            description=e.description,
+            form=e.form,
+            residual=residuals.get(e.name, 1.0 if e.form == "printed" else 0.0),
+            tol=e.tol,
+            seconds=0.01,
+            name=e.name,
+        )  # fmt: skip
+        for e in c.evidence
+    ]
+    return ClaimResult(id=c.id, label=c.label, title=c.title, expected=c.expected,
+                       outcome=c.expected, evidence=evidence)  # fmt: skip
+
+
+def test_a_claim_opens_with_its_verdict_and_its_evidence_by_form() -> None:
+    from derivations.report import OPEN_EVIDENCE, claim_markdown, correction_line
+
+    for c in CLAIMS:
+        md = claim_markdown(_claim_result(c.id))
+        first = md.split("\n\n")[0]
+        assert first.startswith(f"**Verdict on {c.id}: ") and c.expected in first, (c.id, first)
+        if c.corrected:
+            assert f"**Corrected:** {breakable(correction_line(c.id))}" in first, c.id
+        summary = _rows(md.split("\n\n")[1])
+        forms = {e.form for e in c.evidence}
+        assert len(summary) == len(forms) and all(len(r) == 4 for r in summary), c.id
+        assert md.split("\n\n")[2].startswith(f"**{c.id}**"), c.id  # then the statement
+        n = len(c.evidence)
+        dropdown = re.search(
+            r"^:::\{dropdown\} The evidence: (\d+) checks?.*\n(:open:\n)?", md, re.M
+        )
+        assert dropdown and int(dropdown.group(1)) == n, c.id
+        assert bool(dropdown.group(2)) == (n <= OPEN_EVIDENCE), c.id
+        assert md.count("\n| ") - md.count("\n| #") >= n  # every check keeps its row
+
+
+def test_the_evidence_summary_names_the_decisive_and_the_wrong_checks() -> None:
+    from derivations.report import evidence_summary
+
+    c = next(c for c in ERRATA if {"claim", "printed", "corrected"} <= {e.form for e in c.evidence})
+    result = _claim_result(c.id)
+    rows = {r[0]: r for r in _rows(evidence_summary(result.evidence))}
+    assert set(rows) == {"the statement as printed", "the erratum as printed (must fail)",
+                         "the correction"}  # fmt: skip
+    n_printed = sum(e.form == "printed" for e in c.evidence)
+    assert rows["the erratum as printed (must fail)"][2] in (f"all {n_printed} fail", "both fail",
+                                                       "it fails")  # fmt: skip
+    assert "**" not in "".join(r[2] for r in rows.values())
+    # a printed-form check that passes and a corrected one that fails are named, in bold
+    first_printed = next(k for k, e in enumerate(c.evidence, 1) if e.form == "printed")
+    first_corrected = next(k for k, e in enumerate(c.evidence, 1) if e.form == "corrected")
+    worst = {c.evidence[first_printed - 1].name: 0.0, c.evidence[first_corrected - 1].name: 5.0}
+    rows = {r[0]: r for r in _rows(evidence_summary(_claim_result(c.id, worst).evidence))}
+    assert rows["the erratum as printed (must fail)"][2].startswith("**1 of")
+    assert f"#{first_printed}**" in rows["the erratum as printed (must fail)"][2]
+    assert (
+        rows["the correction"][2] == f"**1 of {sum(e.form == 'corrected' for e in c.evidence)}"
+        f" do not pass: #{first_corrected}**"
+    )
+    # the closest call of the correction is now the failing check, of the printed form the pass
+    assert rows["the correction"][3].startswith(f"#{first_corrected}: $5$ $>")
+    assert rows["the erratum as printed (must fail)"][3].startswith(f"#{first_printed}: ")

@@ -216,13 +216,14 @@ def test_evidence_summary_shows_each_check_and_whether_it_is_as_recorded():
 
 def test_method_styles_have_distinct_colours():
     from matplotlib.colors import to_rgb
-    from symrb_book.style import METHOD_STYLE
+    from symrb_book.style import METHOD_STYLE, SERIES_STYLE
 
-    rgb = {name: np.array(to_rgb(s["color"])) for name, s in METHOD_STYLE.items()}
+    table = {**METHOD_STYLE, **SERIES_STYLE}
+    rgb = {name: np.array(to_rgb(s["color"])) for name, s in table.items()}
     names = list(rgb)
     for i, a in enumerate(names):
         for b in names[i + 1 :]:
-            # no two methods share a colour, nor come within 0.1 of each other in RGB
+            # no two methods (or other series) share a colour, nor come within 0.1 in RGB
             assert np.linalg.norm(rgb[a] - rgb[b]) > 0.1, (a, b)
 
 
@@ -284,7 +285,7 @@ def test_work_precision_panels_use_the_style_and_stay_above_the_floor():
 
 #: Words that make a plotted series a method's.
 _METHOD_WORDS = ("DOP853", "RK45", "LSODA", "Radau", "BDF", "mv_flow", "mv_algorithm", "MV-",
-                 "RKMK4", "rkmk4", "symmetric vs")  # fmt: skip
+                 "RKMK4", "rkmk4", "symmetric vs", "gradient descent", "MSA", "shooting")  # fmt: skip
 
 
 def test_book_figures_of_methods_take_their_style_from_the_table():
@@ -309,6 +310,80 @@ def test_book_figures_of_methods_take_their_style_from_the_table():
             if "work_precision(" in cell:
                 checked.append(page.name)
     assert {"hard_cases.md", "04_moser_veselov_runs.md", "accuracy.md"} <= set(checked), checked
+
+
+class _Run(dict):
+    """A scene result as the learning figures read it: records by name, their times."""
+
+    def __init__(self, **records):
+        super().__init__((k, np.asarray(v, dtype=float)) for k, v in records.items())
+        self.times = {k: np.arange(len(v), dtype=float) for k, v in self.items()}
+
+
+def _book_figures():
+    """Every figure of the book that draws methods (by the functions its pages call), by name,
+    on the recorded benchmarks and on made-up training runs."""
+    import json
+
+    from symrb_book import accuracy, learning
+
+    from benchmarks.harness import load
+
+    results = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    full = load(results / "bench.json")
+    training = json.loads((results / "learning.json").read_text())["training"]
+    run = _Run(loss=[3.0, 2.0, 1.5], residual=[1.0, 1e-3, 1e-9])
+    so_runs = {"gradient descent": run, "extended MSA": run, "shooting": run}
+    return {
+        "throughput": accuracy.bench_figure(full, "throughput"),
+        "cost_vs_n": accuracy.bench_figure(full, "cost_vs_n"),
+        "so training": learning.so_training_figure(so_runs, {"shooting": "extremals"}, 1.0),
+        "resnet loss": learning.loss_figure(dict(list(so_runs.items())[:2]), {}, "t"),
+        "training time": learning.training_time_figure(training),
+    }
+
+
+def test_every_figure_draws_each_method_in_the_colour_of_the_style_table():
+    """Each labelled line and bar of a figure of the book that draws methods is named by the
+    style table (its label's head, :func:`series_of`) and drawn in that name's colour: a method
+    looks the same in every figure."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import to_hex
+    from symrb_book.style import METHOD_STYLE, SERIES_STYLE, series_of
+
+    table = {**METHOD_STYLE, **SERIES_STYLE}
+    wrong, seen = [], set()
+    for name, fig in _book_figures().items():
+        for ax in fig.axes:
+            artists = [(line.get_label(), line.get_color()) for line in ax.get_lines()]
+            artists += [(c.get_label(), p.get_facecolor()) for c in ax.containers for p in c]
+            for label, colour in artists:
+                if label.startswith("_"):
+                    continue  # unlabelled: not a series
+                key = series_of(label)
+                seen.add(key)
+                if to_hex(colour) != to_hex(table[key]["color"]):
+                    wrong.append(f"{name}: {label!r} in {to_hex(colour)}, {key} is "
+                                 f"{table[key]['color']}")  # fmt: skip
+        plt.close(fig)
+    assert not wrong, "\n".join(wrong)
+    assert {"MV-fast", "matmul", "gradient descent", "extended MSA", "shooting"} <= seen
+
+
+def test_series_styles_keep_their_colour():
+    from symrb_book.style import SERIES_STYLE, series_of, series_style
+
+    assert series_style("matmul", marker="o") == {**SERIES_STYLE["matmul"], "marker": "o"}
+    assert series_style("mv_flow", ls=":")["color"] == series_style("MV-fast")["color"]
+    assert series_of("mv_flow (NumPy path)") == series_of("MVStepper.step (one call)") == "MV-fast"
+    assert series_of("gradient descent (Cayley, Armijo)") == "gradient descent"
+    with pytest.raises(InputError, match="keeps the colour"):
+        series_style("matmul", color="red")
+    with pytest.raises(InputError, match="no style"):
+        series_of("Euler (forward)")
 
 
 def test_tex_sci_writes_powers_of_ten_that_typeset_as_one_number() -> None:

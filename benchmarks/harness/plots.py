@@ -12,8 +12,24 @@ from symrb.errors import InputError
 
 from .config import EPS
 
+#: A style: the matplotlib keyword arguments of a series from its name and the keyword
+#: arguments that tell two series of one name apart, e.g. ``style("mv_flow", ls="--")``.
+Style = Callable[..., dict[str, Any]]
 
-def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
+
+#: The command line's look of the series that are not methods.
+_PLAIN = {"goal": {"color": "gray", "ls": ":"}}
+
+
+def plain_style(name: str, **variant: Any) -> dict[str, Any]:
+    """The style of the command line's figures: the variant, with colours from matplotlib's
+    cycle (a goal grey).  The book passes its style table instead
+    (``symrb_book.style.series_style``), so that a method has one colour in every figure of the
+    book."""
+    return {**_PLAIN.get(name, {}), **variant}
+
+
+def _work_precision_figure(plt: Any, ms: Mapping[str, Any], style: Style | None = None) -> Any:
     """Work-precision: error against CPU time, one panel per problem (None if not run)."""
     wps = list(ms.get("work-precision", {}).get("n3", []))
     if ms.get("work-precision", {}).get("n10"):
@@ -26,19 +42,21 @@ def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
         for i, (m, e) in enumerate(w["methods"].items()):
             if not e.get("available"):
                 continue
-            # SciPy's methods dashed, symrb's solid; twelve methods, twelve colours
-            style = {
-                "color": plt.get_cmap("tab20")(i % 20),
-                "marker": "osD^v<>ph*XP"[i % 12],
-                "ls": "--" if m in ("RK45", "DOP853", "LSODA", "integrate") else "-",
-            }
+            if style is None:  # SciPy's methods dashed, symrb's solid; twelve colours
+                look = {
+                    "color": plt.get_cmap("tab20")(i % 20),
+                    "marker": "osD^v<>ph*XP"[i % 12],
+                    "ls": "--" if m in ("RK45", "DOP853", "LSODA", "integrate") else "-",
+                }
+            else:
+                look = style(m)
             pts = sorted(e["points"], key=lambda q: q["error"])
             # no point below the reference's own error: such errors are drawn at that floor
             err = [max(q["error"], w["reference_error_estimate"]) for q in pts]
             med = [q["cpu"]["median"] for q in pts]
             lo = [q["cpu"]["median"] - q["cpu"]["min"] for q in pts]
             hi = [q["cpu"]["max"] - q["cpu"]["median"] for q in pts]
-            ax.errorbar(err, med, yerr=[lo, hi], ms=5, capsize=2, label=m, **style)
+            ax.errorbar(err, med, yerr=[lo, hi], ms=5, capsize=2, label=m, **look)
         ax.set_xscale("log")
         ax.set_yscale("log")
         floor = w["reference_error_estimate"]
@@ -51,8 +69,9 @@ def _work_precision_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
     return fig
 
 
-def _long_time_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
-    """The invariants' errors against the step number, one panel per n (None if not run)."""
+def _long_time_figure(plt: Any, ms: Mapping[str, Any], style: Style = plain_style) -> Any:
+    """The invariants' errors against the step number, one panel per n (None if not run).  Its
+    lines are invariants of one method (named in the title), so ``style`` is not used."""
     lts = ms.get("long-time", [])
     if not lts:
         return None
@@ -73,28 +92,25 @@ def _long_time_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
     return fig
 
 
-def _throughput_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
-    """Body-steps per second against the batch size (None if not run)."""
+def _throughput_figure(plt: Any, ms: Mapping[str, Any], style: Style = plain_style) -> Any:
+    """Body-steps per second against the batch size (None if not run).  One method (the
+    Moser-Veselov step), three ways of calling it: one colour, three markers and line styles."""
     thr = ms.get("throughput")
     if not thr:
         return None
     fig, ax = plt.subplots(figsize=(6.5, 5))
     B = [r["batch"] for r in thr["rows"]]
-    ax.loglog(
-        B,
-        [r["step_body_steps_per_s"] for r in thr["rows"]],
-        "o-",
-        label="MVStepper.step (one call)",
-    )
-    for be, mk in (("numpy", "^-"), ("numba", "v-")):
+    steps = [r["step_body_steps_per_s"] for r in thr["rows"]]
+    ax.loglog(B, steps, label="MVStepper.step (one call)", **style("MVStepper.step", marker="o"))
+    for be, mk, ls in (("numpy", "^", "--"), ("numba", "v", "-.")):
         key = f"flow_{be}_body_steps_per_s"
         if all(key in r for r in thr["rows"]):
-            lab = f"mv_flow, {'NumPy path' if be == 'numpy' else 'compiled (numba)'}"
-            ax.loglog(B, [r[key] for r in thr["rows"]], mk, label=lab)
-    ax.loglog(
-        B, [r["matmul_products_per_s"] for r in thr["rows"]], "s-", label="batched 3x3 matmul"
-    )
-    ax.axhline(5e6, color="gray", ls=":", label="goal 5e6")
+            lab = f"mv_flow ({'NumPy path' if be == 'numpy' else 'compiled, numba'})"
+            ax.loglog(B, [r[key] for r in thr["rows"]], label=lab,
+                      **style("mv_flow", marker=mk, ls=ls))  # fmt: skip
+    products = [r["matmul_products_per_s"] for r in thr["rows"]]
+    ax.loglog(B, products, label="matmul (batched 3x3)", **style("matmul", marker="s", ls=":"))
+    ax.axhline(5e6, label="goal (5e6)", **style("goal"))
     ax.set_xlabel("batch size (bodies)")
     ax.set_ylabel("body-steps (or products) per CPU second")
     ax.set_title("throughput, n = 3")
@@ -102,19 +118,21 @@ def _throughput_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
     return fig
 
 
-def _cost_vs_n_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
+def _cost_vs_n_figure(plt: Any, ms: Mapping[str, Any], style: Style = plain_style) -> Any:
     """The cost of a step against n in matrix products (None if not run)."""
     cost = ms.get("cost-vs-n")
     if not cost:
         return None
     fig, ax = plt.subplots(figsize=(6.5, 5))
     ns = [r["n"] for r in cost["rows"]]
-    ax.loglog(
-        ns, [r["matmul_equivalents"] for r in cost["rows"]], "o-", label="one MV step (NumPy)"
-    )
+    units = [r["matmul_equivalents"] for r in cost["rows"]]
+    ax.loglog(ns, units, label="mv_flow (NumPy path)", **style("mv_flow", marker="^", ls="--"))
     comp = cost.get("compiled_n3")
     if comp:
-        ax.loglog([3], [comp["matmul_equivalents"]], "v", ms=9, label="n = 3, compiled (numba)")
+        ax.loglog([3], [comp["matmul_equivalents"]], ms=9, label="mv_flow (compiled, numba; n = 3)",
+                  **style("mv_flow", marker="v", ls="none"))  # fmt: skip
+    ax.set_xticks(ns, [str(n) for n in ns])  # the sizes measured, in plain numbers
+    ax.xaxis.set_minor_locator(plt.NullLocator())
     ax.set_xlabel("n")
     ax.set_ylabel("CPU time in units of one n x n matmul")
     ax.set_title("per-step cost against n (single body)")
@@ -123,7 +141,7 @@ def _cost_vs_n_figure(plt: Any, ms: Mapping[str, Any]) -> Any:
 
 
 #: The figures by name, in the order they are drawn.
-_FIGURES: dict[str, Callable[[Any, Mapping[str, Any]], Any]] = {
+_FIGURES: dict[str, Callable[..., Any]] = {
     "work_precision": _work_precision_figure,
     "long_time": _long_time_figure,
     "throughput": _throughput_figure,
@@ -131,9 +149,12 @@ _FIGURES: dict[str, Callable[[Any, Mapping[str, Any]], Any]] = {
 }
 
 
-def _figures(ms: Mapping[str, Any], names: set[str] | None = None) -> dict[str, Any]:
+def _figures(
+    ms: Mapping[str, Any], names: set[str] | None = None, style: Style | None = None
+) -> dict[str, Any]:
     """The figures of the sections in the measurements ``ms`` that are among ``names`` (all when
-    ``names`` is empty), by name."""
+    ``names`` is empty), by name, drawn with ``style`` (:data:`Style`; default: the command
+    line's, :func:`plain_style`, and twelve colours for the work-precision methods)."""
     import matplotlib.pyplot as plt
 
     unknown = (names or set()) - set(_FIGURES)
@@ -146,7 +167,7 @@ def _figures(ms: Mapping[str, Any], names: set[str] | None = None) -> dict[str, 
     for stem, draw in _FIGURES.items():
         if names and stem not in names:
             continue
-        fig = draw(plt, ms)
+        fig = draw(plt, ms) if style is None else draw(plt, ms, style)
         if fig is not None:
             fig.tight_layout()
             figs[stem] = fig

@@ -14,7 +14,7 @@ import numpy as np
 
 from symrb.errors import InputError
 
-from .plots import _figures, _plot
+from .plots import Style, _figures, _plot
 
 
 @dataclass
@@ -94,11 +94,13 @@ class BenchResult:
         """PNG and SVG diagrams of the sections run (matplotlib, Agg backend); returns the files."""
         return _plot(self.measurements, Path(directory))
 
-    def figures(self, *names: str) -> dict[str, Any]:
+    def figures(self, *names: str, style: Style | None = None) -> dict[str, Any]:
         """The diagrams of the sections run as matplotlib figures, by name (``work_precision``,
         ``long_time``, ``throughput``, ``cost_vs_n``; all when no name is given), e.g. to show
-        them in a notebook."""
-        return _figures(self.measurements, set(names))
+        them in a notebook.  ``style(name, **variant)`` gives the keyword arguments of each
+        series by its name (a method's or ``matmul``, ``goal``); the book passes its style
+        table, so that a method has the same colour in all its figures."""
+        return _figures(self.measurements, set(names), style)
 
 
 def _jsonable(x: Any) -> Any:

@@ -14,7 +14,7 @@ from typing import Any
 
 from symrb.errors import InputError
 
-from .style import method_style
+from .style import method_style, series_style
 
 #: The width of the book's content column at 1280 px, in CSS pixels.
 COLUMN_PX = 680
@@ -148,3 +148,10 @@ def work_precision(result: Any, panels: Sequence[tuple[tuple[int, float], Sequen
     rows = -(-len(handles) // 4)
     fig.tight_layout(rect=(0, (0.1 + 0.025 * size * rows) / fig.get_figheight(), 1, 1))
     return fit_column(fig), clipped
+
+
+def bench_figure(result: Any, name: str) -> Any:
+    """The figure ``name`` of a recorded benchmark (``throughput``, ``cost_vs_n``, ``long_time``;
+    :meth:`BenchResult.figures`) in the colours of :mod:`symrb_book.style`, fitted to the
+    content column."""
+    return fit_column(result.figures(name, style=series_style)[name])

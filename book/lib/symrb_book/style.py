@@ -2,9 +2,13 @@
 
 A method keeps its look from figure to figure: DOP853 is black with squares on the accuracy page
 and wherever else it appears.  SciPy's solvers are dashed, symrb's methods solid and the paper's
-own algorithms dash-dotted.  :func:`method_style` accepts the names under which a method appears
-in the book: the benchmark's names (``MV-pre10``), the keys of :data:`symrb.rigid_body.METHODS`
-with an order (``("mv", 10)``), and function names (``mv_flow``, ``mv_algorithm2``).
+own algorithms dash-dotted; the training methods of the learning pages have colours of their own
+too.  :func:`method_style` accepts the names under which a method appears in the book: the
+benchmark's names (``MV-pre10``), the keys of :data:`symrb.rigid_body.METHODS` with an order
+(``("mv", 10)``), and function names (``mv_flow``, ``mv_algorithm2``).  Series that are not
+methods (a matrix product as the unit of cost, a goal) have their own entries in
+:data:`SERIES_STYLE`, in colours no method has; :func:`series_style` looks a series up in both
+tables, which is what the benchmark's figures are given (``BenchResult.figures(style=...)``).
 """
 
 from __future__ import annotations
@@ -45,6 +49,18 @@ METHOD_STYLE: dict[str, dict[str, Any]] = {
     "MV-Algorithm 1": {"color": "#aec7e8", "marker": "o", **_PAPER},
     "MV-Algorithm 2": {"color": "#6b6ecf", "marker": "s", **_PAPER},
     "symmetric algorithm": {"color": "#843c39", "marker": "D", **_PAPER},
+    # training (symrb.learning): one look for a method on every network it trains
+    "gradient descent": {"color": "#637939", "marker": "o", **_SYMRB},
+    "extended MSA": {"color": "#a55194", "marker": "s", **_SYMRB},
+    "shooting": {"color": "#6baed6", "marker": "D", **_SYMRB},
+}
+
+#: Series of the book's figures that are not methods, in colours no method has.
+SERIES_STYLE: dict[str, dict[str, Any]] = {
+    # a batched n x n matrix product: the unit the cost of a step is measured in
+    "matmul": {"color": "#5254a3", "marker": "s", "ls": ":"},
+    # a goal drawn as a line
+    "goal": {"color": "#999999", "marker": "", "ls": ":"},
 }
 
 #: Other names of the same methods: function names and the keys of symrb.rigid_body.METHODS
@@ -63,6 +79,12 @@ ALIASES: dict[str, str] = {
     "mv_algorithm2": "MV-Algorithm 2",
     "symmetric_flow": "symmetric algorithm",
     "symmetric_step": "symmetric algorithm",
+    "MVStepper.step": "MV-fast",  # one step of mv_flow (order 2), as the benchmark times it
+    "train": "gradient descent",
+    "train_so_gradient": "gradient descent",
+    "train_msa": "extended MSA",
+    "train_so_msa": "extended MSA",
+    "train_so_shooting": "shooting",
 }
 
 #: The families whose order picks the style: (name, order) -> canonical name.
@@ -120,3 +142,34 @@ def method_style(name: str, order: int | None = None, **overrides: Any) -> dict[
     '*'
     """
     return {**METHOD_STYLE[canonical(name, order)], **overrides}
+
+
+def series_style(name: str, order: int | None = None, **overrides: Any) -> dict[str, Any]:
+    """The matplotlib keyword arguments of a series of a figure: a method's
+    (:func:`method_style`) or another series' (:data:`SERIES_STYLE`), with ``overrides`` on top
+    (a marker or line style telling two runs of one method apart; never a colour).
+
+    Raises
+    ------
+    InputError
+        For a series in neither table, or an override of the colour.
+    """
+    if "color" in overrides or "c" in overrides:
+        raise InputError(f"series_style: {name!r} keeps the colour of the style table")
+    if name in SERIES_STYLE:
+        return {**SERIES_STYLE[name], **overrides}
+    return method_style(name, order, **overrides)
+
+
+def series_of(label: str) -> str:
+    """The name in the style tables of the series a figure labels ``label``: the label's head
+    before ``" ("`` or ``", "`` (``"mv_flow (NumPy path)"`` is ``mv_flow``'s, that is
+    ``MV-fast``), looked up in :data:`SERIES_STYLE` and then as a method (:func:`canonical`).
+
+    Raises
+    ------
+    InputError
+        For a label whose head is in neither table.
+    """
+    head = label.split(" (")[0].split(", ")[0].strip()
+    return head if head in SERIES_STYLE else canonical(head)
