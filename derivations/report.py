@@ -250,7 +250,9 @@ def _fmt_residual(e: Mapping[str, Any]) -> str:
 
 
 def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> str:
-    """A Markdown table of evidence results (objects or the dicts of ``verify --json``)."""
+    """A Markdown table of evidence results (objects or the dicts of ``verify --json``); long
+    formulas in the descriptions are cut where a line may break (:func:`breakable`), so that the
+    table fits the column."""
     rows = [
         "| # | form | level | evidence | residual | tol | time |",
         "|---|---|---|---|---|---|---|",
@@ -258,7 +260,8 @@ def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> st
     for k, ev in enumerate(evidence, 1):
         e = ev.to_dict() if isinstance(ev, EvidenceResult) else ev
         rows.append(
-            f"| {k} | {e['form']} | {e['level']} | {plain(e['description'])} | {_fmt_residual(e)} "
+            f"| {k} | {e['form']} | {e['level']} | {breakable(plain(e['description']))} "
+            f"| {_fmt_residual(e)} "
             f"| {e['tol']:.0e} | {e['seconds']:.3f} s |"
         )
     return "\n".join(rows)
