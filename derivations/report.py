@@ -250,9 +250,10 @@ def breakable(text: str, limit: int = 24) -> str:
 
 def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> str:
     """A Markdown table of evidence results (objects or the dicts of ``verify --json``): number,
-    form and level, what is checked and the residual against the tolerance (typeset); four
-    columns, so that it fits the content column inside a dropdown (the time a claim's checks
-    take is on the claims page, by level on the evidence page)."""
+    form and level, what is checked and the residual against the tolerance (typeset).  Four
+    columns, and long formulas in the descriptions cut where a line may break
+    (:func:`breakable`), so that it fits the content column inside a dropdown (the time a
+    claim's checks take is on the claims page, by level on the evidence page)."""
     rows = [
         "| # | form, level | what is checked | residual vs tolerance |",
         "|---|---|---|---|",
@@ -260,7 +261,8 @@ def evidence_table(evidence: Iterable[EvidenceResult | Mapping[str, Any]]) -> st
     for k, ev in enumerate(evidence, 1):
         e = ev.to_dict() if isinstance(ev, EvidenceResult) else ev
         level = SHORT_LEVELS.get(e["level"], e["level"])
-        rows.append(f"| {k} | {e['form']}, {level} | {plain(e['description'])} | {_against(e)} |")
+        what = breakable(plain(e["description"]))
+        rows.append(f"| {k} | {e['form']}, {level} | {what} | {_against(e)} |")
     return "\n".join(rows)
 
 

@@ -1,6 +1,8 @@
 """Open every page of the built book in headless Chromium and check what a reader would see.
 
-For each HTML page of the built book (served from 127.0.0.1 by a local HTTP server):
+Each HTML page of the built book (served from 127.0.0.1 by a local HTTP server) is opened once,
+in a window of 1280 x 800 px, then looked at again with the window narrowed to 400 px (a phone).
+On every page:
 
 * no request leaves 127.0.0.1 (requests elsewhere are recorded and aborted), and no local
   resource answers with an HTTP error; no uncaught JavaScript error;
@@ -14,22 +16,33 @@ For each HTML page of the built book (served from 127.0.0.1 by a local HTTP serv
 * the visible text (code, signatures and typeset math left out) holds no literal HTML tag
   (``<br>``), no Markdown syntax (``**``, ``__``, ``*emphasis*``, backticks, backslash escapes)
   and no Markdown table that failed to render (lines of ``| a | b |`` or ``|---|``), and no
-  rendered table has a row of raw pipes or a separator row shown as data.
+  rendered table has a row of raw pipes or a separator row shown as data;
+* no code or output line runs past the column edge;
+* evidence tables (a table with a ``residual`` column) hold no ASCII pseudo-TeX outside their
+  typeset math (``p_{k+1}``, ``Q^T``, ``d^2H/dy dx``: the patterns of
+  ``tests/test_registry.py``);
+* the page is at most 10 screens long: ``document.documentElement.scrollHeight / 800 <= 10`` at
+  1280 px (but ``genindex-all.html``, Sphinx's whole index on one page beside the index split
+  by letter);
+* at 1280 px and at 400 px: the page does not scroll sideways; no table, display equation
+  (``mjx-container[display]``), figure or image is wider than the content column (the
+  ``article``), nor wider than the box it sits in (a table in a wrapper that scrolls sideways is
+  too wide: tables must fit; a code block that scrolls in its own box is fine); no text is cut
+  off by a box that hides its overflow, and no text lies outside the window.
 
 The errata page must have a summary table listing every erratum, each linking to the erratum's
 own page (``errata/d07.html``: its heading is "Erratum D7", with an evidence table); the
 errata are the claims whose outcome in
 ``verify.json`` beside the built book (else the outcome recorded in the registry) is *holds after
-correction* or *fails*.  The claims and errata pages are also looked at as a reader would, at
-desktop width (1280 px) and on a phone (400 px): the page does not scroll sideways, no text is cut
-off by a box that hides overflow, no text lies outside the window, and every table fits its
-column without horizontal scrolling.  Their screenshots are saved (in ``SYMRB_SCREENSHOT_DIR``
-when set, else in pytest's temporary directory).
+correction* or *fails*.  On the claims page and on the landing page (the verdict table), every
+claim ID in a table links to the label ``claim-d7`` (``derivations.report.anchor_of``) that the
+claim's check places on its page, and that page has an element with that ID.
 
 Playwright drives the system Chromium at ``/usr/bin/chromium`` (``playwright install`` is never
 used). Without a built book or without Chromium the test is skipped, except in CI (``CI=true``),
-where it fails.  Set ``SYMRB_SCREENSHOT_DIR`` to save a full-page screenshot of every page, and
-``SYMRB_BOOK_HTML`` to check a book built elsewhere (default ``book/_build/html``).
+where it fails.  Set ``SYMRB_SCREENSHOT_DIR`` to save a full-page screenshot of every page at
+both widths (none is taken otherwise), and ``SYMRB_BOOK_HTML`` to check a book built elsewhere
+(default ``book/_build/html``).
 """
 
 from __future__ import annotations
@@ -40,10 +53,10 @@ import json
 import os
 import re
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
-from urllib.parse import urlsplit
+from urllib.parse import urljoin, urlsplit
 
 import pytest
 
@@ -63,9 +76,16 @@ LAUNCH_ARGS = [
 ]
 LOCAL_HOSTS = {"127.0.0.1"}
 ERRATA_OUTCOMES = ("holds after correction", "fails")
-# Pages looked at as a reader would, at these window widths (px).
-VISUAL_PAGES = ("intro.html", "claims.html", "errata.html", "errata/d07.html")
+# Every page is looked at in windows of these widths (px): a desktop, then a phone.
 WIDTHS = (1280, 400)
+# A screen is 800 px high (at 1280 px wide); no page is longer than MAX_SCREENS of them, but
+# Sphinx's whole index on one page (the index is also split into a short page per letter).
+SCREEN = 800
+MAX_SCREENS = 10
+LONG_PAGES = {"genindex-all.html"}
+# Pages whose tables list claims by ID, each linking to the claim's check.
+CLAIM_TABLE_PAGES = ("claims.html", "intro.html")
+CLAIM_ID = re.compile(r"[DSM]\d+")
 
 # TeX that MathJax would have replaced; seen in visible text, it means math did not render.
 RAW_TEX = re.compile(
@@ -106,13 +126,31 @@ VISIBLE_TEXT_JS = """() => {
     return body.textContent;
 }"""
 
-# Rows of rendered tables (text of each cell, math and code left out).
-TABLE_ROWS_JS = """() => Array.from(document.querySelectorAll('article table tr')).map(tr =>
-    Array.from(tr.children).map(cell => {
+# The rendered tables: for each, its rows (header rows marked), each cell's text (math, code and
+# the column labels of stacked tables left out) and the target of its first link.
+TABLES_JS = """() => Array.from(document.querySelectorAll('article table')).map(t => {
+    const text = cell => {
         const c = cell.cloneNode(true);
         c.querySelectorAll('mjx-container, code, pre, .symrb-cell-label').forEach(e => e.remove());
         return c.textContent.replace(/\\s+/g, ' ').trim();
-    }))"""
+    };
+    return Array.from(t.querySelectorAll('tr')).filter(tr => tr.closest('table') === t).map(tr => ({
+        head: !!tr.closest('thead') || Array.from(tr.children).every(c => c.tagName === 'TH'),
+        cells: Array.from(tr.children).map(c => {
+            const a = c.querySelector('a[href]');
+            return {text: text(c), href: a ? a.getAttribute('href') : null};
+        }),
+    }));
+})"""
+
+# What the other tests need to know of a page: its title, how many tables it has, and the IDs
+# of the elements links can point to.
+FACTS_JS = """() => ({
+    h1: (document.querySelector('article h1') || {textContent: ''}).textContent
+        .replace(/\\s+/g, ' ').trim(),
+    table_count: document.querySelectorAll('article table').length,
+    ids: Array.from(document.querySelectorAll('article [id]')).map(e => e.id),
+})"""
 
 # Images: where from, alt text, loaded pixels.
 # Code and output blocks whose lines run past the column edge (the reader sees them cut off, or
@@ -130,21 +168,30 @@ IMAGES_JS = """() => Array.from(document.images).map(i => ({
 }))"""
 
 # What a reader at this window width cannot see: text that lies outside the window, or outside
-# an ancestor box that hides its overflow (so no scrolling reveals it); tables wider than the
-# column they sit in (so they scroll sideways); and how far the page itself scrolls sideways.
+# an ancestor box that hides its overflow (so no scrolling reveals it); tables, display
+# equations, figures and images wider than the content column (the article without its padding)
+# or than the box they sit in (so they are cut, or scroll sideways); how far the page itself
+# scrolls sideways, and how long it is.
 LAYOUT_JS = """() => {
     const W = document.documentElement.clientWidth;
-    const article = document.querySelector('article') || document.body;
+    // the content column (the search page has no article: its main part)
+    const article = document.querySelector('article') || document.querySelector('main')
+        || document.body;
     const clipped = [], outside = [], wide = [];
     const describe = (el, text) =>
         `${el.tagName.toLowerCase()}${el.className ? '.' + String(el.className).split(' ')[0] : ''}`
         + `: "${text.trim().slice(0, 60)}"`;
+    const hiders = new Map();  // element -> [its nearest ancestor that does not show overflow, style]
     const hider = start => {
-        for (let a = start; a && a !== document.documentElement; a = a.parentElement) {
-            const s = getComputedStyle(a);
-            if (s.overflowX !== 'visible' || s.overflowY !== 'visible') return [a, s];
+        if (!hiders.has(start)) {
+            let found = [null, null];
+            for (let a = start; a && a !== document.documentElement; a = a.parentElement) {
+                const s = getComputedStyle(a);
+                if (s.overflowX !== 'visible' || s.overflowY !== 'visible') { found = [a, s]; break; }
+            }
+            hiders.set(start, found);
         }
-        return [null, null];
+        return hiders.get(start);
     };
     const units = [];
     const walker = document.createTreeWalker(article, NodeFilter.SHOW_TEXT);
@@ -156,7 +203,8 @@ LAYOUT_JS = """() => {
         units.push([el, el, n.textContent, Array.from(r.getClientRects())]);
     }
     const tex = m => {  // the TeX of a typeset formula, to say which one is cut off
-        const item = Array.from(MathJax.startup.document.math).find(i => i.typesetRoot === m);
+        const item = window.MathJax && MathJax.startup && MathJax.startup.document
+            ? Array.from(MathJax.startup.document.math).find(i => i.typesetRoot === m) : null;
         return item ? '$' + item.math + '$' : 'a formula';
     };
     article.querySelectorAll('mjx-container').forEach(m => units.push(
@@ -188,17 +236,37 @@ LAYOUT_JS = """() => {
             }
         }
     }
-    article.querySelectorAll('table').forEach(t => {
-        const holder = t.parentElement;
-        if (t.getBoundingClientRect().width > holder.clientWidth + 1 || t.scrollWidth > t.clientWidth + 1) {
-            const head = t.querySelector('th, td');
-            wide.push(`table starting "${head ? head.textContent.trim().slice(0, 40) : ''}": `
-                + `${Math.round(t.getBoundingClientRect().width)} px in ${holder.clientWidth} px`);
-        }
-    });
+    // the content column: the article's box without its padding
+    const a = article.getBoundingClientRect(), as = getComputedStyle(article);
+    const left = a.left + parseFloat(as.paddingLeft), right = a.right - parseFloat(as.paddingRight);
+    const kinds = [
+        ['table', t => { const c = t.querySelector('th, td'); return c ? c.textContent : ''; }],
+        ['mjx-container[display]', tex],
+        ['figure', f => { const c = f.querySelector('figcaption, img'); return c ? (c.alt || c.textContent) : ''; }],
+        ['img', i => i.alt || i.getAttribute('src') || ''],
+    ];
+    for (const [selector, name] of kinds) {
+        article.querySelectorAll(selector).forEach(el => {
+            const rects = [el.getBoundingClientRect()];
+            const inner = el.querySelector(':scope > mjx-math');  // a formula wider than its line
+            if (inner) rects.push(inner.getBoundingClientRect());
+            if (rects[0].width === 0 || rects[0].height === 0) return;  // not shown
+            const l = Math.min(...rects.map(r => r.left)), r = Math.max(...rects.map(r => r.right));
+            const holder = el.parentElement;
+            const holderWidth = holder ? holder.clientWidth : Infinity;
+            const width = Math.max(r - l, el.scrollWidth);
+            if (l < left - 1 || r > right + 1 || el.scrollWidth > el.clientWidth + 1
+                    || (selector === 'table' && width > holderWidth + 1)) {
+                wide.push(`${selector.replace(/\\[.*/, '')} "${String(name(el)).trim().slice(0, 50)}": `
+                    + `${Math.round(width)} px in a ${Math.round(right - left)} px column`
+                    + (selector === 'table' ? ` (its box ${holderWidth} px)` : ''));
+            }
+        });
+    }
     return {
         window: W,
         page: document.documentElement.scrollWidth,
+        height: document.documentElement.scrollHeight,
         clipped: clipped.slice(0, 10),
         outside: outside.slice(0, 10),
         wide: wide,
@@ -239,11 +307,6 @@ def _errata_ids() -> list[str]:
     from derivations.registry import all_claims
 
     return [c.id for c in all_claims() if c.expected in ERRATA_OUTCOMES]
-
-
-def _screenshot_dir(tmp_path: Path) -> Path:
-    shots = os.environ.get("SYMRB_SCREENSHOT_DIR")
-    return Path(shots) if shots else tmp_path
 
 
 class _QuietHandler(http.server.SimpleHTTPRequestHandler):
@@ -287,7 +350,9 @@ def _open(browser: Any, server: str, page: str, width: int = 1280) -> tuple[Any,
     """Open ``page`` in a new context of the given window width, wait until its images and math
     are done, and return ``(context, tab, record)`` with the requests and errors seen."""
     record: dict[str, list[str]] = {"requests": [], "outside": [], "http": [], "js": []}
-    context = browser.new_context(viewport={"width": width, "height": 900}, service_workers="block")
+    context = browser.new_context(
+        viewport={"width": width, "height": SCREEN}, service_workers="block"
+    )
 
     def route(r: Any) -> None:
         url = r.request.url
@@ -392,6 +457,128 @@ def _image_defects(images: list[dict]) -> list[str]:
     return bad
 
 
+def _body_rows(tables: list[list[dict]]) -> Iterator[list[dict]]:
+    """The cells of every row that is not a header row, of every table."""
+    for table in tables:
+        for row in table:
+            if not row["head"]:
+                yield row["cells"]
+
+
+def _evidence_defects(tables: list[list[dict]]) -> list[str]:
+    """ASCII pseudo-TeX (``p_{k+1}``, ``Q^T``) outside typeset math in the cells of the evidence
+    tables: the tables with a column whose header starts with "residual"."""
+    from test_registry import _pseudo_tex
+
+    found = []
+    for table in tables:
+        heads = [c["text"].lower() for row in table if row["head"] for c in row["cells"]]
+        if not any(h.startswith("residual") for h in heads):
+            continue
+        for row in table:
+            if not row["head"]:
+                found += [f"{hit!r} in {c['text'][:60]!r}" for c in row["cells"]
+                          for hit in _pseudo_tex(c["text"])]  # fmt: skip
+    return found
+
+
+def _page_problems(seen: dict[str, Any]) -> list[str]:
+    """What :func:`test_page` reports of the findings of :func:`_look`."""
+    record = seen["record"]
+    problems = []
+    if not record["requests"]:
+        problems.append("no request recorded")
+    if record["outside"]:
+        problems.append(f"requests left 127.0.0.1: {record['outside']}")
+    if record["http"]:
+        problems.append(f"HTTP errors: {record['http']}")
+    if record["js"]:
+        problems.append(f"JavaScript errors: {record['js']}")
+    if record["mathjax"] and seen["mjx_count"] == 0:
+        problems.append("MathJax is loaded but typeset nothing")
+    if seen["math_errors"]:
+        problems.append(f"MathJax could not typeset: {seen['math_errors'][:5]}")
+    problems += [f"image {d}" for d in _image_defects(seen["images"])]
+    problems += _text_defects(seen["visible"])
+    rows = [[c["text"] for c in row["cells"]] for table in seen["tables"] for row in table]
+    problems += [f"table row of raw pipes: {r}" for r in _table_defects(rows)]
+    problems += [f"code or output line cut at the column edge: {c}" for c in seen["cut"][:5]]
+    ascii_math = _evidence_defects(seen["tables"])
+    if ascii_math:
+        problems.append(f"ASCII math in evidence tables ({len(ascii_math)}): {ascii_math[:5]}")
+    return problems
+
+
+def _layout_problems(layout: dict[str, Any]) -> list[str]:
+    """What a reader cannot see whole, from the findings of :data:`LAYOUT_JS`."""
+    problems = []
+    if layout["page"] > layout["window"] + 1:
+        problems.append(
+            f"the page scrolls sideways: {layout['page']} px in a {layout['window']} px window"
+        )
+    problems += [f"text cut off by its box: {c}" for c in layout["clipped"]]
+    problems += [f"text outside the window: {c}" for c in layout["outside"]]
+    problems += [f"wider than the column: {w}" for w in layout["wide"]]
+    return problems
+
+
+def _look(browser: Any, server: str, page: str) -> dict[str, Any]:
+    """Open ``page`` at the first of :data:`WIDTHS`, read what the tests ask of it, then narrow
+    the same tab to each other width and measure the layout again (screenshots only when
+    ``SYMRB_SCREENSHOT_DIR`` is set).  Returns the findings, not the page."""
+    context, tab, record = _open(browser, server, page, width=WIDTHS[0])
+    try:
+        seen = {
+            "record": record,
+            "images": tab.evaluate(IMAGES_JS),
+            "visible": tab.evaluate(VISIBLE_TEXT_JS),
+            "tables": tab.evaluate(TABLES_JS),
+            "cut": tab.evaluate(CUT_LINES_JS),
+            "mjx_count": tab.locator("mjx-container").count(),
+            "math_errors": tab.evaluate(
+                "() => Array.from(document.querySelectorAll('mjx-merror'))"
+                ".map(e => e.getAttribute('data-mjx-error') || e.textContent)"
+            ),
+            **tab.evaluate(FACTS_JS),
+        }
+        shots = os.environ.get("SYMRB_SCREENSHOT_DIR")
+        layouts = {}
+        for width in WIDTHS:
+            if width != WIDTHS[0]:
+                tab.set_viewport_size({"width": width, "height": SCREEN})
+            layouts[width] = tab.evaluate(LAYOUT_JS)
+            if shots:
+                name = page.replace("/", "__").removesuffix(".html") + f"_{width}px.png"
+                (Path(shots) / name).parent.mkdir(parents=True, exist_ok=True)
+                tab.screenshot(path=str(Path(shots) / name), full_page=True)
+    finally:
+        context.close()
+    seen["problems"] = _page_problems(seen)
+    del seen["visible"]  # the largest finding, needed only for the problems
+    seen["height"] = layouts[WIDTHS[0]]["height"]
+    seen["layout"] = {width: _layout_problems(layout) for width, layout in layouts.items()}
+    return seen
+
+
+@pytest.fixture(scope="module")
+def look(server: str, browser: Any) -> Callable[[str], dict[str, Any]]:
+    """``look(page)``: the findings of :func:`_look`, each page opened once for all the tests."""
+    seen: dict[str, dict[str, Any] | Exception] = {}
+
+    def get(page: str) -> dict[str, Any]:
+        if page not in seen:
+            try:
+                seen[page] = _look(browser, server, page)
+            except Exception as exc:  # a page that did not open is not opened again
+                seen[page] = exc
+        found = seen[page]
+        if isinstance(found, Exception):
+            raise found
+        return found
+
+    return get
+
+
 @pytest.mark.parametrize(
     ("text", "defect"),
     [
@@ -437,6 +624,55 @@ def test_image_checks_see_hashed_names_and_missing_pixels() -> None:
     assert len(found) == 3 and not any(f.startswith("c.png") for f in found), found
 
 
+def test_evidence_check_sees_ascii_math_only_in_evidence_tables() -> None:
+    def table(head: list[str], *rows: list[str]) -> list[dict]:
+        cells = [[{"text": t, "href": None} for t in r] for r in (head, *rows)]
+        return [{"head": k == 0, "cells": c} for k, c in enumerate(cells)]
+
+    head = ["check", "what is checked", "residual vs tolerance", "result"]
+    found = _evidence_defects(
+        [table(head, ["claim, float64", "p_{k+1} against Q^T P", "1e-16 ≤ 1e-12", "passes"])]
+    )
+    assert len(found) == 2, found
+    assert not _evidence_defects(
+        [
+            table(head, ["claim, float64", "the costate against SymPy", "0 (exact)", "passes"]),
+            table(["key", "meaning"], ["p_{k+1}", "not an evidence table"]),
+        ]
+    )
+
+
+# A page with one of each thing the layout check must see, and things it must pass: a table in
+# a wrapper that scrolls, a formula and a picture wider than the column, text cut off by a box
+# that hides its overflow; a code block that scrolls in its own box, a table that fits.
+LAYOUT_SAMPLE = """<html><body style="margin: 0"><article style="padding: 0 10px">
+<div style="overflow-x: auto"><table><tr><td>wide table</td><td><div style="width: 600px">.</div>
+</td></tr></table></div>
+<mjx-container display="true" style="display: block"><mjx-math
+  style="display: inline-block; width: 700px">x</mjx-math></mjx-container>
+<img alt="wide picture" width="700" height="10"
+  src="data:image/gif;base64,R0lGODlhAQABAIAAAAAAAP///yH5BAEAAAAALAAAAAABAAEAAAIBRAA7">
+<div style="overflow: hidden; width: 100px; white-space: nowrap">cut words run on and on and on</div>
+<pre style="overflow: auto">fine code that is much longer than the column of a phone, and scrolls</pre>
+<table><tr><td>fine table</td></tr></table>
+</article></body></html>"""
+
+
+def test_layout_check_sees_what_does_not_fit(browser: Any) -> None:
+    context = browser.new_context(viewport={"width": 400, "height": SCREEN})
+    try:
+        tab = context.new_page()
+        tab.set_content(LAYOUT_SAMPLE)
+        problems = _layout_problems(tab.evaluate(LAYOUT_JS))
+    finally:
+        context.close()
+    found = "\n".join(problems)
+    for seen in ('table "wide table"', 'mjx-container "a formula"', 'img "wide picture"',
+                 "cut off by its box: div", "scrolls sideways"):  # fmt: skip
+        assert seen in found, found
+    assert "fine" not in found, found
+
+
 def test_book_has_pages() -> None:
     if not PAGES:
         _skip_or_fail("the book is not built: run bash tools/book.sh")
@@ -456,100 +692,70 @@ def test_book_has_pages() -> None:
 
 
 @pytest.mark.parametrize("page", PAGES or ["(book not built)"])
-def test_page(page: str, server: str, browser: Any) -> None:
-    context, tab, record = _open(browser, server, page)
-    try:
-        images = tab.evaluate(IMAGES_JS)
-        visible = tab.evaluate(VISIBLE_TEXT_JS)
-        rows = tab.evaluate(TABLE_ROWS_JS)
-        cut = tab.evaluate(CUT_LINES_JS)
-        mjx_count = tab.locator("mjx-container").count()
-        math_errors = tab.evaluate(
-            "() => Array.from(document.querySelectorAll('mjx-merror'))"
-            ".map(e => e.getAttribute('data-mjx-error') || e.textContent)"
-        )
-        shots = os.environ.get("SYMRB_SCREENSHOT_DIR")
-        if shots:
-            target = Path(shots) / (page.replace("/", "__").removesuffix(".html") + ".png")
-            target.parent.mkdir(parents=True, exist_ok=True)
-            tab.screenshot(path=str(target), full_page=True)
-    finally:
-        context.close()
-
-    problems = []
-    if not record["requests"]:
-        problems.append("no request recorded")
-    if record["outside"]:
-        problems.append(f"requests left 127.0.0.1: {record['outside']}")
-    if record["http"]:
-        problems.append(f"HTTP errors: {record['http']}")
-    if record["js"]:
-        problems.append(f"JavaScript errors: {record['js']}")
-    if record["mathjax"] and mjx_count == 0:
-        problems.append("MathJax is loaded but typeset nothing")
-    if math_errors:
-        problems.append(f"MathJax could not typeset: {math_errors[:5]}")
-    problems += [f"image {d}" for d in _image_defects(images)]
-    problems += _text_defects(visible)
-    problems += [f"table row of raw pipes: {r}" for r in _table_defects(rows)]
-    problems += [f"code or output line cut at the column edge: {c}" for c in cut[:5]]
+def test_page(page: str, look: Callable[[str], dict[str, Any]]) -> None:
+    problems = look(page)["problems"]
     assert not problems, f"{page}:\n  " + "\n  ".join(problems)
 
 
-def test_errata_page_has_a_summary_and_one_page_per_erratum(server: str, browser: Any) -> None:
-    errata = _errata_ids()
-    assert errata, "no erratum found in the results: nothing to check"
-    context, tab, _record = _open(browser, server, "errata.html")
-    try:
-        rows = tab.evaluate(
-            """() => Array.from(document.querySelectorAll('article table tbody tr')).map(r => {
-                const a = r.querySelector('td a');
-                return {id: a ? a.textContent.trim() : '', href: a ? a.getAttribute('href') : ''};
-            })"""
-        )
-    finally:
-        context.close()
-    listed = [r["id"] for r in rows]
-    assert listed == errata, f"the summary lists {listed}, the errata are {errata}"
-    for r in rows:
-        page, _, anchor = r["href"].partition("#")
-        assert page.startswith("errata/") and anchor, f"{r['id']} links to {r['href']}"
-        context, tab, _record = _open(browser, server, page)
-        try:
-            found = tab.evaluate(
-                """anchor => ({
-                    h1: (document.querySelector('article h1') || {textContent: ''})
-                        .textContent.replace(/\\s+/g, ' ').trim(),
-                    target: !!document.getElementById(anchor),
-                    tables: document.querySelectorAll('article table').length
-                })""",
-                anchor,
-            )
-        finally:
-            context.close()
-        assert found["h1"].startswith(f"Erratum {r['id']}"), f"{page}: heading {found['h1']!r}"
-        assert found["target"] and found["tables"], f"{page}: no #{anchor} or no evidence table"
+@pytest.mark.parametrize("page", [p for p in PAGES if p not in LONG_PAGES] or ["(not built)"])
+def test_page_height(page: str, look: Callable[[str], dict[str, Any]]) -> None:
+    height = look(page)["height"]
+    assert height / SCREEN <= MAX_SCREENS, (
+        f"{page} is {height / SCREEN:.1f} screens long ({height} px at {WIDTHS[0]} px wide; "
+        f"at most {MAX_SCREENS} screens of {SCREEN} px)"
+    )
 
 
 @pytest.mark.parametrize("width", WIDTHS)
-@pytest.mark.parametrize("page", VISUAL_PAGES)
-def test_reader_view(page: str, width: int, server: str, browser: Any, tmp_path: Path) -> None:
+@pytest.mark.parametrize("page", PAGES or ["(book not built)"])
+def test_layout(page: str, width: int, look: Callable[[str], dict[str, Any]]) -> None:
+    problems = look(page)["layout"][width]
+    assert not problems, f"{page} at {width} px:\n  " + "\n  ".join(problems)
+
+
+def test_errata_page_has_a_summary_and_one_page_per_erratum(
+    look: Callable[[str], dict[str, Any]],
+) -> None:
+    errata = _errata_ids()
+    assert errata, "no erratum found in the results: nothing to check"
+    summary = look("errata.html")["tables"]
+    rows = [next((c for c in cells if c["href"]), None) for cells in _body_rows(summary)]
+    listed = [r["text"] if r else "" for r in rows]
+    assert listed == errata, f"the summary lists {listed}, the errata are {errata}"
+    for r in rows:
+        assert r is not None
+        page, _, anchor = r["href"].partition("#")
+        assert page.startswith("errata/") and anchor, f"{r['text']} links to {r['href']}"
+        found = look(page)
+        assert found["h1"].startswith(f"Erratum {r['text']}"), f"{page}: heading {found['h1']!r}"
+        assert anchor in found["ids"] and found["table_count"], (
+            f"{page}: no #{anchor} or no evidence table"
+        )
+
+
+@pytest.mark.parametrize("page", CLAIM_TABLE_PAGES)
+def test_claim_ids_link_to_their_checks(page: str, look: Callable[[str], dict[str, Any]]) -> None:
+    """Every claim ID in the tables of ``page`` links to the label ``claim-d7`` that the claim's
+    check places on its page (``derivations.report.check``), and that page has it."""
+    from derivations.registry import all_claims
+    from derivations.report import anchor_of
+
     if page not in PAGES:
         _skip_or_fail(f"{page} is not built")
-    context, tab, _record = _open(browser, server, page, width=width)
-    try:
-        layout = tab.evaluate(LAYOUT_JS)
-        target = _screenshot_dir(tmp_path) / f"reader_{page.removesuffix('.html')}_{width}px.png"
-        target.parent.mkdir(parents=True, exist_ok=True)
-        tab.screenshot(path=str(target), full_page=True)
-    finally:
-        context.close()
+    ids = {c.id for c in all_claims()}
+    cells = [c for cells in _body_rows(look(page)["tables"]) for c in cells if c["text"] in ids]
+    assert cells, f"{page}: no claim ID in its tables"
     problems = []
-    if layout["page"] > layout["window"] + 1:
-        problems.append(
-            f"the page scrolls sideways: {layout['page']} px in a {layout['window']} px window"
-        )
-    problems += [f"text cut off by its box: {c}" for c in layout["clipped"]]
-    problems += [f"text outside the window: {c}" for c in layout["outside"]]
-    problems += [f"table wider than its column: {w}" for w in layout["wide"]]
-    assert not problems, f"{page} at {width} px (screenshot {target}):\n  " + "\n  ".join(problems)
+    for cell in cells:
+        cid, href = cell["text"], cell["href"]
+        url = urlsplit(urljoin(f"http://book/{page}", href or ""))
+        target = url.path.lstrip("/")
+        if not href:
+            problems.append(f"{cid} links nowhere")
+        elif url.fragment != anchor_of(cid):
+            problems.append(f"{cid} links to {href}, not to its check (#{anchor_of(cid)})")
+        elif target not in PAGES or url.fragment not in look(target)["ids"]:
+            problems.append(f"{cid} links to {href}: no such element on {target}")
+    assert not problems, f"{page}: {len(problems)} of {len(cells)} claim IDs:\n  " + "\n  ".join(
+        problems
+    )

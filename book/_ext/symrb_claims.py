@@ -13,9 +13,10 @@ or whose corrected-form checks do not all pass, stops the build with an error.
 A claim's note starts with two sentences the summary reads: what is wrong, then ``Corrected:``
 and the corrected form, in one line each (an erratum without them stops the build too).
 
-On the claims and errata pages every table also gets the class ``symrb-stack`` and, in each
-body cell, a label naming its column; ``book/_static/symrb.css`` shows the labels and stacks the
-cells of a row on narrow screens, so no table needs scrolling sideways on a phone.
+On every page of the book every table also gets the class ``symrb-stack`` and, in each body
+cell, a label naming its column; ``book/_static/symrb.css`` shows the labels and stacks the cells
+of a row on narrow screens, so no table needs scrolling sideways on a phone
+(``tests/test_book_browser.py`` checks that every table fits its column at 1280 and 400 px).
 """
 
 from __future__ import annotations
@@ -48,8 +49,6 @@ from derivations.report import (
 
 __all__ = ["ERRATA", "sentences", "summary_of", "errata_summary", "erratum_page", "errata_page"]
 
-#: Pages whose tables stack their cells on a narrow screen (and every page of ``errata/``).
-STACKED_PAGES = {"intro", "claims", "claims_evidence", "errata"}
 LEVELS = SHORT_LEVELS  # evidence levels as the tables show them, strongest first
 
 
@@ -247,29 +246,48 @@ class SymrbErrata(SphinxDirective):
         return holder.children
 
 
+#: A body cell with more characters than this gets the class ``symrb-long``: the CSS lets its
+#: long words (a dotted code name) break anywhere, so that they never widen the table, while
+#: the short cells (a form, a number) keep their words whole.
+LONG_CELL = 60
+
+
+def _label(head: nodes.Node) -> nodes.inline:
+    """The label ``header: `` of a cell in the column headed by ``head`` (a copy of the header's
+    text and math, so that a formula in a header is typeset in the label too)."""
+    label = nodes.inline("", "", classes=["symrb-cell-label"])
+    for child in head.children:
+        if isinstance(child, nodes.paragraph):
+            label.extend(c.deepcopy() for c in child.children)
+        else:
+            label += nodes.Text(child.astext())
+    label += nodes.Text(": ")
+    return label
+
+
 def label_table_cells(app: Any, doctree: nodes.document) -> None:
-    """On the pages of :data:`STACKED_PAGES` and of the errata, give every table the classes
-    ``symrb-stack`` and ``symrb-page-<page>`` and every body cell a label with its column's
-    header, which the CSS shows when the cells are stacked."""
-    docname = app.env.docname
-    if docname not in STACKED_PAGES and not docname.startswith("errata/"):
-        return
-    page = "symrb-page-" + docname.replace("/", "-")
+    """Give every table of the page the classes ``symrb-stack`` and ``symrb-page-<page>``, every
+    body cell a label with its column's header, which the CSS shows when the cells are stacked,
+    and every long cell the class ``symrb-long`` (tables written in Markdown, printed by a cell as
+    Markdown, or made by a directive such as autosummary; a table a cell prints as HTML, such as
+    a pandas table, is not seen here)."""
+    page = "symrb-page-" + app.env.docname.replace("/", "-")
     for table in doctree.findall(nodes.table):
         table["classes"] += ["symrb-stack", page]
         head = next(iter(table.findall(nodes.thead)), None)
-        if head is None:
-            continue
-        headers = [entry.astext().strip() for entry in next(iter(head.findall(nodes.row)))]
+        heads = list(next(iter(head.findall(nodes.row))).children) if head is not None else []
         for body in table.findall(nodes.tbody):
             for row in body.findall(nodes.row):
-                for header, entry in zip(headers, row.children, strict=False):
-                    label = nodes.inline(text=f"{header}: ", classes=["symrb-cell-label"])
+                for k, entry in enumerate(row.children):
+                    if len(entry.astext()) > LONG_CELL:
+                        entry["classes"].append("symrb-long")
+                    if k >= len(heads):
+                        continue
                     first = entry.children[0] if entry.children else None
                     if isinstance(first, nodes.paragraph):
-                        first.insert(0, label)
+                        first.insert(0, _label(heads[k]))
                     else:
-                        entry.insert(0, nodes.paragraph("", "", label))
+                        entry.insert(0, nodes.paragraph("", "", _label(heads[k])))
 
 
 def setup(app: Any) -> dict[str, Any]:
