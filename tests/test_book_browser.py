@@ -177,7 +177,7 @@ LAYOUT_JS = """() => {
     // the content column (the search page has no article: its main part)
     const article = document.querySelector('article') || document.querySelector('main')
         || document.body;
-    const clipped = [], outside = [], wide = [];
+    const clipped = [], outside = [], wide = [], scrolled = [];
     const describe = (el, text) =>
         `${el.tagName.toLowerCase()}${el.className ? '.' + String(el.className).split(' ')[0] : ''}`
         + `: "${text.trim().slice(0, 60)}"`;
@@ -247,6 +247,14 @@ LAYOUT_JS = """() => {
     ];
     for (const [selector, name] of kinds) {
         article.querySelectorAll(selector).forEach(el => {
+            if (el.classList.contains('symrb-math-scroll')) {  // too long even at 60 %: own box
+                const r = el.getBoundingClientRect();
+                if (r.left >= left - 1 && r.right <= right + 1) {
+                    scrolled.push(`"${String(name(el)).trim().slice(0, 50)}": `
+                        + `${el.scrollWidth} px in its ${el.clientWidth} px box`);
+                    return;
+                }
+            }
             const rects = [el.getBoundingClientRect()];
             const inner = el.querySelector(':scope > mjx-math');  // a formula wider than its line
             if (inner) rects.push(inner.getBoundingClientRect());
@@ -263,6 +271,9 @@ LAYOUT_JS = """() => {
             }
         });
     }
+    article.querySelectorAll('mjx-container.symrb-math-scroll:not([display])').forEach(el =>
+        scrolled.push(`"${tex(el).trim().slice(0, 50)}": ${el.scrollWidth} px in its `
+            + `${el.clientWidth} px box (inline)`));
     return {
         window: W,
         page: document.documentElement.scrollWidth,
@@ -270,6 +281,7 @@ LAYOUT_JS = """() => {
         clipped: clipped.slice(0, 10),
         outside: outside.slice(0, 10),
         wide: wide,
+        scrolled: scrolled,
     };
 }"""
 
@@ -346,6 +358,16 @@ def browser() -> Iterator[Any]:
             b.close()
 
 
+# The book's script that fits display equations to the column (book/_static/symrb-math-fit.js)
+# marks <html data-symrb-math-fit="W"> when it is done for window width W.
+MATH_FIT_DONE = """() => !document.querySelector('script[src*="symrb-math-fit"]')
+    || document.documentElement.dataset.symrbMathFit === String(window.innerWidth)"""
+
+
+def _wait_for_math_fit(tab: Any) -> None:
+    tab.wait_for_function(MATH_FIT_DONE, timeout=30_000)
+
+
 def _open(browser: Any, server: str, page: str, width: int = 1280) -> tuple[Any, Any, dict]:
     """Open ``page`` in a new context of the given window width, wait until its images and math
     are done, and return ``(context, tab, record)`` with the requests and errors seen."""
@@ -401,6 +423,7 @@ def _open(browser: Any, server: str, page: str, width: int = 1280) -> tuple[Any,
                 "() => window.MathJax && MathJax.startup && MathJax.startup.promise", timeout=60_000
             )
             tab.evaluate("() => MathJax.startup.promise")
+        _wait_for_math_fit(tab)
     except BaseException:
         context.close()
         raise
@@ -510,8 +533,12 @@ def _page_problems(seen: dict[str, Any]) -> list[str]:
 
 
 def _layout_problems(layout: dict[str, Any]) -> list[str]:
-    """What a reader cannot see whole, from the findings of :data:`LAYOUT_JS`."""
+    """What a reader cannot see whole, from the findings of :data:`LAYOUT_JS`.  A display
+    equation too long for the column at 60 % of its size scrolls in its own box; that is allowed
+    on a phone, never at desktop width (:data:`WIDTHS`\\[0]), where it must fit."""
     problems = []
+    if layout["window"] >= WIDTHS[0] - 20:  # the window's width less the scroll bar
+        problems += [f"equation scrolls in its box: {e}" for e in layout.get("scrolled", [])]
     if layout["page"] > layout["window"] + 1:
         problems.append(
             f"the page scrolls sideways: {layout['page']} px in a {layout['window']} px window"
@@ -546,6 +573,7 @@ def _look(browser: Any, server: str, page: str) -> dict[str, Any]:
         for width in WIDTHS:
             if width != WIDTHS[0]:
                 tab.set_viewport_size({"width": width, "height": SCREEN})
+                _wait_for_math_fit(tab)
             layouts[width] = tab.evaluate(LAYOUT_JS)
             if shots:
                 name = page.replace("/", "__").removesuffix(".html") + f"_{width}px.png"
@@ -655,6 +683,8 @@ LAYOUT_SAMPLE = """<html><body style="margin: 0"><article style="padding: 0 10px
 <div style="overflow: hidden; width: 100px; white-space: nowrap">cut words run on and on and on</div>
 <pre style="overflow: auto">fine code that is much longer than the column of a phone, and scrolls</pre>
 <table><tr><td>fine table</td></tr></table>
+<mjx-container display="true" class="symrb-math-scroll" style="display: block; overflow-x: auto">
+  <mjx-math style="display: inline-block; width: 1700px">y</mjx-math></mjx-container>
 </article></body></html>"""
 
 
@@ -671,6 +701,16 @@ def test_layout_check_sees_what_does_not_fit(browser: Any) -> None:
                  "cut off by its box: div", "scrolls sideways"):  # fmt: skip
         assert seen in found, found
     assert "fine" not in found, found
+    # the long equation that scrolls in its own box (symrb-math-fit.js) passes on a phone only
+    assert "scrolls in its box" not in found, found
+    context = browser.new_context(viewport={"width": WIDTHS[0], "height": SCREEN})
+    try:
+        tab = context.new_page()
+        tab.set_content(LAYOUT_SAMPLE)
+        wide = _layout_problems(tab.evaluate(LAYOUT_JS))
+    finally:
+        context.close()
+    assert any("equation scrolls in its box" in w for w in wide), wide
 
 
 def test_book_has_pages() -> None:

@@ -285,8 +285,8 @@ def so_network_gradients(
     info : SweepInfo
         Only with ``return_info=True``.  Accuracy stated and tested (tests/test_conditions.py,
         against a 40-digit mpmath sweep): :math:`\max_k\|G_k - G_{k,\mathrm{exact}}\|_F \le
-        10(N+1)n\varepsilon\kappa(M\sqrt n\,(\sqrt n + \max_{k,a}\|P^a_k\|_F) +
-        \alpha\max_i\lambda_i)`.
+        10(N+1)n\varepsilon\kappa B` with
+        :math:`B = M\sqrt n\,(\sqrt n + \max_{k,a}\|P^a_k\|_F) + \alpha\max_i\lambda_i`.
 
     Raises
     ------
