@@ -21,6 +21,7 @@ of a row on narrow screens, so no table needs scrolling sideways on a phone
 
 from __future__ import annotations
 
+import re
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -162,6 +163,19 @@ def errata_summary(results: Sequence[Mapping[str, Any]]) -> list[str]:
     return lines
 
 
+#: An inline formula longer than this (characters of TeX, about 300 px typeset) does not fit a
+#: card of half the column: the printed and corrected forms are then shown one above the other.
+SIDE_BY_SIDE_TEX = 90
+
+
+def side_by_side(*forms: str) -> str:
+    """The columns of the grid of the printed and corrected forms (sphinx-design: phone, tablet,
+    laptop, desktop): two on wide screens, unless a formula in a form is too long for half the
+    column (:data:`SIDE_BY_SIDE_TEX`)."""
+    longest = max((len(m) for f in forms for m in re.findall(r"\$([^$]+)\$", f)), default=0)
+    return "1 1 2 2" if longest <= SIDE_BY_SIDE_TEX else "1 1 1 1"
+
+
 def erratum_page(r: Mapping[str, Any]) -> list[str]:
     """The page of one erratum (a result dict of ``verify --json``) as MyST Markdown lines: its
     title and label, where it is in the paper, the outcome and a link to its check, the claim in
@@ -181,6 +195,10 @@ def erratum_page(r: Mapping[str, Any]) -> list[str]:
         outcome = "some checks fail and no correction is recorded"
     home = check_pages().get(claim.id)
     shown = f" The claim with its check: {claim_link(claim.id, 'on its page')}." if home else ""
+    printed = breakable(claim.render("printed") if claim.printed else claim.render("statement"))
+    corrected = (
+        breakable(claim.render("corrected")) if claim.corrected else "(no correction recorded)"
+    )
     return [
         f"(erratum-{claim.id.lower()})=",
         f"# Erratum {claim.id}",  # no math: the title is also the sidebar's and the tab's
@@ -193,20 +211,20 @@ def erratum_page(r: Mapping[str, Any]) -> list[str]:
         "",
         f"**The claim in our words.** {breakable(claim.render('statement'))}",
         "",
-        "::::{grid} 1 1 2 2",
+        f"::::{{grid}} {side_by_side(printed, corrected)}",
         ":gutter: 2",
         ":class-container: symrb-forms",
         "",
         ":::{grid-item-card} Printed in the paper",
         ":class-card: symrb-printed",
         "",
-        breakable(claim.render("printed") if claim.printed else claim.render("statement")),
+        printed,
         ":::",
         "",
         ":::{grid-item-card} Corrected",
         ":class-card: symrb-corrected",
         "",
-        breakable(claim.render("corrected")) if claim.corrected else "(no correction recorded)",
+        corrected,
         ":::",
         "::::",
         "",
