@@ -688,28 +688,26 @@ LAYOUT_SAMPLE = """<html><body style="margin: 0"><article style="padding: 0 10px
 </article></body></html>"""
 
 
-def test_layout_check_sees_what_does_not_fit(browser: Any) -> None:
-    context = browser.new_context(viewport={"width": 400, "height": SCREEN})
+def _sample_layout(browser: Any, width: int) -> list[str]:
+    """The layout problems of :data:`LAYOUT_SAMPLE` in a window ``width`` px wide."""
+    context = browser.new_context(viewport={"width": width, "height": SCREEN})
     try:
         tab = context.new_page()
         tab.set_content(LAYOUT_SAMPLE)
-        problems = _layout_problems(tab.evaluate(LAYOUT_JS))
+        return _layout_problems(tab.evaluate(LAYOUT_JS))
     finally:
         context.close()
-    found = "\n".join(problems)
+
+
+def test_layout_check_sees_what_does_not_fit(browser: Any) -> None:
+    found = "\n".join(_sample_layout(browser, 400))
     for seen in ('table "wide table"', 'mjx-container "a formula"', 'img "wide picture"',
                  "cut off by its box: div", "scrolls sideways"):  # fmt: skip
         assert seen in found, found
     assert "fine" not in found, found
     # the long equation that scrolls in its own box (symrb-math-fit.js) passes on a phone only
     assert "scrolls in its box" not in found, found
-    context = browser.new_context(viewport={"width": WIDTHS[0], "height": SCREEN})
-    try:
-        tab = context.new_page()
-        tab.set_content(LAYOUT_SAMPLE)
-        wide = _layout_problems(tab.evaluate(LAYOUT_JS))
-    finally:
-        context.close()
+    wide = _sample_layout(browser, WIDTHS[0])
     assert any("equation scrolls in its box" in w for w in wide), wide
 
 
