@@ -11,8 +11,28 @@ step's :math:`s` (conserved by the map), accepted when :math:`|ds| \le` tol; oth
 fails is reported (its step index) and the caller redoes the run on the NumPy path, which has
 the Riccati fallback and the fold diagnosis.
 
-The first step (the cold start with its branch check) is taken by the caller on the NumPy path;
+A step may be a composition of sub-steps :math:`\gamma_1 h, \dots, \gamma_s h` (the symmetric
+compositions of :func:`symrb.compose.composed_rigid_body_flow`): :math:`s/h^2` is conserved by
+the map, so each sub-step starts from :math:`s = (\gamma_i h)^2\sigma`, :math:`\sigma` the last
+sub-step's :math:`s/(\gamma_{i-1}h)^2` (a plain run is :math:`\gamma = (1)` and carries
+:math:`s` itself).
+
+The first root (the cold start with its branch check) is found by the caller on the NumPy path;
 this module only continues from a state and an :math:`s` on the branch.
+
+Compilation and its cache: nothing is compiled, and numba is not even imported, until the first
+call of :func:`run_mv3`; then the three kernels and the loop are wrapped by
+``numba.njit(cache=True)`` as module-level functions (no closures), so a later process loads the
+machine code from numba's on-disk cache instead of compiling it (type inference and LLVM, about
+a second).  Where numba keeps that cache (``numba.core.caching``, its locator classes, tried in
+this order): the directory named by the environment variable ``NUMBA_CACHE_DIR`` if set; else
+the ``__pycache__`` directory beside the source file (``symrb/__pycache__`` for the loop,
+``symrb/_generated/__pycache__`` for the kernels), used only when numba can create it and write a
+temporary file into it; else, e.g. for a read-only installation, numba's user-wide cache
+directory (``~/.cache/numba`` on Linux, ``$XDG_CACHE_HOME/numba`` when that is set), in a
+subdirectory named after the source directory.  A read-only install is never written to.  The
+files are an index ``*.nbi`` per function and one ``*.nbc`` per compiled signature; numba
+invalidates them when the source file's contents change.
 
 Examples
 --------
@@ -23,7 +43,7 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import importlib.util
 from typing import Any
 
 import numpy as np
@@ -32,50 +52,69 @@ from numpy.typing import NDArray
 from ._generated import discrete_rigid_body as _gen
 from ._validate import Array
 
-try:  # pragma: no cover - depends on the environment
-    import numba
-
-    AVAILABLE = True
-except ImportError:  # pragma: no cover
-    numba = None  # type: ignore[assignment]
-    AVAILABLE = False
+#: True when numba can be imported (it is imported on the first compiled call only).
+AVAILABLE = importlib.util.find_spec("numba") is not None
 
 __all__ = ["AVAILABLE", "run_mv3"]
 
 _MAXITER = 12
-_loop: Callable[..., Any] | None = None
+
+# The kernels the loop calls, by these global names: the plain Python functions until
+# :func:`_jit` replaces them by their compiled versions (the loop itself runs as plain Python
+# too, slowly: what the tests without numba use).
+_step: Any = _gen.mv3_cayley_step
+_snewton: Any = _gen.mv3_cayley_s_newton
+_prelam: Any = _gen.mv3_preprocessed_lam
+_loop: Any = None  # the compiled _mv3_loop, made by _jit
 
 
-def _build() -> Callable[..., Any]:
-    step = numba.njit(cache=True)(_gen.mv3_cayley_step)
-    snewton = numba.njit(cache=True)(_gen.mv3_cayley_s_newton)
-    prelam = numba.njit(cache=True)(_gen.mv3_preprocessed_lam)
+def _jit() -> Any:
+    """The compiled loop (compiled, or loaded from numba's cache, on the first call)."""
+    global _step, _snewton, _prelam, _loop
+    if _loop is None:
+        import numba
 
-    @numba.njit(cache=True)
-    def loop(s0, h, m0, lam, q0, tol, steps, k0, save_every, ms, qs, fail, extra, pre, cf):  # type: ignore[no-untyped-def]  # noqa: E501
-        for b in range(m0.shape[0]):
-            s = s0[b]
-            m1, m2, m3 = m0[b, 0], m0[b, 1], m0[b, 2]
-            L1, L2, L3 = lam[b, 0], lam[b, 1], lam[b, 2]
-            l1, l2, l3 = L1, L2, L3
-            c = cf[b]
-            q = q0[b]
-            q11, q12, q13, q21, q22, q23, q31, q32, q33 = (
-                q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8]
-            )  # fmt: skip
-            j = 0
-            for k in range(1, steps + 1):
+        jit = numba.njit(cache=True)
+        _step = jit(_gen.mv3_cayley_step)
+        _snewton = jit(_gen.mv3_cayley_s_newton)
+        _prelam = jit(_gen.mv3_preprocessed_lam)
+        _loop = jit(_mv3_loop)
+    return _loop
+
+
+def _mv3_loop(s0, h, gammas, m0, lam, q0, tol, steps, k0, save_every, ms, qs, fail, extra, pre, cf):  # type: ignore[no-untyped-def]  # noqa: E501
+    """The steps of each body (module docstring); writes ``ms``, ``qs``, ``fail``, ``extra``."""
+    ng = gammas.shape[0]
+    for b in range(m0.shape[0]):
+        s = s0[b]
+        sigma = 0.0
+        m1, m2, m3 = m0[b, 0], m0[b, 1], m0[b, 2]
+        L1, L2, L3 = lam[b, 0], lam[b, 1], lam[b, 2]
+        l1, l2, l3 = L1, L2, L3
+        c = cf[b]
+        q = q0[b]
+        q11, q12, q13, q21, q22, q23, q31, q32, q33 = (
+            q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8]
+        )  # fmt: skip
+        j = 0
+        for k in range(1, steps + 1):
+            for g in range(ng):
+                hs = h * gammas[g]
+                if ng > 1 and (k > 1 or g > 0):  # s/h^2 is conserved: start from it
+                    s = hs * hs * sigma
                 if pre:  # the preprocessed method: this step's modified Lambda
-                    l1, l2, l3 = prelam(
-                        h, m1, m2, m3, L1, L2, L3, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
+                    l1, l2, l3 = _prelam(
+                        hs, m1, m2, m3, L1, L2, L3, c[0], c[1], c[2], c[3], c[4], c[5], c[6],
                         c[7], c[8], c[9], c[10], c[11], c[12], c[13], c[14], c[15], c[16], c[17],
                         c[18], c[19], c[20], c[21], c[22], c[23], c[24], c[25], c[26], c[27],
                     )  # fmt: skip
-                o = step(s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, q31, q32, q33)
+                o = _step(
+                    s, hs, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, q31, q32, q33
+                )
                 if not abs(o[1]) <= tol[b]:
                     ok = False
                     for _ in range(_MAXITER):
-                        s, ds = snewton(s, h, m1, m2, m3, l1, l2, l3)
+                        s, ds = _snewton(s, hs, m1, m2, m3, l1, l2, l3)
                         extra[k - 1] += 1
                         if abs(ds) <= tol[b]:
                             ok = True
@@ -83,23 +122,24 @@ def _build() -> Callable[..., Any]:
                     if not ok:
                         fail[b] = k
                         break
-                    o = step(
-                        s, h, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, q31, q32, q33
+                    o = _step(
+                        s, hs, m1, m2, m3, l1, l2, l3, q11, q12, q13, q21, q22, q23, q31, q32, q33
                     )
                 s = o[0]  # the kernel returns increments: the state is rounded once a step
+                sigma = s / (hs * hs)
                 m1, m2, m3 = m1 + o[2], m2 + o[3], m3 + o[4]
                 q11, q12, q13 = q11 + o[5], q12 + o[6], q13 + o[7]
                 q21, q22, q23 = q21 + o[8], q22 + o[9], q23 + o[10]
                 q31, q32, q33 = q31 + o[11], q32 + o[12], q33 + o[13]
-                if (k0 + k) % save_every == 0:
-                    ms[j, b, 0], ms[j, b, 1], ms[j, b, 2] = m1, m2, m3
-                    qs[j, b, 0], qs[j, b, 1], qs[j, b, 2] = q11, q12, q13
-                    qs[j, b, 3], qs[j, b, 4], qs[j, b, 5] = q21, q22, q23
-                    qs[j, b, 6], qs[j, b, 7], qs[j, b, 8] = q31, q32, q33
-                    j += 1
-        return 0
-
-    return loop  # type: ignore[no-any-return]
+            if fail[b]:
+                break
+            if (k0 + k) % save_every == 0:
+                ms[j, b, 0], ms[j, b, 1], ms[j, b, 2] = m1, m2, m3
+                qs[j, b, 0], qs[j, b, 1], qs[j, b, 2] = q11, q12, q13
+                qs[j, b, 3], qs[j, b, 4], qs[j, b, 5] = q21, q22, q23
+                qs[j, b, 6], qs[j, b, 7], qs[j, b, 8] = q31, q32, q33
+                j += 1
+    return 0
 
 
 def run_mv3(
@@ -113,13 +153,17 @@ def run_mv3(
     save_every: int,
     k0: int = 0,
     coef: Array | None = None,
+    *,
+    gammas: Array | None = None,
+    compiled: bool = True,
 ) -> tuple[Array, Array, NDArray[np.int64], NDArray[np.int64]]:
     r"""Continue ``steps`` steps of n = 3 bodies from a state on the branch (compiled loop).
 
     Parameters
     ----------
     s : ndarray, shape (B,)
-        The scalar :math:`s = b\cdot x` of the last step (a root of :math:`p`).
+        The scalar :math:`s = b\cdot x` of the first (sub-)step, a root of :math:`p` at
+        ``gammas[0] * h`` (or a good start for Newton).
     h : float
         The step.
     m : ndarray, shape (B, 3)
@@ -136,6 +180,11 @@ def run_mv3(
     coef : ndarray, shape (B, 28), optional
         The constants of ``mv3_preprocessed_lam`` (preprocessed method): each step then uses
         the modified Lambda of the current momentum.
+    gammas : ndarray, shape (S,), optional
+        A step is the sub-steps ``gammas[0] * h``, ..., ``gammas[-1] * h`` in turn (a
+        composition method); by default the one step ``h``.
+    compiled : bool, optional
+        False runs the same loop as plain Python (slow; for checking the loop without numba).
 
     Returns
     -------
@@ -145,12 +194,12 @@ def run_mv3(
     fail : ndarray of int, shape (B,)
         0, or the step whose Newton iteration failed (that body's saves stop before it).
     extra : ndarray of int, shape (steps,)
-        The Newton steps taken at each step besides its one (summed over the bodies).
+        The Newton steps taken at each step besides one a sub-step (summed over the bodies).
 
     Raises
     ------
     RuntimeError
-        Without numba.
+        Without numba (and ``compiled`` True).
 
     Examples
     --------
@@ -164,11 +213,9 @@ def run_mv3(
     ...     print((2, 1, 3), (2, 1, 9), 0)
     (2, 1, 3) (2, 1, 9) 0
     """
-    global _loop
-    if not AVAILABLE:
+    if compiled and not AVAILABLE:
         raise RuntimeError("numba is not installed (pip install numba)")
-    if _loop is None:
-        _loop = _build()
+    loop = _jit() if compiled else _mv3_loop
     B = m.shape[0]
     K = (k0 + steps) // save_every - k0 // save_every
     ms = np.full((K, B, 3), np.nan)
@@ -177,9 +224,11 @@ def run_mv3(
     extra = np.zeros(steps, dtype=np.int64)
     pre = coef is not None
     cf = np.ascontiguousarray(coef, dtype=float) if pre else np.zeros((B, 28))
-    _loop(
+    gv = np.ones(1) if gammas is None else np.ascontiguousarray(gammas, dtype=float)
+    loop(
         np.ascontiguousarray(s, dtype=float),
         float(h),
+        gv,
         np.ascontiguousarray(m, dtype=float),
         np.ascontiguousarray(lam, dtype=float),
         np.ascontiguousarray(q, dtype=float),

@@ -131,10 +131,52 @@ def _s_cold(h: Any, m: Any, lam: Any) -> Any:
     return b1 * b1 / (2.0 * (l2 + l3)) + b2 * b2 / (2.0 * (l1 + l3)) + b3 * b3 / (2.0 * (l1 + l2))
 
 
+def _branch3(s: float, h: float, m: Any, lam: Any) -> bool:
+    """One body: U of the root s on the branch through I (every eigenvalue of U Lambda in the
+    open right half-plane).  A Cholesky factorisation of the symmetric part of U Lambda in
+    scalars (it exists: the symmetric part is positive definite, which suffices); when it does
+    not, :func:`_on_branch` decides from the eigenvalues."""
+    l1, l2, l3 = lam
+    o = _kernel3(s, h, *m, l1, l2, l3, *_I3)  # the increments D = U - I (Q = I)
+    u11, u12, u13, u21, u22, u23, u31, u32, u33 = (
+        1.0 + o[5], o[6], o[7], o[8], 1.0 + o[9], o[10], o[11], o[12], 1.0 + o[13]
+    )  # fmt: skip
+    a11, a22, a33 = u11 * l1, u22 * l2, u33 * l3
+    a21, a31, a32 = 0.5 * (u21 * l1 + u12 * l2), 0.5 * (u31 * l1 + u13 * l3), 0.5 * (
+        u32 * l2 + u23 * l3
+    )
+    if a11 > 0.0:
+        c11 = math.sqrt(a11)
+        c21, c31 = a21 / c11, a31 / c11
+        d2 = a22 - c21 * c21
+        if d2 > 0.0:
+            c32 = (a32 - c31 * c21) / math.sqrt(d2)
+            if a33 - c31 * c31 - c32 * c32 > 0.0:
+                return True
+    U = np.array([[u11, u12, u13], [u21, u22, u23], [u31, u32, u33]])
+    return bool(_on_branch(U[None], np.array([[l1, l2, l3]]))[0])
+
+
+def _solve_s3_one(s: float, h: float, m: Any, lam: Any, tol: float) -> tuple[float, int]:
+    """:func:`_solve_s3` (with the branch check) for one body, in Python floats."""
+    ds = math.inf
+    it = 0
+    for it in range(1, _MAXITER + 1):  # noqa: B007
+        s, ds = _snewton3(s, h, *m, *lam)
+        if abs(ds) <= tol or not abs(ds) < 1e3:  # converged, or nan or diverging
+            break
+    if not (abs(ds) <= tol and _branch3(s, h, m, lam)):
+        b = np.array([[h * m[0], h * m[1], h * m[2]]])
+        s = float(_riccati3_s(b, np.array([[float(x) for x in lam]]))[0])
+    return s, it
+
+
 def _solve_s3(s: Any, h: float, m: Any, lam: Any, tol: Any, *, check: bool) -> tuple[Any, int]:
     """Newton on the quartic p(s) (floats or arrays) from s until |ds| <= tol; then, when
     ``check``, every item whose U is off the branch through I, and every item not converged,
     is solved by symrb.solve_moser_veselov (raises past the fold)."""
+    if check and isinstance(s, float) and isinstance(m[0], float) and isinstance(tol, float):
+        return _solve_s3_one(s, h, m, lam, tol)
     ds: Any = np.inf
     it = 0
     for it in range(1, _MAXITER + 1):  # noqa: B007
@@ -388,7 +430,8 @@ class MVStepper:
         if not cold:
             out = _step3(s, h, *m, *lam, *q)
             it = 1
-        if out is None or not np.max(np.abs(out[1])) <= self._tol_max:
+        ds = None if out is None else out[1]
+        if ds is None or not (abs(ds) if isinstance(ds, float) else np.max(np.abs(ds))) <= self._tol_max:
             s, it = _solve_s3(s, h, m, lam, self._tol, check=True)
             out = _step3(s, h, *m, *lam, *q)
             it += 1
