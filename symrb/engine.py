@@ -63,10 +63,21 @@ from . import _compiled
 from . import _validate as v
 from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
+from ._mv3 import (
+    _check_modified,
+    _columns,
+    _hat_cols,
+    _preprocessing,
+    _s_cold,
+    _solve_s3,
+    _step3,
+    _vee_cols,
+)
+from ._mv3 import _kernel3 as _kernel3
 from ._results import STEP_FAILURES, DiscreteFlowSolution, Trajectory, step_failure
 from ._stepping import _check_h, _check_steps, _prepare
 from ._validate import Array
-from .errors import InputError, OutOfDomainError
+from .errors import InputError
 from .solvers import solve_moser_veselov
 
 __all__ = ["MVStepper", "mv_flow"]
@@ -84,134 +95,6 @@ _SOLVERS = ("auto", "newton", "fixed-point")
 _FLOW_METHODS = _SOLVERS + ("numpy", "numba")
 #: method="auto" compiles (numba) n = 3 runs of at least this many body-steps
 _NUMBA_MIN_WORK = 20_000
-_snewton3 = _gen.mv3_cayley_s_newton
-_kernel3 = _gen.mv3_cayley_step  # returns increments dm, dQ: the caller adds them
-
-
-def _step3(s: Any, h: Any, m1: Any, m2: Any, m3: Any, l1: Any, l2: Any, l3: Any, *q: Any) -> Any:
-    """mv3_cayley_step with its increments added: (s_next, ds, m_next (3), Q_next (9))."""
-    o = _kernel3(s, h, m1, m2, m3, l1, l2, l3, *q)
-    return (o[0], o[1], m1 + o[2], m2 + o[3], m3 + o[4], q[0] + o[5], q[1] + o[6], q[2] + o[7],
-            q[3] + o[8], q[4] + o[9], q[5] + o[10], q[6] + o[11], q[7] + o[12], q[8] + o[13])  # fmt: skip
-
-
-# ---------------------------------------------------------------------------------------------
-# n = 3
-
-
-def _cay_inverse3(U: Array) -> Array:
-    """The Cayley vector x of U in SO(3): x = vee(U - U^T) / (1 + tr U)."""
-    d = 1.0 + np.trace(U, axis1=-2, axis2=-1)
-    return (
-        np.stack(
-            [U[..., 2, 1] - U[..., 1, 2], U[..., 0, 2] - U[..., 2, 0], U[..., 1, 0] - U[..., 0, 1]],
-            axis=-1,
-        )
-        / d[..., None]
-    )
-
-
-def _riccati3_s(b: Array, lam: Array) -> Array:
-    """s = b.x from symrb.solve_moser_veselov (raises past the fold); b, lam (k, 3)."""
-    B = np.zeros(b.shape[:-1] + (3, 3))
-    B[..., 2, 1], B[..., 0, 2], B[..., 1, 0] = b[..., 0], b[..., 1], b[..., 2]
-    B = B - np.swapaxes(B, -1, -2)
-    x = _cay_inverse3(np.asarray(solve_moser_veselov(B, lam)))
-    out: Array = np.einsum("...i,...i->...", b, x)
-    return out
-
-
-_I3: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-
-
-def _s_cold(h: Any, m: Any, lam: Any) -> Any:
-    """The first-order root s = sum b_i^2 / (2 I_i) (x = J^{-1}(b)/2, b = h m)."""
-    l1, l2, l3 = lam
-    b1, b2, b3 = h * m[0], h * m[1], h * m[2]
-    return b1 * b1 / (2.0 * (l2 + l3)) + b2 * b2 / (2.0 * (l1 + l3)) + b3 * b3 / (2.0 * (l1 + l2))
-
-
-def _branch3(s: float, h: float, m: Any, lam: Any) -> bool:
-    """One body: U of the root s on the branch through I (every eigenvalue of U Lambda in the
-    open right half-plane).  A Cholesky factorisation of the symmetric part of U Lambda in
-    scalars (it exists: the symmetric part is positive definite, which suffices); when it does
-    not, :func:`_on_branch` decides from the eigenvalues."""
-    l1, l2, l3 = lam
-    o = _kernel3(s, h, *m, l1, l2, l3, *_I3)  # the increments D = U - I (Q = I)
-    u11, u12, u13, u21, u22, u23, u31, u32, u33 = (
-        1.0 + o[5], o[6], o[7], o[8], 1.0 + o[9], o[10], o[11], o[12], 1.0 + o[13]
-    )  # fmt: skip
-    a11, a22, a33 = u11 * l1, u22 * l2, u33 * l3
-    a21, a31, a32 = 0.5 * (u21 * l1 + u12 * l2), 0.5 * (u31 * l1 + u13 * l3), 0.5 * (
-        u32 * l2 + u23 * l3
-    )
-    if a11 > 0.0:
-        c11 = math.sqrt(a11)
-        c21, c31 = a21 / c11, a31 / c11
-        d2 = a22 - c21 * c21
-        if d2 > 0.0:
-            c32 = (a32 - c31 * c21) / math.sqrt(d2)
-            if a33 - c31 * c31 - c32 * c32 > 0.0:
-                return True
-    U = np.array([[u11, u12, u13], [u21, u22, u23], [u31, u32, u33]])
-    return bool(_on_branch(U[None], np.array([[l1, l2, l3]]))[0])
-
-
-def _solve_s3_one(s: float, h: float, m: Any, lam: Any, tol: float) -> tuple[float, int]:
-    """:func:`_solve_s3` (with the branch check) for one body, in Python floats."""
-    ds = math.inf
-    it = 0
-    for it in range(1, _MAXITER + 1):  # noqa: B007
-        s, ds = _snewton3(s, h, *m, *lam)
-        if abs(ds) <= tol or not abs(ds) < 1e3:  # converged, or nan or diverging
-            break
-    if not (abs(ds) <= tol and _branch3(s, h, m, lam)):
-        b = np.array([[h * m[0], h * m[1], h * m[2]]])
-        s = float(_riccati3_s(b, np.array([[float(x) for x in lam]]))[0])
-    return s, it
-
-
-def _solve_s3(s: Any, h: float, m: Any, lam: Any, tol: Any, *, check: bool) -> tuple[Any, int]:
-    """Newton on the quartic p(s) (floats or arrays) from s until |ds| <= tol; then, when
-    ``check``, every item whose U is off the branch through I, and every item not converged,
-    is solved by symrb.solve_moser_veselov (raises past the fold)."""
-    if check and isinstance(s, float) and isinstance(m[0], float) and isinstance(tol, float):
-        return _solve_s3_one(s, h, m, lam, tol)
-    ds: Any = np.inf
-    it = 0
-    for it in range(1, _MAXITER + 1):  # noqa: B007
-        s, ds = _snewton3(s, h, *m, *lam)
-        if np.all(np.abs(ds) <= tol):
-            break
-        if not np.all(np.abs(ds) < 1e3):  # nan or diverging
-            break
-    conv = np.abs(ds) <= tol
-    if check:
-        U = np.stack(np.broadcast_arrays(*_step3(s, h, *m, *lam, *_I3)[5:]), axis=-1)
-        U = U.reshape(np.shape(U)[:-1] + (3, 3))
-        L = np.broadcast_to(np.stack(np.broadcast_arrays(*lam), -1), U.shape[:-1])
-        conv = conv & _on_branch(U.reshape(-1, 3, 3), L.reshape(-1, 3)).reshape(np.shape(conv))
-    if not np.all(conv):
-        bad = ~np.atleast_1d(conv)
-        b = h * np.stack(np.broadcast_arrays(*m), axis=-1).reshape(-1, 3)
-        L = np.broadcast_to(np.stack(np.broadcast_arrays(*lam), -1), b.shape)
-        sa = np.array(np.broadcast_to(s, bad.shape), dtype=float)
-        sa[bad] = _riccati3_s(b[bad], L[bad])
-        s = float(sa[0]) if np.ndim(conv) == 0 else sa
-    return s, it
-
-
-def _vee_cols(M: Array) -> list[Array]:
-    return [M[:, 2, 1].copy(), M[:, 0, 2].copy(), M[:, 1, 0].copy()]
-
-
-def _hat_cols(m: list[Array]) -> Array:
-    out = np.zeros(m[0].shape + (3, 3))
-    out[..., 2, 1], out[..., 0, 2], out[..., 1, 0] = m
-    out[..., 1, 2], out[..., 2, 0], out[..., 0, 1] = -m[0], -m[1], -m[2]
-    return out
-
-
 # ---------------------------------------------------------------------------------------------
 # general n
 
@@ -431,7 +314,10 @@ class MVStepper:
             out = _step3(s, h, *m, *lam, *q)
             it = 1
         ds = None if out is None else out[1]
-        if ds is None or not (abs(ds) if isinstance(ds, float) else np.max(np.abs(ds))) <= self._tol_max:
+        if (
+            ds is None
+            or not (abs(ds) if isinstance(ds, float) else np.max(np.abs(ds))) <= self._tol_max
+        ):
             s, it = _solve_s3(s, h, m, lam, self._tol, check=True)
             out = _step3(s, h, *m, *lam, *q)
             it += 1
@@ -525,46 +411,6 @@ class MVStepper:
         DMD = np.swapaxes(D, -1, -2) @ MD
         dM = (MD - np.swapaxes(MD, -1, -2)) + 0.5 * (DMD - np.swapaxes(DMD, -1, -2))
         return (Qf + Qf @ D).reshape(Qa.shape), (Mf + dM).reshape(Ma.shape)
-
-
-# ---------------------------------------------------------------------------------------------
-# preprocessing (n = 3)
-
-
-def _preprocessing(order: int, lam_c: Any) -> tuple[Any, ...] | None:
-    """The 28 constants of mv3_preprocessed_lam for ``order`` (zeros above it), or None."""
-    if order == 2:
-        return None
-    c = _gen.mv3_preprocessing_coefficients(*lam_c)
-    keep = order // 2 - 1  # the h^2k terms kept, k = 1..keep
-    # the constants come as c_kj (k = 1..4, j = 0..k), then d_kj in the same order
-    sizes = [k + 2 for k in range(4)]
-    out: list[Any] = []
-    for half in (c[:14], c[14:]):
-        i = 0
-        for k, size in enumerate(sizes):
-            out += [x if k < keep else 0.0 * x for x in half[i : i + size]]
-            i += size
-    return tuple(out)
-
-
-def _columns(parts: Any, size: int) -> Array:
-    """Floats or arrays (each broadcasting to (size,)) as the columns of a (size, k) array."""
-    out = np.empty((size, len(parts)))
-    for i, x in enumerate(parts):
-        out[:, i] = x
-    return out
-
-
-def _check_modified(lam_k: Any, h: float, order: int) -> None:
-    """The modified Lambda must be finite and positive (h small enough for the series)."""
-    low = min(float(np.min(x)) for x in lam_k)
-    if not np.isfinite(low) or low <= 0:
-        raise OutOfDomainError(
-            f"h = {h:g}: the preprocessed method of order {order} gives a modified Lambda with "
-            f"min = {low:.3g} (must be finite and > 0); h |m| is too large for the series, "
-            "take a smaller h or a lower order"
-        )
 
 
 # ---------------------------------------------------------------------------------------------
