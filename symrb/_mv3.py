@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ._generated import discrete_rigid_body as _gen
-from ._validate import Array
+from ._validate import MAGNITUDE, Array
 from .errors import OutOfDomainError
 from .solvers import solve_moser_veselov
 
@@ -198,3 +198,53 @@ def _check_modified(lam_k: Any, h: float, order: int) -> None:
             f"min = {low:.3g} (must be finite and > 0); h |m| is too large for the series, "
             "take a smaller h or a lower order"
         )
+
+
+# ---------------------------------------------------------------------------------------------
+# the validation fast path of mv_flow (one body)
+
+_F64 = np.dtype(np.float64)
+
+
+def _one_body(Q0: Any, M0: Any, lam: Any) -> tuple[Array, Array, tuple[float, ...]] | None:
+    """``(Q, M, lam)`` for the common case of :func:`symrb.engine.mv_flow`, or None.
+
+    The common case: ``Q0``, ``M0`` float64 arrays of shape (3, 3) and ``lam`` one of shape (3,)
+    that pass the checks of :func:`symrb._stepping._prepare` (finite, entries at most
+    MAGNITUDE, lam_i > 0, M0 skew to 1e-10 relative, Q0 orthogonal to 1e-8 with det > 0), each
+    made in a few scalar operations.  Every comparison is written so that a NaN fails it, and
+    ``Q0`` is only accepted well inside the tolerance (within 1e-9), so a case this function
+    accepts is one the full checks accept; None sends everything else (every error) to them.
+    Returns a copy of ``Q0``, the skew part of ``M0`` and ``lam`` as floats.
+    """
+    if not (type(Q0) is np.ndarray and type(M0) is np.ndarray and type(lam) is np.ndarray):
+        return None
+    if Q0.shape != (3, 3) or M0.shape != (3, 3) or lam.shape != (3,):
+        return None
+    if Q0.dtype != _F64 or M0.dtype != _F64 or lam.dtype != _F64:
+        return None
+    lam_t = tuple(lam.tolist())
+    if not all(1e-140 <= x <= MAGNITUDE for x in lam_t):  # > 0, pairwise sums >= 1/MAGNITUDE
+        return None
+    m = M0.tolist()
+    q = Q0.tolist()
+    if not all(abs(x) <= MAGNITUDE for row in m + q for x in row):  # finite, bounded
+        return None
+    dev = max(abs(m[i][j] + m[j][i]) for i in range(3) for j in range(i, 3))
+    scale = max(max(abs(x) for row in m for x in row), 1.0)
+    if not dev <= 1e-10 * scale:
+        return None
+    (a, b, c), (d, e, f), (g, h, k) = q
+    gram = (
+        a * a + d * d + g * g - 1.0,
+        b * b + e * e + h * h - 1.0,
+        c * c + f * f + k * k - 1.0,
+        a * b + d * e + g * h,
+        a * c + d * f + g * k,
+        b * c + e * f + h * k,
+    )
+    if not max(abs(x) for x in gram) <= 1e-9:
+        return None
+    if not a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g) > 0.0:
+        return None
+    return Q0.copy(), 0.5 * (M0 - M0.T), lam_t

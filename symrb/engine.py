@@ -67,6 +67,7 @@ from ._mv3 import (
     _check_modified,
     _columns,
     _hat_cols,
+    _one_body,
     _preprocessing,
     _s_cold,
     _solve_s3,
@@ -302,6 +303,23 @@ class MVStepper:
             self._tol: Any = float(tol[0]) if one else tol
             self._tol_max = float(np.min(tol))
 
+    @classmethod
+    def _one3(cls, lam: tuple[float, ...]) -> MVStepper:
+        """The stepper of one n = 3 body with a validated ``lam`` (floats): what ``__init__``
+        builds for it, without the checks (:func:`mv_flow`'s fast path)."""
+        self = cls.__new__(cls)
+        l1, l2, l3 = lam
+        self.n, self.batch_shape, self.method, self.size = 3, (), "auto", 1
+        self.lam = np.array([[l1, l2, l3]])
+        self.iterations = 0
+        self._w = self._w_prev = self._h_prev = self._h_last = self._sigma = None
+        self._eye = np.eye(3)
+        self._Wh = 0.5 / (self.lam[:, :, None] + self.lam[:, None, :])
+        self._kron = None
+        self._lam_c = (l1, l2, l3)
+        self._tol = self._tol_max = 2e-9 * (l1 + l2 + l3 - max(l1, l2, l3))
+        return self
+
     # n = 3: Python floats for one body, component vectors for a batch --------------------------
     def _step3(self, h: float, m: Any, q: Any, lam: Any = None) -> tuple[Any, ...]:
         """The outputs of mv3_cayley_step, (s, ds, m_next (3), Q_next (9)), at a root s
@@ -499,10 +517,8 @@ def mv_flow(
         raise InputError(f"method must be one of {', '.join(_FLOW_METHODS)}, got {method!r}")
     if isinstance(order, bool) or order not in PREPROCESSED_ORDERS:
         raise InputError(f"order must be one of {PREPROCESSED_ORDERS}, got {order!r}")
-    L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
-    M = 0.5 * (M - np.swapaxes(M, -1, -2))
-    stepper = MVStepper(L, batch, method=method if method in _SOLVERS else "auto")
-    n = L.shape[-1]
+    Q, M, stepper = _flow_inputs(Q0, M0, lam, method if method in _SOLVERS else "auto")
+    n = stepper.n
     if order != 2 and n != 3:
         raise InputError(
             f"order {order} (the preprocessed Moser-Veselov method) needs n = 3, got n = {n}; "
@@ -535,6 +551,17 @@ def mv_flow(
         if run.ks[-1] != run.k:  # the state before the failed step
             run.save()
     return run.result(h, order, failure)
+
+
+def _flow_inputs(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, method: str
+                 ) -> tuple[Array, Array, MVStepper]:  # fmt: skip
+    """:func:`mv_flow`'s validated ``Q0`` (a copy), the skew part of ``M0`` and the stepper;
+    one n = 3 body by the scalar fast path (:func:`symrb._mv3._one_body`)."""
+    one = _one_body(Q0, M0, lam)
+    if one is not None:
+        return one[0], one[1], MVStepper._one3(one[2])
+    L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
+    return Q, 0.5 * (M - np.swapaxes(M, -1, -2)), MVStepper(L, batch, method=method)
 
 
 def _mv_momentum_flow(M0: ArrayLike, lam: ArrayLike, h: float, steps: int, save_every: int,
