@@ -224,27 +224,26 @@ def _one_body(Q0: Any, M0: Any, lam: Any) -> tuple[Array, Array, tuple[float, ..
     if Q0.dtype != _F64 or M0.dtype != _F64 or lam.dtype != _F64:
         return None
     lam_t = tuple(lam.tolist())
-    if not all(1e-140 <= x <= MAGNITUDE for x in lam_t):  # > 0, pairwise sums >= 1/MAGNITUDE
+    l1, l2, l3 = lam_t
+    if not (1e-140 <= l1 <= MAGNITUDE and 1e-140 <= l2 <= MAGNITUDE and 1e-140 <= l3 <= MAGNITUDE):
+        return None  # (lam_i >= 1e-140: the pairwise sums >= 1/MAGNITUDE)
+    m = M0.ravel().tolist()
+    if not sum(map(abs, m)) <= MAGNITUDE:  # finite (a NaN fails), each entry bounded
         return None
-    m = M0.tolist()
-    q = Q0.tolist()
-    if not all(abs(x) <= MAGNITUDE for row in m + q for x in row):  # finite, bounded
+    m11, m12, m13, m21, m22, m23, m31, m32, m33 = m
+    d = max(2.0 * abs(m11), 2.0 * abs(m22), 2.0 * abs(m33))
+    dev = max(d, abs(m12 + m21), abs(m13 + m31), abs(m23 + m32))  # max |M0 + M0^T|
+    if not dev <= 1e-10 * max(max(map(abs, m)), 1.0):
         return None
-    dev = max(abs(m[i][j] + m[j][i]) for i in range(3) for j in range(i, 3))
-    scale = max(max(abs(x) for row in m for x in row), 1.0)
-    if not dev <= 1e-10 * scale:
-        return None
-    (a, b, c), (d, e, f), (g, h, k) = q
-    gram = (
-        a * a + d * d + g * g - 1.0,
-        b * b + e * e + h * h - 1.0,
-        c * c + f * f + k * k - 1.0,
-        a * b + d * e + g * h,
-        a * c + d * f + g * k,
-        b * c + e * f + h * k,
+    a, b, c, d, e, f, g, h, k = Q0.ravel().tolist()
+    gram = max(
+        abs(a * a + d * d + g * g - 1.0),
+        abs(b * b + e * e + h * h - 1.0),
+        abs(c * c + f * f + k * k - 1.0),
+        abs(a * b + d * e + g * h),
+        abs(a * c + d * f + g * k),
+        abs(b * c + e * f + h * k),
     )
-    if not max(abs(x) for x in gram) <= 1e-9:
-        return None
-    if not a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g) > 0.0:
-        return None
+    if not (gram <= 1e-9 and a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g) > 0.0):
+        return None  # (a NaN or inf in Q0 fails too)
     return Q0.copy(), 0.5 * (M0 - M0.T), lam_t

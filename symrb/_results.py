@@ -55,6 +55,9 @@ def first_nonfinite(t: Array, y: Mapping[str, Array]) -> tuple[int, list[str]] |
     """The first index of the time axis at which ``t`` or a state of ``y`` (time first) holds a
     non-finite number, with the names of what is not finite there; None when all is finite."""
     K = t.shape[0]
+    arrays = [np.asarray(x) for x in y.values()]
+    if np.isfinite(t).all() and all(np.isfinite(a).all() for a in arrays if a.dtype.kind in "fc"):
+        return None  # the common case, without the rows below
     rows: dict[str, NDArray[np.bool_]] = {"t": np.asarray(np.isfinite(t))}
     for name, x in y.items():
         a = np.asarray(x)

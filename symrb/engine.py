@@ -96,6 +96,8 @@ _SOLVERS = ("auto", "newton", "fixed-point")
 _FLOW_METHODS = _SOLVERS + ("numpy", "numba")
 #: method="auto" compiles (numba) n = 3 runs of at least this many body-steps
 _NUMBA_MIN_WORK = 20_000
+_EYE3 = np.eye(3)
+_WH_UNUSED = np.full((1, 3, 3), np.nan)  # MVStepper._one3: n = 3 never uses the fixed point
 # ---------------------------------------------------------------------------------------------
 # general n
 
@@ -313,8 +315,8 @@ class MVStepper:
         self.lam = np.array([[l1, l2, l3]])
         self.iterations = 0
         self._w = self._w_prev = self._h_prev = self._h_last = self._sigma = None
-        self._eye = np.eye(3)
-        self._Wh = 0.5 / (self.lam[:, :, None] + self.lam[:, None, :])
+        self._eye = _EYE3  # read only, as are _Wh and _kron (general n only)
+        self._Wh = _WH_UNUSED
         self._kron = None
         self._lam_c = (l1, l2, l3)
         self._tol = self._tol_max = 2e-9 * (l1 + l2 + l3 - max(l1, l2, l3))
@@ -626,7 +628,8 @@ class _FlowRun:
             self.Ms.append(self.Mk)
         elif self.size == 1 or not self.attitude:
             self.Qs += [np.array(self.q).reshape(Qshape)] if self.attitude else []
-            self.Ms.append(_hat_cols([np.array(c) for c in self.m]).reshape(Mshape))
+            m1, m2, m3 = self.m  # floats: hat(m) directly
+            self.Ms.append(np.array([[0.0, -m3, m2], [m3, 0.0, -m1], [-m2, m1, 0.0]]))
         else:
             self.Qs.append(np.stack(self.q, axis=-1).reshape(Qshape))
             self.Ms.append(_hat_cols(list(self.m)).reshape(Mshape))
