@@ -184,7 +184,7 @@ class DiscreteFlowSolution:
             self.failed_step = step
         for name in ("residual", "tol"):
             values = np.asarray(getattr(self, name))
-            if not np.isfinite(values).all():
+            if values.size and not np.isfinite(values).all():
                 j = int(np.argmin(np.isfinite(values)))
                 notes.append(f"the {name} of solve {j} (of J_D(U) = M, in order) is {values[j]}")
         if notes:

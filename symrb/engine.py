@@ -513,8 +513,10 @@ def mv_flow(
     >>> bool(np.abs(sol.y.M[-1] - ex.y.M[-1]).max() < 1e-11)
     True
     """
-    h = _check_h(h)
-    steps, save_every = _check_steps(steps, save_every)
+    if not (type(h) is float and 0.0 < h < math.inf):  # (the common case: no checks)
+        h = _check_h(h)
+    if not (type(steps) is int and type(save_every) is int and steps >= 0 and save_every >= 1):
+        steps, save_every = _check_steps(steps, save_every)
     if method not in _FLOW_METHODS:
         raise InputError(f"method must be one of {', '.join(_FLOW_METHODS)}, got {method!r}")
     if isinstance(order, bool) or order not in PREPROCESSED_ORDERS:
@@ -603,7 +605,7 @@ class _FlowRun:
         self.ks: list[int] = [0]
         self.Qs: list[Array] = [Q.copy()] if self.attitude else []
         self.Ms: list[Array] = [M.copy()]
-        self.iters = np.ones(steps, dtype=np.int64) * (1 if self.n == 3 else 0)
+        self.iters = np.full(steps, 1 if self.n == 3 else 0, dtype=np.int64)
         self.k = 0
         self.Qk, self.Mk = Q, M
         self.s: Any = None
@@ -660,7 +662,8 @@ class _FlowRun:
             self.s, self.m, self.q = out[0], out[2:5], out[5:]
             if k % self.save_every == 0:
                 self.save()
-        self.iters *= size
+        if size != 1:
+            self.iters *= size
 
     def compiled(self, h: float) -> bool:
         """Steps 2.. by the compiled loop of :mod:`symrb._compiled`; False if an item failed."""
@@ -695,13 +698,14 @@ class _FlowRun:
                 self.save()
 
     def result(self, h: float, order: int, failure: str) -> DiscreteFlowSolution:
-        kk = np.asarray(self.ks, dtype=np.int64)
+        kk = np.array(self.ks, dtype=np.int64)
         k = self.k
+        # the saved states have one shape: np.array stacks them (a fifth of np.stack's cost)
         return DiscreteFlowSolution(
-            t=kk.astype(np.float64) * h,
+            t=np.array(self.ks, dtype=np.float64) * h,
             k=kk,
             y=Trajectory(
-                {**({"Q": np.stack(self.Qs)} if self.attitude else {}), "M": np.stack(self.Ms)}
+                {**({"Q": np.array(self.Qs)} if self.attitude else {}), "M": np.array(self.Ms)}
             ),  # fmt: skip
             iterations=self.iters[: max(k, 0)] if failure else self.iters,
             success=not failure,
