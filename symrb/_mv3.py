@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ._generated import discrete_rigid_body as _gen
+from ._results import STEP_FAILURES, DiscreteFlowSolution, Trajectory
 from ._validate import MAGNITUDE, Array
 from .errors import OutOfDomainError
 from .solvers import solve_moser_veselov
@@ -247,3 +248,84 @@ def _one_body(Q0: Any, M0: Any, lam: Any) -> tuple[Array, Array, tuple[float, ..
     if not (gram <= 1e-9 and a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g) > 0.0):
         return None  # (a NaN or inf in Q0 fails too)
     return Q0.copy(), 0.5 * (M0 - M0.T), lam_t
+
+
+# ---------------------------------------------------------------------------------------------
+# compositions of Moser-Veselov sub-steps (composed_rigid_body_flow, n = 3)
+
+
+def _composed3(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_every: int,
+               gammas: Any, method: str) -> DiscreteFlowSolution | None:  # fmt: skip
+    """The run of :func:`symrb.compose.composed_rigid_body_flow` with the MV base step at n = 3,
+    without a Python object per stage (``method`` its name), or None when a stage fails (the
+    caller then runs its general loop, which reports the failure).
+
+    ``Q``, ``M`` of shape (..., 3, 3), broadcast to the batch of ``stepper`` (a fresh
+    :class:`symrb.engine.MVStepper`); the sub-steps are ``gamma * h``.  NumPy: the stepper's
+    ``_step3`` on floats (one body) or component vectors (a batch), the very arithmetic of
+    ``MVStepper.step``.  Compiled (``use_numba``): the first root (cold start, branch check,
+    Riccati fallback) here, then every stage in :func:`symrb._compiled.run_mv3`; when numba is
+    installed and the run has at least ``_NUMBA_MIN_WORK`` body-stages, as in ``mv_flow``.
+    """
+    from . import _compiled
+    from .engine import _NUMBA_MIN_WORK
+
+    use_numba = _compiled.AVAILABLE and steps * len(gammas) * stepper.size >= _NUMBA_MIN_WORK
+    got = _composed3_run(Q, M, stepper, h, steps, save_every, gammas, use_numba)
+    if got is None:
+        return None
+    kk = np.asarray(got[0], dtype=np.int64)
+    return DiscreteFlowSolution(
+        t=kk.astype(float) * h,
+        k=kk,
+        y=Trajectory(Q=got[1], M=got[2]),
+        iterations=np.zeros(0, dtype=np.int64),  # (MVStepper reports no last_iterations)
+        success=True,
+        status=0,
+        message=f"all {steps} steps taken",
+        method=method,
+        h=h,
+    )
+
+
+def _composed3_run(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_every: int,
+                   gammas: Any, use_numba: bool) -> tuple[list[int], Array, Array] | None:  # fmt: skip
+    """The saved ``(k, Q, M)`` of :func:`_composed3`, or None."""
+    from . import _compiled
+
+    Qf, Mf = Q.reshape(-1, 3, 3), M.reshape(-1, 3, 3)
+    g = tuple(float(x) for x in np.asarray(gammas).ravel())
+    if stepper.size == 1:
+        q: Any = tuple(Qf[0].ravel().tolist())
+        m: Any = (float(Mf[0, 2, 1]), float(Mf[0, 0, 2]), float(Mf[0, 1, 0]))
+    else:
+        m = tuple(_vee_cols(Mf))
+        q = tuple(Qf[:, i, j].copy() for i in range(3) for j in range(3))
+    ks = list(range(0, steps + 1, save_every))
+    try:
+        if not use_numba:
+            Qs, Ms = [Qf.copy()], [Mf.copy()]
+            for k in range(1, steps + 1):
+                for c in g:
+                    out = stepper._step3(c * h, m, q)
+                    m, q = out[2:5], out[5:]
+                if k % save_every == 0:
+                    Qs.append(np.stack(np.broadcast_arrays(*q), axis=-1).reshape(Qf.shape))
+                    Ms.append(_hat_cols(list(np.broadcast_arrays(*m))).reshape(Mf.shape))
+            return ks, np.array(Qs).reshape((-1,) + Q.shape), np.array(Ms).reshape((-1,) + M.shape)
+        h0 = g[0] * h
+        s, _ = _solve_s3(_s_cold(h0, m, stepper._lam_c), h0, m, stepper._lam_c, stepper._tol,
+                         check=True)  # fmt: skip
+    except STEP_FAILURES:
+        return None
+    size = stepper.size
+    ms, qs, fail, _ = _compiled.run_mv3(
+        np.broadcast_to(np.asarray(s, dtype=float), (size,)), h, _columns(m, size), stepper.lam,
+        _columns(q, size), np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,)),
+        steps, save_every, gammas=np.array(g),
+    )  # fmt: skip
+    if fail.any() or not np.isfinite(ms).all():
+        return None
+    Qs = np.concatenate([Qf[None], qs.reshape(-1, size, 3, 3)])
+    Ms = np.concatenate([Mf[None], _hat_cols([ms[..., 0], ms[..., 1], ms[..., 2]])])
+    return ks, Qs.reshape((-1,) + Q.shape), Ms.reshape((-1,) + M.shape)

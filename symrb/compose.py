@@ -225,9 +225,21 @@ def composed_rigid_body_flow(
     """
     Q, M, L, hv, steps, save_every = _prepare(Q0, M0, lam, h, steps, save_every)
     gammas = composition_coefficients(order, kind)
+    kind_name = kind or _DEFAULT_KIND[int(order)]
+    batch = np.broadcast_shapes(Q.shape[:-2], M.shape[:-2])
+    if isinstance(step, str) and step == "mv" and L.shape[-1] == 3 and not progress:
+        # n = 3: every stage in one loop (compiled with numba for runs worth it), no Python
+        # object per stage; a failed stage leaves the run to the general loop below
+        from ._mv3 import _composed3
+
+        sol = _composed3(Q, M, MVStepper(L, batch), hv, steps, save_every, gammas,
+                         f"MV-Algorithm 2 composed to order {int(order)} ({kind_name}, "
+                         f"{gammas.size} stages)")  # fmt: skip
+        if sol is not None:
+            return sol
     if isinstance(step, str):
         if step == "mv":  # the fast engine (Cayley-parametrised Newton, warm started)
-            base: Any = MVStepper(L, np.broadcast_shapes(Q.shape[:-2], M.shape[:-2]))
+            base: Any = MVStepper(L, batch)
             name = "MV-Algorithm 2"
         elif step == "midpoint":
             base = MidpointStep(L)
@@ -244,7 +256,6 @@ def composed_rigid_body_flow(
         )
     counter = _Counter(base)
     psi = compose_steps(counter.wrap, gammas)
-    kind_name = kind or _DEFAULT_KIND[int(order)]
     method = f"{name} composed to order {int(order)} ({kind_name}, {gammas.size} stages)"
     return _run(
         lambda q, m: psi((q, m), hv), counter, Q, M, hv, steps, save_every, method, progress
