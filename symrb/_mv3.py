@@ -288,6 +288,11 @@ def _composed3(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_ever
     )
 
 
+def _max_abs(x: Any) -> Any:
+    """max |x| of a float or an array."""
+    return abs(x) if isinstance(x, float) else np.max(np.abs(x))
+
+
 def _composed3_run(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_every: int,
                    gammas: Any, use_numba: bool) -> tuple[list[int], Array, Array] | None:  # fmt: skip
     """The saved ``(k, Q, M)`` of :func:`_composed3`, or None."""
@@ -305,10 +310,15 @@ def _composed3_run(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_
     try:
         if not use_numba:
             Qs, Ms = [Qf.copy()], [Mf.copy()]
+            lam, tol = stepper._lam_c, stepper._tol_max
+            sg: list[Any] = [None] * len(g)  # the s of each sub-step, as in _compiled
             for k in range(1, steps + 1):
-                for c in g:
-                    out = stepper._step3(c * h, m, q)
-                    m, q = out[2:5], out[5:]
+                for i, c in enumerate(g):
+                    out = None if k == 1 else _step3(sg[i], c * h, *m, *lam, *q)
+                    if out is None or not _max_abs(out[1]) <= tol:
+                        out = stepper._step3(c * h, m, q)  # from s/h^2 of the last sub-step
+                    stepper._sigma = out[0] / (c * h * c * h)
+                    m, q, sg[i] = out[2:5], out[5:], out[0]
                 if k % save_every == 0:
                     Qs.append(np.stack(np.broadcast_arrays(*q), axis=-1).reshape(Qf.shape))
                     Ms.append(_hat_cols(list(np.broadcast_arrays(*m))).reshape(Mf.shape))
