@@ -60,6 +60,8 @@ AVAILABLE = importlib.util.find_spec("numba") is not None
 __all__ = ["AVAILABLE", "run_mv3"]
 
 _MAXITER = 12
+#: ``method="auto"`` compiles n = 3 runs of at least this many body-steps (sub-steps count)
+MIN_WORK = 20_000
 
 # The kernels the loop calls, by these global names: the plain Python functions until
 # :func:`_jit` replaces them by their compiled versions (the loop itself runs as plain Python

@@ -14,6 +14,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ._generated import discrete_rigid_body as _gen
 from ._results import STEP_FAILURES, DiscreteFlowSolution, Trajectory
@@ -24,11 +25,15 @@ from .solvers import solve_moser_veselov
 _MAXITER = 12
 
 
-def _on_branch(U: Array, lam: Array) -> Any:
-    """:func:`symrb.engine._on_branch` (imported on use: :mod:`symrb.engine` imports this module)."""
-    from .engine import _on_branch as on_branch
-
-    return on_branch(U, lam)
+def _on_branch(U: Array, lam: Array) -> NDArray[np.bool_]:
+    """Every eigenvalue of U Lambda in the open right half-plane (the branch through I)."""
+    UL = U * lam[:, None, :]
+    S = 0.5 * (UL + np.swapaxes(UL, -1, -2))
+    try:
+        np.linalg.cholesky(S)  # a positive definite symmetric part suffices
+        return np.ones(U.shape[0], dtype=bool)
+    except np.linalg.LinAlgError:
+        return np.linalg.eigvals(UL).real.min(axis=-1) > 0
 
 
 _snewton3 = _gen.mv3_cayley_s_newton
@@ -265,12 +270,11 @@ def _composed3(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_ever
     ``_step3`` on floats (one body) or component vectors (a batch), the very arithmetic of
     ``MVStepper.step``.  Compiled (``use_numba``): the first root (cold start, branch check,
     Riccati fallback) here, then every stage in :func:`symrb._compiled.run_mv3`; when numba is
-    installed and the run has at least ``_NUMBA_MIN_WORK`` body-stages, as in ``mv_flow``.
+    installed and the run has at least ``_compiled.MIN_WORK`` body-stages, as in ``mv_flow``.
     """
     from . import _compiled
-    from .engine import _NUMBA_MIN_WORK
 
-    use_numba = _compiled.AVAILABLE and steps * len(gammas) * stepper.size >= _NUMBA_MIN_WORK
+    use_numba = _compiled.AVAILABLE and steps * len(gammas) * stepper.size >= _compiled.MIN_WORK
     got = _composed3_run(Q, M, stepper, h, steps, save_every, gammas, use_numba)
     if got is None:
         return None

@@ -67,6 +67,7 @@ from ._mv3 import (
     _check_modified,
     _columns,
     _hat_cols,
+    _on_branch,
     _one_body,
     _preprocessing,
     _s_cold,
@@ -94,8 +95,6 @@ _MAXITER_FP = 60
 _KRON_MAX_N = 6
 _SOLVERS = ("auto", "newton", "fixed-point")
 _FLOW_METHODS = _SOLVERS + ("numpy", "numba")
-#: method="auto" compiles (numba) n = 3 runs of at least this many body-steps
-_NUMBA_MIN_WORK = 20_000
 _EYE3 = np.eye(3)
 _WH_UNUSED = np.full((1, 3, 3), np.nan)  # MVStepper._one3: n = 3 never uses the fixed point
 # ---------------------------------------------------------------------------------------------
@@ -205,17 +204,6 @@ def _cay_inverse(U: Array, eye: Array) -> Array:
                     -1, -2)  # fmt: skip
     out: Array = np.asarray(0.5 * (X - np.swapaxes(X, -1, -2)), dtype=np.float64)
     return out
-
-
-def _on_branch(U: Array, lam: Array) -> NDArray[np.bool_]:
-    """Every eigenvalue of U Lambda in the open right half-plane (the branch through I)."""
-    UL = U * lam[:, None, :]
-    S = 0.5 * (UL + np.swapaxes(UL, -1, -2))
-    try:
-        np.linalg.cholesky(S)  # a positive definite symmetric part suffices
-        return np.ones(U.shape[0], dtype=bool)
-    except np.linalg.LinAlgError:
-        return np.linalg.eigvals(UL).real.min(axis=-1) > 0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -535,7 +523,7 @@ def mv_flow(
         )
     use_numba = n == 3 and (
         method == "numba"
-        or (method == "auto" and _compiled.AVAILABLE and steps * stepper.size >= _NUMBA_MIN_WORK)
+        or (method == "auto" and _compiled.AVAILABLE and steps * stepper.size >= _compiled.MIN_WORK)
     )
     run = _FlowRun(Q, M, stepper, steps, save_every)
     failure = ""
