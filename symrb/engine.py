@@ -619,7 +619,9 @@ class _FlowRun:
         elif self.size == 1 or not self.attitude:
             self.Qs += [np.array(self.q).reshape(Qshape)] if self.attitude else []
             m1, m2, m3 = self.m  # floats: hat(m) directly
-            self.Ms.append(np.array([[0.0, -m3, m2], [m3, 0.0, -m1], [-m2, m1, 0.0]]))
+            self.Ms.append(
+                np.array([[0.0, -m3, m2], [m3, 0.0, -m1], [-m2, m1, 0.0]]).reshape(Mshape)
+            )
         else:
             self.Qs.append(np.stack(self.q, axis=-1).reshape(Qshape))
             self.Ms.append(_hat_cols(list(self.m)).reshape(Mshape))
