@@ -549,7 +549,7 @@ def _flow_inputs(Q0: ArrayLike, M0: ArrayLike, lam: ArrayLike, method: str
                  ) -> tuple[Array, Array, MVStepper]:  # fmt: skip
     """:func:`mv_flow`'s validated ``Q0`` (a copy), the skew part of ``M0`` and the stepper;
     one n = 3 body by the scalar fast path (:func:`symrb._mv3._one_body`)."""
-    one = _one_body(Q0, M0, lam)
+    one = _one_body(Q0, M0, lam) if method == "auto" else None  # (n = 3 ignores the solver)
     if one is not None:
         return one[0], one[1], MVStepper._one3(one[2])
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
