@@ -89,7 +89,8 @@ def _branch3(s: float, h: float, m: Any, lam: Any) -> bool:
     scalars (it exists: the symmetric part is positive definite, which suffices); when it does
     not, :func:`_on_branch` decides from the eigenvalues."""
     l1, l2, l3 = lam
-    o = _kernel3(s, h, *m, l1, l2, l3, *_I3)  # the increments D = U - I (Q = I)
+    m1, m2, m3 = m
+    o = _kernel3(s, h, m1, m2, m3, l1, l2, l3, *_I3)  # the increments D = U - I (Q = I)
     u11, u12, u13, u21, u22, u23, u31, u32, u33 = (
         1.0 + o[5], o[6], o[7], o[8], 1.0 + o[9], o[10], o[11], o[12], 1.0 + o[13]
     )  # fmt: skip
@@ -340,6 +341,6 @@ def _composed3_run(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_
     )  # fmt: skip
     if fail.any() or not np.isfinite(ms).all():
         return None
-    Qs = np.concatenate([Qf[None], qs.reshape(-1, size, 3, 3)])
-    Ms = np.concatenate([Mf[None], _hat_cols([ms[..., 0], ms[..., 1], ms[..., 2]])])
-    return ks, Qs.reshape((-1,) + Q.shape), Ms.reshape((-1,) + M.shape)
+    Qk = np.concatenate([Qf[None], qs.reshape(-1, size, 3, 3)])
+    Mk = np.concatenate([Mf[None], _hat_cols([ms[..., 0], ms[..., 1], ms[..., 2]])])
+    return ks, Qk.reshape((-1,) + Q.shape), Mk.reshape((-1,) + M.shape)

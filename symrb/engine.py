@@ -67,6 +67,7 @@ from ._mv3 import (
     _check_modified,
     _columns,
     _hat_cols,
+    _max_abs,
     _on_branch,
     _one_body,
     _preprocessing,
@@ -317,15 +318,11 @@ class MVStepper:
         lam = self._lam_c if lam is None else lam
         cold = self._sigma is None
         s = _s_cold(h, m, lam) if cold else h * h * self._sigma
-        out = None
+        out: Any = None
         if not cold:
             out = _step3(s, h, *m, *lam, *q)
             it = 1
-        ds = None if out is None else out[1]
-        if (
-            ds is None
-            or not (abs(ds) if isinstance(ds, float) else np.max(np.abs(ds))) <= self._tol_max
-        ):
+        if out is None or not _max_abs(out[1]) <= self._tol_max:
             s, it = _solve_s3(s, h, m, lam, self._tol, check=True)
             out = _step3(s, h, *m, *lam, *q)
             it += 1
@@ -459,7 +456,13 @@ def mv_flow(
         n = 3 the backend: ``"numpy"`` the NumPy path (the reference), ``"numba"`` the compiled
         loop of :mod:`symrb._compiled` (needs numba; the same kernels, results equal to rounding),
         ``"auto"`` the compiled loop when numba is importable and the run has at least
-        2 * 10^4 body-steps, else NumPy (and Newton for n <= 6, the fixed point above).
+        2 * 10^4 body-steps, else NumPy (and Newton for n <= 6, the fixed point above).  The
+        compiled loop is compiled on its first use in a process and cached on disk by numba
+        (``cache=True``), so later processes load it: into the environment variable
+        ``NUMBA_CACHE_DIR`` if set, else into ``symrb/__pycache__`` (and
+        ``symrb/_generated/__pycache__`` for the kernels) when numba can write there, else
+        (a read-only installation) into numba's user-wide cache directory, ``~/.cache/numba``
+        on Linux (details in :mod:`symrb._compiled`).
     order : {2, 4, 6, 8, 10}, optional
         2: the Moser-Veselov map itself.  4 to 10 (n = 3 only): the preprocessed method of
         Hairer and Vilmart (2006), each step with the modified :math:`\tilde\Lambda(h, m)` of
