@@ -32,9 +32,10 @@ the ``__pycache__`` directory beside the source file (``symrb/__pycache__`` for 
 ``symrb/_generated/__pycache__`` for the kernels), used only when numba can create it and write a
 temporary file into it; else, e.g. for a read-only installation, numba's user-wide cache
 directory (``~/.cache/numba`` on Linux, ``$XDG_CACHE_HOME/numba`` when that is set), in a
-subdirectory named after the source directory.  A read-only install is never written to.  The
-files are an index ``*.nbi`` per function and one ``*.nbc`` per compiled signature; numba
-invalidates them when the source file's contents change.
+subdirectory named after the source directory and a hash of its path.  A read-only install is
+never written to; when no directory at all is writable, the functions are compiled in memory
+in every process.  The files are an index ``*.nbi`` per function and one ``*.nbc`` per compiled
+signature; numba invalidates them when the source file's contents change.
 
 Examples
 --------
@@ -78,11 +79,14 @@ def _jit() -> Any:
     if _loop is None:
         import numba
 
-        jit = numba.njit(cache=True)
-        _step = jit(_gen.mv3_cayley_step)
-        _snewton = jit(_gen.mv3_cayley_s_newton)
-        _prelam = jit(_gen.mv3_preprocessed_lam)
-        _loop = jit(_mv3_loop)
+        try:
+            jit = numba.njit(cache=True)
+            kernels = [jit(f) for f in (_gen.mv3_cayley_step, _gen.mv3_cayley_s_newton,
+                                        _gen.mv3_preprocessed_lam, _mv3_loop)]  # fmt: skip
+        except RuntimeError:  # numba found no writable cache directory: compile in memory
+            kernels = [numba.njit(f) for f in (_gen.mv3_cayley_step, _gen.mv3_cayley_s_newton,
+                                               _gen.mv3_preprocessed_lam, _mv3_loop)]  # fmt: skip
+        _step, _snewton, _prelam, _loop = kernels
     return _loop
 
 
