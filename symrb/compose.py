@@ -192,7 +192,9 @@ def composed_rigid_body_flow(
         order 4 and Kahan-Li at orders 6 and 8).
     step : {"mv", "midpoint"} or object, optional
         The base step: ``"mv"`` (:class:`symrb.engine.MVStepper`, the fast Moser-Veselov step;
-        :class:`MVStep` is the same map through :func:`symrb.solve_moser_veselov`),
+        :class:`MVStep` is the same map through :func:`symrb.solve_moser_veselov`; at n = 3
+        without ``progress`` every stage runs in one loop on the generated kernels, compiled
+        by numba, when installed, for runs of at least 2 * 10^4 body-stages),
         ``"midpoint"`` (:class:`MidpointStep`), or any
         object with a method ``step(Q, M, h) -> (Q, M)`` that is symmetric and of order 2 (e.g.
         a faster engine); its ``last_iterations`` attribute, if any, is recorded.

@@ -38,7 +38,9 @@ the solution.  The cold start is :math:`X_0 = \tfrac12 W\circ B` (:math:`= \tfra
 n = 3: :math:`s_0 = b\cdot x_0`); an item whose Newton iteration
 fails (near the fold of :math:`J_D`) is solved by :func:`symrb.solve_moser_veselov` (Riccati start),
 which raises :class:`~symrb.errors.OutOfDomainError` past the fold.  Nothing is validated inside
-the step loop: :func:`mv_flow` validates once; :meth:`MVStepper.step` trusts its arguments.
+the step loop: :func:`mv_flow` validates once (one n = 3 body of float64 arrays by a few scalar
+operations, :mod:`symrb._mv3`, with the branch check of the cold start in scalars too);
+:meth:`MVStepper.step` trusts its arguments.
 
 Preprocessing (n = 3, ``mv_flow(..., order=4, 6, 8 or 10)``): Hairer and Vilmart (2006) showed
 that one Moser-Veselov step of a body whose inertia is modified as a function of ``h``, of
