@@ -256,3 +256,19 @@ def test_without_numba(monkeypatch: pytest.MonkeyPatch) -> None:
                           np.eye(3).reshape(1, 9), np.full(1, 1e-9), 2, 1)  # fmt: skip
     sol = composed_rigid_body_flow(np.eye(3), M0, LAM, 0.1, 3000, order=8)  # over MIN_WORK
     assert sol.success and sol.k[-1] == 3000
+
+
+def test_result_finite_check_screen() -> None:
+    """The screen of first_nonfinite (a finite float64 sum) decides as the row-wise test: a NaN
+    or an inf is found at its time index; finite entries whose sum overflows are finite."""
+    from symrb._results import first_nonfinite
+
+    t = np.arange(4.0)
+    big = np.full((4, 3, 3), 1e308)
+    assert first_nonfinite(t, {"M": big}) is None
+    for bad in (np.nan, np.inf, -np.inf):
+        M = np.zeros((4, 3, 3))
+        M[2, 1, 0] = bad
+        assert first_nonfinite(t, {"M": M, "Q": big}) == (2, ["y.M"])
+    assert first_nonfinite(np.array([0.0, np.nan]), {"M": np.zeros((2, 3))}) == (1, ["t"])
+    assert first_nonfinite(t, {"M": [[0.0], [0.0], [np.nan], [0.0]]}) == (2, ["y.M"])
