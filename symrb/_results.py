@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -52,21 +51,12 @@ class Trajectory(dict):
         return sorted(set(super().__dir__()) | {str(k) for k in self})
 
 
-def _finite_sum(x: object) -> bool:
-    """True when ``x`` is a float64 array with a finite sum, so every entry is finite (a NaN or
-    an inf propagates into the sum); False otherwise (unsure: a sum can overflow)."""
-    return (
-        type(x) is np.ndarray
-        and x.dtype == np.float64
-        and math.isfinite(np.add.reduce(x, axis=None))
-    )
-
-
 def first_nonfinite(t: Array, y: Mapping[str, Array]) -> tuple[int, list[str]] | None:
     """The first index of the time axis at which ``t`` or a state of ``y`` (time first) holds a
     non-finite number, with the names of what is not finite there; None when all is finite."""
     K = t.shape[0]
-    if all(_finite_sum(x) for x in (t, *y.values())):
+    arrays = [np.asarray(x) for x in y.values()]
+    if np.isfinite(t).all() and all(np.isfinite(a).all() for a in arrays if a.dtype.kind in "fc"):
         return None  # the common case, without the rows below
     rows: dict[str, NDArray[np.bool_]] = {"t": np.asarray(np.isfinite(t))}
     for name, x in y.items():

@@ -259,8 +259,8 @@ def test_without_numba(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_result_finite_check_screen() -> None:
-    """The screen of first_nonfinite (a finite float64 sum) decides as the row-wise test: a NaN
-    or an inf is found at its time index; finite entries whose sum overflows are finite."""
+    """The screen of first_nonfinite (every entry finite) decides as the row-wise test: a NaN or
+    an inf is found at its time index, in whichever state; huge finite entries are finite."""
     from symrb._results import first_nonfinite
 
     t = np.arange(4.0)
