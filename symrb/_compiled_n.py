@@ -47,7 +47,7 @@ except ImportError:  # pragma: no cover
     numba = None  # type: ignore[assignment]
     AVAILABLE = False
 
-__all__ = ["AVAILABLE", "expm", "run_mv_n", "run_rkmk4", "run_midpoint"]
+__all__ = ["AVAILABLE", "expm", "run_mv_n", "continue_mv_n", "run_rkmk4", "run_midpoint"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -802,3 +802,35 @@ def run_midpoint(
     fail = _midpoint_loop(np.array(Q, dtype=float), np.array(M, dtype=float), Wl, float(h),
                           int(steps), int(save_every), int(maxiter), Qs, Ms, iters)  # fmt: skip
     return Qs, Ms, iters, int(fail)
+
+
+def continue_mv_n(run: Any, h: float) -> bool:
+    """Steps 2, 3, ... of a general-n :func:`symrb.engine.mv_flow` run by :func:`run_mv_n`.
+
+    Parameters
+    ----------
+    run : symrb.engine._FlowRun
+        The run after its first step (taken by :class:`symrb.engine.MVStepper`, whose warm
+        start the loop continues); its saved states, iteration counts and step are extended.
+    h : float
+        The step.
+
+    Returns
+    -------
+    bool
+        False (the run unchanged) if an item's iteration failed: the caller redoes the run on
+        the NumPy path.
+    """
+    st, n = run.stepper, run.n
+    w_prev = st._w_prev if st._h_prev == (h, h) else None
+    Qs, Ms, fail, iters = run_mv_n(run.Qk.reshape(-1, n, n), run.Mk.reshape(-1, n, n), st._w,
+                                   w_prev, h, st.lam, run.steps - 1, run.save_every, k0=1)  # fmt: skip
+    if fail.any():
+        return False
+    for j, kj in enumerate(range(max(run.save_every, 2), run.steps + 1, run.save_every)):
+        run.ks.append(kj)
+        run.Qs.append(Qs[j].reshape(run.shapes[0]))
+        run.Ms.append(Ms[j].reshape(run.shapes[1]))
+    run.iters[1:] = iters * run.size
+    run.k = run.steps
+    return True
