@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _compiled_n
+from . import _compiled_stages
 from . import _validate as v
 from ._docs import fill
 from ._progress import progress_bar
@@ -104,11 +104,11 @@ def _run(
     save_every: int,
     method: str,
     progress: bool,
-    compiled: Callable[[Array, Array], tuple[Array, Array, Array] | None] | None = None,
+    compiled: Callable[[Array, Array], tuple[Array, Array, Any] | None] | None = None,
 ) -> DiscreteFlowSolution:
     """The loop shared by the flows: save every ``save_every``-th state, stop on a failed step.
     ``compiled``: a function of ``(Q, M)`` that takes the whole run at once (a loop of
-    :mod:`symrb._compiled_n`) and returns the saved states after the first and the iterations,
+    :mod:`symrb._compiled_stages`) and returns the saved states after the first and the iterations,
     or None when a step failed there (the loop then runs, and reports the failure)."""
     got = None if compiled is None else compiled(Q, M)
     if got is not None:
@@ -159,29 +159,29 @@ def _solution(ks: list[int], Qs: list[Array], Ms: list[Array], its: Any, failure
 
 
 def _backend(method: str, steps: int, size: int) -> bool:
-    """Whether a flow with option ``method`` runs compiled (:mod:`symrb._compiled_n`)."""
+    """Whether a flow with option ``method`` runs compiled (:mod:`symrb._compiled_stages`)."""
     if method not in _BACKENDS:
         raise InputError(f"method must be one of {', '.join(_BACKENDS)}, got {method!r}")
-    if method == "numba" and not _compiled_n.AVAILABLE:
+    if method == "numba" and not _compiled_stages.AVAILABLE:
         raise InputError("method 'numba' needs numba installed (pip install numba)")
     return method == "numba" or (
-        method == "auto" and _compiled_n.AVAILABLE and steps * size >= _NUMBA_MIN_STEPS
+        method == "auto" and _compiled_stages.AVAILABLE and steps * size >= _NUMBA_MIN_STEPS
     )
 
 
 def _compiled_run(kind: str, L: Array, h: float, steps: int, save_every: int) -> Callable[
-        [Array, Array], tuple[Array, Array, Array] | None]:  # fmt: skip
+        [Array, Array], tuple[Array, Array, Any] | None]:  # fmt: skip
     """The ``compiled`` argument of :func:`_run` for ``kind`` "rkmk4" or "midpoint"."""
 
-    def run(Q: Array, M: Array) -> tuple[Array, Array, Array] | None:
+    def run(Q: Array, M: Array) -> tuple[Array, Array, Any] | None:
         n = Q.shape[-1]
         lam = np.broadcast_to(L, Q.shape[:-2] + (n,)).reshape(-1, n)
         Qf, Mf = Q.reshape(-1, n, n), M.reshape(-1, n, n)
         if kind == "rkmk4":
-            Qs, Ms, fail = _compiled_n.run_rkmk4(Qf, Mf, lam, h, steps, save_every)
-            its = np.zeros(0, dtype=np.int64)
+            Qs, Ms, fail = _compiled_stages.run_rkmk4(Qf, Mf, lam, h, steps, save_every)
+            its: Any = np.zeros(0, dtype=np.int64)
         else:
-            Qs, Ms, its, fail = _compiled_n.run_midpoint(Qf, Mf, lam, h, steps, save_every)
+            Qs, Ms, its, fail = _compiled_stages.run_midpoint(Qf, Mf, lam, h, steps, save_every)
         if fail or not (np.isfinite(Qs).all() and np.isfinite(Ms).all()):
             return None
         shape = (Qs.shape[0],) + Q.shape
@@ -330,7 +330,7 @@ def rkmk4_rigid_body_flow(
     %(progress)s
     method : {"auto", "numpy", "numba"}, optional
         The backend: ``"numpy"`` the NumPy path (:class:`~symrb.base_steps.RKMK4Step`, the
-        reference), ``"numba"`` the compiled loop of :mod:`symrb._compiled_n` (needs numba; the
+        reference), ``"numba"`` the compiled loop of :mod:`symrb._compiled_stages` (needs numba; the
         same arithmetic, results equal to rounding; a run that fails there is redone on the
         NumPy path, which reports the failure), ``"auto"`` the compiled loop when numba is
         importable and the run has at least 500 body-steps.
@@ -387,7 +387,7 @@ def midpoint_rigid_body_flow(
     %(progress)s
     method : {"auto", "numpy", "numba"}, optional
         The backend: ``"numpy"`` the NumPy path (:class:`~symrb.base_steps.MidpointStep`, the
-        reference), ``"numba"`` the compiled loop of :mod:`symrb._compiled_n` (needs numba; the
+        reference), ``"numba"`` the compiled loop of :mod:`symrb._compiled_stages` (needs numba; the
         same arithmetic, results equal to rounding; a run that fails there is redone on the
         NumPy path, which reports the failure), ``"auto"`` the compiled loop when numba is
         importable and the run has at least 500 body-steps.

@@ -1,4 +1,4 @@
-"""The compiled loops of symrb._compiled_n against the NumPy paths they reproduce.
+"""The compiled loops of symrb._compiled_n and symrb._compiled_stages against the NumPy paths they reproduce.
 
 The NumPy paths (symrb.engine.MVStepper's general-n step, symrb.base_steps.RKMK4Step and
 MidpointStep) are the reference: the compiled runs must agree with them to rounding, step for step,
@@ -14,7 +14,7 @@ import pytest
 import scipy.linalg as sla
 
 import symrb
-from symrb import _compiled_n
+from symrb import _compiled_n, _compiled_stages
 from symrb.compose import midpoint_rigid_body_flow, rkmk4_rigid_body_flow
 from symrb.engine import mv_flow
 from symrb.errors import InputError
@@ -129,8 +129,10 @@ def test_midpoint_not_converging_numba_reports_as_numpy():
 def test_auto_compiles_long_runs_only(flow, monkeypatch):
     calls = []
     for name in ("run_rkmk4", "run_midpoint"):
-        real = getattr(_compiled_n, name)
-        monkeypatch.setattr(_compiled_n, name, lambda *a, real=real, **k: calls.append(1) or real(*a, **k))
+        real = getattr(_compiled_stages, name)
+        monkeypatch.setattr(
+            _compiled_stages, name, lambda *a, real=real, **k: calls.append(1) or real(*a, **k)
+        )
     Q0, M0, lam = _case(3, 1)
     flow(Q0, M0, lam, 0.05, 10)
     assert not calls
@@ -143,7 +145,7 @@ def test_stage_backend_bad_input(flow, monkeypatch):
     Q0, M0, lam = _case(3, 1)
     with pytest.raises(InputError, match="method"):
         flow(Q0, M0, lam, 0.05, 3, method="fast")
-    monkeypatch.setattr(_compiled_n, "AVAILABLE", False)
+    monkeypatch.setattr(_compiled_stages, "AVAILABLE", False)
     with pytest.raises(InputError, match="numba"):
         flow(Q0, M0, lam, 0.05, 3, method="numba")
     assert flow(Q0, M0, lam, 0.05, 600, save_every=600).success  # "auto" runs NumPy
