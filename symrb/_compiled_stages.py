@@ -238,18 +238,13 @@ def _times3(q: Array, g: Array) -> None:  # pragma: no cover - compiled
 def _exp3(
     g: Array, t0: float, t1: float, t2: float, a: float, b: float
 ) -> None:  # pragma: no cover
-    """g (9,) = I + a hat(t) + b hat(t)^2 (row-major 3x3)."""
-    tt = (t0, t1, t2)
-    for i in range(3):
-        for j in range(3):
-            v = b * tt[i] * tt[j] - (b * (t0 * t0 + t1 * t1 + t2 * t2) if i == j else 0.0)
-            g[3 * i + j] = (1.0 if i == j else 0.0) + v
-    g[5] -= a * t0
-    g[7] += a * t0
-    g[6] -= a * t1
-    g[2] += a * t1
-    g[1] -= a * t2
-    g[3] += a * t2
+    """g (9,) = I + a hat(t) + b hat(t)^2 (row-major 3x3; hat(t)^2 = t t^T - |t|^2 I)."""
+    s = t0 * t0 + t1 * t1 + t2 * t2
+    b0, b1, b2 = b * t0, b * t1, b * t2
+    g[0], g[4], g[8] = 1.0 + (b0 * t0 - b * s), 1.0 + (b1 * t1 - b * s), 1.0 + (b2 * t2 - b * s)
+    g[1], g[3] = b0 * t1 - a * t2, b1 * t0 + a * t2
+    g[2], g[6] = b0 * t2 + a * t1, b2 * t0 - a * t1
+    g[5], g[7] = b1 * t2 - a * t0, b2 * t1 + a * t0
 
 
 @_jit
