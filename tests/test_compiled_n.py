@@ -95,7 +95,9 @@ def test_expm_needs_numba(monkeypatch):
 
 @needs_numba
 @pytest.mark.parametrize("flow", [rkmk4_rigid_body_flow, midpoint_rigid_body_flow])
-@pytest.mark.parametrize(("n", "batch"), [(3, None), (3, 4), (5, None), (10, None), (10, 3)])
+@pytest.mark.parametrize(
+    ("n", "batch"), [(2, None), (3, None), (3, 4), (5, None), (10, None), (10, 3)]
+)
 def test_stages_agree_with_numpy_path(flow, n, batch):
     Q0, M0, lam = _case(n, 11 + n, batch)
     fast = flow(Q0, M0, lam, 0.05, 120, save_every=7, method="numba")
