@@ -173,9 +173,7 @@ def _tables() -> dict[str, list[Option]]:
             Option("step", ("mv", "midpoint", "object"), step_name),
         ],
         "symrb.compose.rkmk4_rigid_body_flow": [Option("method", backends, _param("method"))],
-        "symrb.compose.midpoint_rigid_body_flow": [
-            Option("method", backends, _param("method"))
-        ],
+        "symrb.compose.midpoint_rigid_body_flow": [Option("method", backends, _param("method"))],
         "symrb.continuous.integrate": [
             Option("method", NAMES, _param("method")),
             Option("flow", flows, flow_name),
