@@ -20,7 +20,8 @@ networks).  A value in effect through a default counts as reached.  Left out, wi
   that it leaves results alone);
 * the scenes (TOML input and output, the cache), the command line, the errors and
   ``symrb.testing`` (Hypothesis strategies): no numerics of their own;
-* the backend ``"numba"`` of the engine when numba is not installed (it cannot run).
+* the backend ``"numba"`` of the engine and of the RKMK4 and midpoint flows when numba is not
+  installed (it cannot run).
 
 Recording wraps each function object of the universe in every loaded module namespace that
 binds it (so ``from x import f`` bindings are caught as well) and, for a class, its ``__init__``;
@@ -138,7 +139,8 @@ def _table_of(kinds: dict[int, tuple[str, ...]], default: dict[int, str]) -> Opt
 
 def _tables() -> dict[str, list[Option]]:
     """The options read from symrb's dispatch tables, by function name."""
-    from symrb import _compiled
+    from symrb import _compiled, _compiled_stages
+    from symrb.compose import _BACKENDS
     from symrb.composition import _DEFAULT_KIND, _KINDS
     from symrb.engine import _FLOW_METHODS, _SOLVERS, PREPROCESSED_ORDERS
     from symrb.learning.resnet import _ACTIVATIONS
@@ -146,6 +148,7 @@ def _tables() -> dict[str, list[Option]]:
     from symrb.rigid_body.ivp import NAMES
 
     flow_methods = tuple(m for m in _FLOW_METHODS if m != "numba" or _compiled.AVAILABLE)
+    backends = tuple(m for m in _BACKENDS if m != "numba" or _compiled_stages.AVAILABLE)
     flows = ("RigidBody", "SymmetricRigidBody", "McLachlanScovel", "MultiSampleSymmetricRigidBody")
 
     def flow_name(args: dict[str, Any]) -> str:
@@ -169,6 +172,8 @@ def _tables() -> dict[str, list[Option]]:
             _table_of(_KINDS, _DEFAULT_KIND),
             Option("step", ("mv", "midpoint", "object"), step_name),
         ],
+        "symrb.compose.rkmk4_rigid_body_flow": [Option("method", backends, _param("method"))],
+        "symrb.compose.midpoint_rigid_body_flow": [Option("method", backends, _param("method"))],
         "symrb.continuous.integrate": [
             Option("method", NAMES, _param("method")),
             Option("flow", flows, flow_name),

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import _compiled_stages
 from . import _validate as v
 from ._docs import fill
 from ._progress import progress_bar
@@ -61,6 +62,10 @@ __all__ = [
     "rkmk4_rigid_body_flow",
     "midpoint_rigid_body_flow",
 ]
+
+_BACKENDS = ("auto", "numpy", "numba")
+#: method="auto" runs RKMK4 and the midpoint rule compiled from this many body-steps
+_NUMBA_MIN_STEPS = 500
 
 # ---------------------------------------------------------------------------------------------
 # flows
@@ -99,8 +104,20 @@ def _run(
     save_every: int,
     method: str,
     progress: bool,
+    compiled: Callable[[Array, Array], tuple[Array, Array, Any] | None] | None = None,
 ) -> DiscreteFlowSolution:
-    """The loop shared by the flows: save every ``save_every``-th state, stop on a failed step."""
+    """The loop shared by the flows: save every ``save_every``-th state, stop on a failed step.
+    ``compiled``: a function of ``(Q, M)`` that takes the whole run at once (a loop of
+    :mod:`symrb._compiled_stages`) and returns the saved states after the first and the iterations,
+    or None when a step failed there (the loop then runs, and reports the failure)."""
+    got = None if compiled is None else compiled(Q, M)
+    if got is not None:
+        bar = progress_bar(steps, method, progress)
+        for _ in range(steps):
+            bar.step()
+        bar.close()
+        ks = list(range(0, steps + 1, save_every))
+        return _solution(ks, [Q, *got[0]], [M, *got[1]], got[2], "", h, steps, method)
     ks, Qs, Ms, its = [0], [Q.copy()], [M.copy()], []
     bar = progress_bar(steps, method, progress)
     failure = ""
@@ -122,6 +139,11 @@ def _run(
             Qs.append(Q)
             Ms.append(M)
     bar.close()
+    return _solution(ks, Qs, Ms, its, failure, h, steps, method)
+
+
+def _solution(ks: list[int], Qs: list[Array], Ms: list[Array], its: Any, failure: str, h: float,
+              steps: int, method: str) -> DiscreteFlowSolution:  # fmt: skip
     kk = np.asarray(ks, dtype=np.int64)
     return DiscreteFlowSolution(
         t=kk.astype(float) * h,
@@ -134,6 +156,38 @@ def _run(
         method=method,
         h=h,
     )
+
+
+def _backend(method: str, steps: int, size: int) -> bool:
+    """Whether a flow with option ``method`` runs compiled (:mod:`symrb._compiled_stages`)."""
+    if method not in _BACKENDS:
+        raise InputError(f"method must be one of {', '.join(_BACKENDS)}, got {method!r}")
+    if method == "numba" and not _compiled_stages.AVAILABLE:
+        raise InputError("method 'numba' needs numba installed (pip install numba)")
+    return method == "numba" or (
+        method == "auto" and _compiled_stages.AVAILABLE and steps * size >= _NUMBA_MIN_STEPS
+    )
+
+
+def _compiled_run(kind: str, L: Array, h: float, steps: int, save_every: int) -> Callable[
+        [Array, Array], tuple[Array, Array, Any] | None]:  # fmt: skip
+    """The ``compiled`` argument of :func:`_run` for ``kind`` "rkmk4" or "midpoint"."""
+
+    def run(Q: Array, M: Array) -> tuple[Array, Array, Any] | None:
+        n = Q.shape[-1]
+        lam = np.broadcast_to(L, Q.shape[:-2] + (n,)).reshape(-1, n)
+        Qf, Mf = Q.reshape(-1, n, n), M.reshape(-1, n, n)
+        if kind == "rkmk4":
+            Qs, Ms, fail = _compiled_stages.run_rkmk4(Qf, Mf, lam, h, steps, save_every)
+            its: Any = np.zeros(0, dtype=np.int64)
+        else:
+            Qs, Ms, its, fail = _compiled_stages.run_midpoint(Qf, Mf, lam, h, steps, save_every)
+        if fail or not (np.isfinite(Qs).all() and np.isfinite(Ms).all()):
+            return None
+        shape = (Qs.shape[0],) + Q.shape
+        return Qs.reshape(shape), Ms.reshape(shape), its
+
+    return run
 
 
 class _Counter:
@@ -274,6 +328,7 @@ def rkmk4_rigid_body_flow(
     *,
     save_every: int = 1,
     progress: bool = False,
+    method: str = "auto",
 ) -> DiscreteFlowSolution:
     r"""The rigid body by RKMK4 (:class:`RKMK4Step`), order 4, explicit.
 
@@ -286,6 +341,12 @@ def rkmk4_rigid_body_flow(
     %(steps)s
     %(save_every)s
     %(progress)s
+    method : {"auto", "numpy", "numba"}, optional
+        The backend: ``"numpy"`` the NumPy path (:class:`~symrb.base_steps.RKMK4Step`, the
+        reference), ``"numba"`` the compiled loop of :mod:`symrb._compiled_stages` (needs numba; the
+        same arithmetic, results equal to rounding; a run that fails there is redone on the
+        NumPy path, which reports the failure), ``"auto"`` the compiled loop when numba is
+        importable and the run has at least 500 body-steps.
 
     Returns
     -------
@@ -307,9 +368,11 @@ def rkmk4_rigid_body_flow(
     """
     Q, M, L, hv, steps, save_every = _prepare(Q0, M0, lam, h, steps, save_every)
     base = RKMK4Step(L)
+    fast = _backend(method, steps, M[..., 0, 0].size)
     return _run(
-        lambda q, m: base.step(q, m, hv), None, Q, M, hv, steps, save_every, "RKMK4", progress
-    )
+        lambda q, m: base.step(q, m, hv), None, Q, M, hv, steps, save_every, "RKMK4", progress,
+        _compiled_run("rkmk4", L, hv, steps, save_every) if fast else None,
+    )  # fmt: skip
 
 
 @fill
@@ -322,6 +385,7 @@ def midpoint_rigid_body_flow(
     *,
     save_every: int = 1,
     progress: bool = False,
+    method: str = "auto",
 ) -> DiscreteFlowSolution:
     r"""The rigid body by the implicit midpoint rule (:class:`MidpointStep`), order 2, symmetric.
 
@@ -334,6 +398,12 @@ def midpoint_rigid_body_flow(
     %(steps)s
     %(save_every)s
     %(progress)s
+    method : {"auto", "numpy", "numba"}, optional
+        The backend: ``"numpy"`` the NumPy path (:class:`~symrb.base_steps.MidpointStep`, the
+        reference), ``"numba"`` the compiled loop of :mod:`symrb._compiled_stages` (needs numba; the
+        same arithmetic, results equal to rounding; a run that fails there is redone on the
+        NumPy path, which reports the failure), ``"auto"`` the compiled loop when numba is
+        importable and the run has at least 500 body-steps.
 
     Returns
     -------
@@ -356,14 +426,9 @@ def midpoint_rigid_body_flow(
     """
     Q, M, L, hv, steps, save_every = _prepare(Q0, M0, lam, h, steps, save_every)
     counter = _Counter(MidpointStep(L))
+    fast = _backend(method, steps, M[..., 0, 0].size)
     return _run(
-        lambda q, m: counter.wrap((q, m), hv),
-        counter,
-        Q,
-        M,
-        hv,
-        steps,
-        save_every,
-        "implicit midpoint",
-        progress,
-    )
+        lambda q, m: counter.wrap((q, m), hv), counter, Q, M, hv, steps, save_every,
+        "implicit midpoint", progress,
+        _compiled_run("midpoint", L, hv, steps, save_every) if fast else None,
+    )  # fmt: skip

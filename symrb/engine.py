@@ -61,7 +61,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _compiled
+from . import _compiled, _compiled_n
 from . import _validate as v
 from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
@@ -100,6 +100,7 @@ _SOLVERS = ("auto", "newton", "fixed-point")
 _FLOW_METHODS = _SOLVERS + ("numpy", "numba")
 _EYE3 = np.eye(3)
 _WH_UNUSED = np.full((1, 3, 3), np.nan)  # MVStepper._one3: n = 3 never uses the fixed point
+_NUMBA_MIN_WORK_N = 2_000_000  # n != 3: steps * bodies * n^3 (2000 steps at n = 10, ~0.4 s)
 # ---------------------------------------------------------------------------------------------
 # general n
 
@@ -454,17 +455,16 @@ def mv_flow(
     %(save_every)s
     method : str, optional
         One of ``"auto"``, ``"newton"``, ``"fixed-point"``, ``"numpy"``, ``"numba"``: the solver
-        for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or for
-        n = 3 the backend: ``"numpy"`` the NumPy path (the reference), ``"numba"`` the compiled
-        loop of :mod:`symrb._compiled` (needs numba; the same kernels, results equal to rounding),
-        ``"auto"`` the compiled loop when numba is importable and the run has at least
-        2 * 10^4 body-steps, else NumPy (and Newton for n <= 6, the fixed point above).  The
-        compiled loop is compiled on its first use in a process and cached on disk by numba
-        (``cache=True``), so later processes load it: into the environment variable
-        ``NUMBA_CACHE_DIR`` if set, else into ``symrb/__pycache__`` (and
-        ``symrb/_generated/__pycache__`` for the kernels) when numba can write there, else
-        (a read-only installation) into numba's user-wide cache directory, ``~/.cache/numba``
-        on Linux (details in :mod:`symrb._compiled`).
+        for n != 3 (``"newton"``, ``"fixed-point"``; see :class:`MVStepper`), or the backend:
+        ``"numpy"`` the NumPy path (the reference), ``"numba"`` the compiled loop of
+        :mod:`symrb._compiled` (n = 3) or :mod:`symrb._compiled_n` (needs numba; results equal
+        to rounding), ``"auto"`` compiled when numba is importable and the run has at least
+        2 * 10^4 body-steps (n = 3) or steps * bodies * n^3 >= 2 * 10^6, else NumPy.  The
+        compiled loops are compiled on their first use in a process and cached on disk by numba
+        (``cache=True``), so later processes load them: into the environment variable
+        ``NUMBA_CACHE_DIR`` if set, else into the ``__pycache__`` beside each module when numba
+        can write there, else (a read-only installation) into numba's user-wide cache
+        directory, ``~/.cache/numba`` on Linux (details in :mod:`symrb._compiled`).
     order : {2, 4, 6, 8, 10}, optional
         2: the Moser-Veselov map itself.  4 to 10 (n = 3 only): the preprocessed method of
         Hairer and Vilmart (2006), each step with the modified :math:`\tilde\Lambda(h, m)` of
@@ -521,11 +521,10 @@ def mv_flow(
             f"order {order} (the preprocessed Moser-Veselov method) needs n = 3, got n = {n}; "
             "for higher order at any n use symrb.compose.composed_rigid_body_flow"
         )
-    if method == "numba" and (n != 3 or not _compiled.AVAILABLE):
-        raise InputError(
-            "method 'numba' needs n = 3 and numba installed, got "
-            f"n = {n}, numba {'installed' if _compiled.AVAILABLE else 'not installed'}"
-        )
+    if method == "numba" and not (_compiled.AVAILABLE if n == 3 else _compiled_n.AVAILABLE):
+        raise InputError("method 'numba' needs numba installed (pip install numba)")
+    numba_n = n != 3 and (method == "numba" or (method == "auto" and _compiled_n.AVAILABLE
+                          and steps * stepper.size * n**3 >= _NUMBA_MIN_WORK_N))  # fmt: skip
     use_numba = n == 3 and (
         method == "numba"
         or (method == "auto" and _compiled.AVAILABLE and steps * stepper.size >= _compiled.MIN_WORK)
@@ -540,8 +539,8 @@ def mv_flow(
                 return mv_flow(
                     Q0, M0, lam, h, steps, save_every=save_every, method="numpy", order=order
                 )
-        else:
-            run.loop_n(h)
+        elif not run.loop_n(h, numba_n):  # an item failed in the compiled loop
+            return mv_flow(Q0, M0, lam, h, steps, save_every=save_every, method="numpy")
     except STEP_FAILURES as exc:
         failure = f"step {run.k} of {steps} failed: {step_failure(exc)}"
         run.k -= 1
@@ -683,14 +682,16 @@ class _FlowRun:
         self.k = steps
         return True
 
-    def loop_n(self, h: float) -> None:
-        """General n: one :meth:`MVStepper.step` a step."""
-        for k in range(1, self.steps + 1):
+    def loop_n(self, h: float, use_numba: bool = False) -> bool:
+        """General n: one :meth:`MVStepper.step` a step (``use_numba``: the first, the rest by
+        :func:`symrb._compiled_n.continue_mv_n`; False if an item failed there)."""
+        for k in range(1, (min(self.steps, 1) if use_numba else self.steps) + 1):
             self.k = k
             self.Qk, self.Mk = self.stepper.step(self.Qk, self.Mk, h)
             self.iters[k - 1] = self.stepper.iterations * self.size
             if k % self.save_every == 0:
                 self.save()
+        return _compiled_n.continue_mv_n(self, h) if use_numba and self.steps > 1 else True
 
     def result(self, h: float, order: int, failure: str) -> DiscreteFlowSolution:
         kk = np.array(self.ks, dtype=np.int64)

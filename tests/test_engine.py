@@ -194,10 +194,16 @@ def test_numba_past_the_fold_ends_run() -> None:
     assert not sol.success and sol.k[-1] == 0
 
 
-def test_numba_method_needs_n3() -> None:
-    Q0, M0, lam = _case(4, 1)
+@pytest.mark.parametrize("n", [3, 4])
+def test_numba_method_needs_numba(n: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    from symrb import _compiled_n
+
+    monkeypatch.setattr(_compiled, "AVAILABLE", False)
+    monkeypatch.setattr(_compiled_n, "AVAILABLE", False)
+    Q0, M0, lam = _case(n, 1)
     with pytest.raises(InputError, match="numba"):
         mv_flow(Q0, M0, lam, 0.05, 3, method="numba")
+    assert mv_flow(Q0, M0, lam, 0.05, 3).success  # "auto" runs NumPy
 
 
 # --- the preprocessed method (order > 2, n = 3) ----------------------------------------------
