@@ -74,12 +74,12 @@ except ImportError:  # pragma: no cover
 
 __all__ = ["splitting_flow", "SPLITTING_ORDERS"]
 
-#: The orders of :func:`splitting_flow` (2: the Strang product; 4, 6, 8: its compositions).
+#: The orders of :func:`splitting_flow` (2 is the Strang product, 4, 6 and 8 its compositions).
 SPLITTING_ORDERS = (2, 4, 6, 8)
 _METHODS = ("auto", "numpy", "numba")
 #: method="auto" compiles (numba) runs of at least this many plane rotations (steps x bodies x
-#: rotations a step): below it the first call's compilation (or cache load) costs more
-_NUMBA_MIN_WORK = 200_000
+#: rotations a step): below it loading the compiled loop costs more than the NumPy loop
+_NUMBA_MIN_WORK = 5_000
 
 
 # ---------------------------------------------------------------------------------------------
@@ -150,44 +150,55 @@ def _plane_arrays(n: int, order: int) -> tuple[Array, Array, Array, int]:
 # NumPy (the reference)
 
 
-def _rotate_numpy(Q: Array, M: Array, W: Array, I: Array, J: Array, tau: float) -> None:
-    """The flow of the planes (I, J) (disjoint) over the time ``tau``, in place; Q, M, W of shape
-    (B, n, n)."""
-    theta = tau * M[:, I, J] * W[:, I, J]  # (B, g)
-    half = np.sin(0.5 * theta)
-    cm1 = (-2.0 * half * half)[:, None, :]  # cos(theta) - 1
-    s = np.sin(theta)[:, None, :]
-    for X in (Q, M):  # columns: X R
-        XI, XJ = X[:, :, I], X[:, :, J]
-        X[:, :, I] = XI + (cm1 * XI - s * XJ)
-        X[:, :, J] = XJ + (s * XI + cm1 * XJ)
-    cm1, s = np.swapaxes(cm1, 1, 2), np.swapaxes(s, 1, 2)
-    MI, MJ = M[:, I, :], M[:, J, :]  # rows: R^T (M R)
-    M[:, I, :] = MI + (cm1 * MI - s * MJ)
-    M[:, J, :] = MJ + (s * MI + cm1 * MJ)
+class _Group:
+    """One group of disjoint planes (I, J) for a batch: the weights 1/(lam_i + lam_j) and the
+    buffer D of R - I (zero off the planes' entries, which every call overwrites)."""
+
+    def __init__(self, planes: list[tuple[int, int]], n: int, W: Array) -> None:
+        self.I = np.array([p[0] for p in planes])
+        self.J = np.array([p[1] for p in planes])
+        self.rows = n + self.I  # the rows of M_IJ in the stacked state [Q; M]
+        self.W = W[:, self.I, self.J]
+        self.D = np.zeros(W.shape)
+
+    def rotate(self, X: Array, M: Array, tau: float) -> None:
+        """The flow of the planes over the time ``tau``, in place on the stacked state X =
+        [Q; M] (B, 2n, n), whose view ``M`` is its momentum: X <- X R, then M <- R^T M, each
+        as an increment by D = R - I."""
+        theta = (tau * self.W) * X[:, self.rows, self.J]
+        half = np.sin(0.5 * theta)
+        cm1 = -2.0 * half * half  # cos(theta) - 1
+        s = np.sin(theta)
+        D, I, J = self.D, self.I, self.J
+        D[:, I, I], D[:, J, J], D[:, I, J], D[:, J, I] = cm1, cm1, s, -s
+        X += X @ D
+        M += np.swapaxes(D, 1, 2) @ M
 
 
 def _run_numpy(Q: Array, M: Array, W: Array, n: int, order: int, h: float, steps: int,
                save_every: int, Qs: Array, Ms: Array) -> None:  # fmt: skip
-    """Steps 1..steps in place on (Q, M) (B, n, n); saves into Qs, Ms from index 1."""
-    groups = [(np.array([p[0] for p in g]), np.array([p[1] for p in g])) for g in plane_groups(n)]
+    """Steps 1..steps from (Q, M) (B, n, n); saves into Qs, Ms from index 1."""
+    groups = [_Group(g, n, W) for g in plane_groups(n)]
     seq, head = _schedule(n, order)
-    body = seq[head : len(seq) - head]
+    body = [(groups[g], frac * h) for g, frac in seq[head : len(seq) - head]]
+    first, last = groups[seq[0][0]], groups[seq[-1][0]]
+    X = np.concatenate([Q, M], axis=1)
+    Xm = X[:, n:, :]
     k = 0
     while k < steps:
         block = min(save_every - k % save_every, steps - k)  # steps up to the next saved one
         if head:
-            _rotate_numpy(Q, M, W, *groups[seq[0][0]], seq[0][1] * h)
+            first.rotate(X, Xm, seq[0][1] * h)
         for st in range(block):
-            for g, frac in body:
-                _rotate_numpy(Q, M, W, *groups[g], frac * h)
+            for group, tau in body:
+                group.rotate(X, Xm, tau)
             if head:
                 frac = seq[-1][1] + (seq[0][1] if st < block - 1 else 0.0)
-                _rotate_numpy(Q, M, W, *groups[seq[-1][0]], frac * h)
+                last.rotate(X, Xm, frac * h)
         k += block
-        M[:] = 0.5 * (M - np.swapaxes(M, 1, 2))  # the rows and columns rounded differently
+        Xm[:] = 0.5 * (Xm - np.swapaxes(Xm, 1, 2))  # its rows and columns round differently
         if k % save_every == 0:
-            Qs[k // save_every], Ms[k // save_every] = Q, M
+            Qs[k // save_every], Ms[k // save_every] = X[:, :n], Xm
 
 
 # ---------------------------------------------------------------------------------------------
@@ -284,7 +295,7 @@ def splitting_flow(
         ``"numpy"``: the reference, vectorised over the batch and over the disjoint planes of a
         group; ``"numba"``: the compiled loop (needs numba; the same map, equal to rounding);
         ``"auto"`` (default): ``"numba"`` when numba is importable and the run has at least
-        :math:`2\cdot 10^5` plane rotations (steps times bodies times rotations a step), else
+        5000 plane rotations (steps times bodies times rotations a step), else
         ``"numpy"``.
 
     Returns

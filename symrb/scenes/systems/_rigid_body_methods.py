@@ -154,7 +154,15 @@ def _default_method(value: Any) -> Any:
 
 #: the integrator of a rigid-body scene (and of a rigid-body [compare] run)
 RigidBodyIntegrator = Annotated[
-    SolveIVP | MV | Composition | RKMK4 | Midpoint | Exact | Splitting | Discrete | MVAlgorithm2
+    SolveIVP
+    | MV
+    | Composition
+    | RKMK4
+    | Midpoint
+    | Exact
+    | Splitting
+    | Discrete
+    | MVAlgorithm2
     | MVAlgorithm1,
     Field(discriminator="method"),
     BeforeValidator(_default_method),
