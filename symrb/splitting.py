@@ -365,7 +365,7 @@ def splitting_flow(
     k = np.arange(K + 1, dtype=np.int64) * save_every
     ok = bool(np.isfinite(Qs[-1]).all() and np.isfinite(Ms[-1]).all())
     return DiscreteFlowSolution(
-        t=k * h,
+        t=k.astype(np.float64) * h,
         k=k,
         y=Trajectory({"Q": Qs.reshape((K + 1,) + Q.shape), "M": Ms.reshape((K + 1,) + M.shape)}),
         iterations=np.zeros(0, dtype=np.int64),

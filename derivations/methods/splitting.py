@@ -148,16 +148,3 @@ def m13_backends_agree() -> float:
                 worst = max(worst, float(np.abs(r.y.Q - runs[0].y.Q).max()),
                             float(np.abs(r.y.M - runs[0].y.M).max() / np.abs(M0).max()))  # fmt: skip
     return worst
-
-
-M13.sentence(
-    "symrb.splitting.splitting_flow has order 2, 4, 6 or 8 as asked, for $n = 3$ and $n = 6$.",
-    m13_orders_against_independent_references,
-)
-M13.sentence(
-    "Along long runs at large steps the attitude stays orthogonal and the Casimirs of the "
-    "momentum stay fixed within a few $\\varepsilon\\sqrt{N}$, while the energy error stays "
-    "bounded.",
-    m13_invariants_long_runs,
-)
-M13.sentence("Its compiled and NumPy backends compute the same map.", m13_backends_agree)
