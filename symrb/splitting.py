@@ -41,8 +41,10 @@ Every sub-flow is a coadjoint rotation of :math:`M` and a right multiplication o
 rotation, so the Casimirs :math:`\operatorname{tr}M^{2k}` and :math:`Q^TQ = I` hold to rounding
 whatever ``h``; the map is symplectic and the energy is conserved to the order of the method,
 without drift.  The state is updated in increment form (:math:`x + ((\cos\theta - 1)x - \sin\theta
-\,y)` with :math:`\cos\theta - 1 = -2\sin^2(\theta/2)`), so the rounding errors of a long run add
-up like a random walk rather than with a bias (as in :mod:`symrb.engine`).  ``M`` is kept exactly
+\,y)` with :math:`\cos\theta - 1 = -2\sin^2(\theta/2)`, as in :mod:`symrb.engine`): each rotation
+rounds a small increment, and the errors of a long run add up like a random walk (measured:
+:math:`|Q^TQ - I|` and the Casimirs within a few :math:`\varepsilon\sqrt N`, 1.5 to 4 times below
+the same rotations written as :math:`\cos\theta\,x - \sin\theta\,y`).  ``M`` is kept exactly
 skew.
 
 Two backends compute the same map: ``"numpy"``, the reference, vectorised over a batch of bodies
