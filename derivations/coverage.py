@@ -20,8 +20,8 @@ networks).  A value in effect through a default counts as reached.  Left out, wi
   that it leaves results alone);
 * the scenes (TOML input and output, the cache), the command line, the errors and
   ``symrb.testing`` (Hypothesis strategies): no numerics of their own;
-* the backend ``"numba"`` of the engine and of the RKMK4 and midpoint flows when numba is not
-  installed (it cannot run).
+* the backend ``"numba"`` of the engine, of the RKMK4 and midpoint flows and of the splitting
+  when numba is not installed (it cannot run).
 
 Recording wraps each function object of the universe in every loaded module namespace that
 binds it (so ``from x import f`` bindings are caught as well) and, for a class, its ``__init__``;
@@ -78,6 +78,7 @@ MODULES = (
     "symrb.compose",
     "symrb.base_steps",
     "symrb.exact",
+    "symrb.splitting",
     "symrb.continuous",
     "symrb.symmetric",
     "symrb.orbits",
@@ -146,6 +147,9 @@ def _tables() -> dict[str, list[Option]]:
     from symrb.learning.resnet import _ACTIVATIONS
     from symrb.rigid_body.entry import METHODS
     from symrb.rigid_body.ivp import NAMES
+    from symrb.splitting import _METHODS as SPLIT_METHODS
+    from symrb.splitting import AVAILABLE as SPLIT_NUMBA
+    from symrb.splitting import SPLITTING_ORDERS
 
     flow_methods = tuple(m for m in _FLOW_METHODS if m != "numba" or _compiled.AVAILABLE)
     backends = tuple(m for m in _BACKENDS if m != "numba" or _compiled_stages.AVAILABLE)
@@ -167,6 +171,14 @@ def _tables() -> dict[str, list[Option]]:
             Option("order", tuple(map(str, PREPROCESSED_ORDERS)), _param("order")),
         ],
         "symrb.engine.MVStepper": [Option("method", _SOLVERS, _param("method"))],
+        "symrb.splitting.splitting_flow": [
+            Option(
+                "method",
+                tuple(m for m in SPLIT_METHODS if m != "numba" or SPLIT_NUMBA),
+                _param("method"),
+            ),  # fmt: skip
+            Option("order", tuple(map(str, SPLITTING_ORDERS)), _param("order")),
+        ],
         "symrb.composition.composition_coefficients": [_table_of(_KINDS, _DEFAULT_KIND)],
         "symrb.compose.composed_rigid_body_flow": [
             _table_of(_KINDS, _DEFAULT_KIND),

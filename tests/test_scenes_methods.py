@@ -32,6 +32,8 @@ SIMULATED = [
     {"method": "rkmk4", "h": 0.25},
     {"method": "midpoint", "h": 0.25},
     {"method": "exact"},
+    {"method": "splitting", "h": 0.25},
+    {"method": "splitting", "h": 0.25, "order": 8, "backend": "numba"},
     {"method": "DOP853", "rtol": 1e-9, "atol": 1e-11},
     {"method": "Radau"},
     {},  # simulate's default method, DOP853
@@ -68,6 +70,7 @@ def test_a_scene_of_each_method_equals_simulate_by_hand(integrator: dict[str, An
 
 @pytest.mark.parametrize("integrator", [
     {"method": "composition", "h": 0.25, "order": 8}, {"method": "rkmk4", "h": 0.25},
+    {"method": "splitting", "h": 0.25, "order": 6},
 ])  # fmt: skip
 def test_without_the_attitude_simulate_steps_q_but_records_m_only(integrator) -> None:
     sc = _scene(integrator, effects=(), n=4, observables={"M": {"every": 5}})
@@ -127,6 +130,7 @@ def test_a_keyword_the_method_does_not_take_is_refused(method, extra, key, allow
         ("rk4", "", "integrator.method", METHOD_NAMES),
         ("mv", "h = 0.5\norder = 3", "integrator.order", [2, 4, 6, 8, 10]),
         ("composition", "h = 0.5\norder = 4\nkind = 'leapfrog'", "integrator.kind", None),
+        ("splitting", "h = 0.5\norder = 10", "integrator.order", [2, 4, 6, 8]),
     ],
 )  # fmt: skip
 def test_a_value_the_method_does_not_take_is_refused(method, extra, key, allowed) -> None:

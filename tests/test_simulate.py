@@ -22,6 +22,7 @@ from symrb.exact import rigid_body_exact
 from symrb.rigid_body import METHODS, RigidBodySolution, simulate
 from symrb.rigid_body.entry import _finite
 from symrb.rigid_body.ivp import NAMES as IVP
+from symrb.splitting import splitting_flow
 
 LAM = np.array([0.7, 1.1, 1.6])
 Q0 = symrb.random_SO(3, seed=3)
@@ -106,6 +107,19 @@ def test_composition_is_composed_rigid_body_flow(order: int, kind: str | None) -
     assert sol.order == order and sol.stats == {"steps": STEPS, "iterations": 0}
 
 
+@pytest.mark.parametrize("order", [2, 4, 6, 8])
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_splitting_is_splitting_flow(order: int, backend: str) -> None:
+    if backend == "numba" and not _compiled.AVAILABLE:
+        pytest.skip("numba not installed")
+    sol = simulate(Q0, M0, LAM, SPAN, method="splitting", h=H, order=order, save_every=4,
+                   backend=backend)  # fmt: skip
+    raw = splitting_flow(Q0, M0, LAM, H, STEPS, order=order, save_every=4, method=backend)
+    _same_raw(sol, raw)
+    assert sol.order == order and sol.method == "splitting" and sol.stats == {"steps": STEPS}
+    assert simulate(Q0, M0, LAM, SPAN, method="splitting", h=H).order == 4  # the default
+
+
 def test_composition_options() -> None:
     sol = simulate(Q0, M0, LAM, SPAN, method="composition", h=H, step="midpoint", save_every=4)
     ref = composed_rigid_body_flow(Q0, M0, LAM, H, STEPS, 4, step="midpoint", save_every=4)
@@ -178,7 +192,7 @@ def test_errors_name_the_arrays() -> None:
 
 
 def test_every_method_is_tested_here() -> None:
-    assert set(METHODS) == {*IVP, "mv", "composition", "rkmk4", "midpoint", "exact"}
+    assert set(METHODS) == {*IVP, "mv", "composition", "rkmk4", "midpoint", "exact", "splitting"}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -195,7 +209,9 @@ def _error(method: str, h: float, order: int | None = None, T: float = 2.0) -> f
     ("method", "order", "h"),
     [("mv", 2, 0.1), ("mv", 4, 0.1), ("mv", 6, 0.25), ("mv", 8, 0.4), ("mv", 10, 0.5),
      ("composition", 2, 0.1), ("composition", 4, 0.1), ("composition", 6, 0.25),
-     ("composition", 8, 0.4), ("rkmk4", None, 0.1), ("midpoint", None, 0.1)],
+     ("composition", 8, 0.4), ("rkmk4", None, 0.1), ("midpoint", None, 0.1),
+     ("splitting", 2, 0.05), ("splitting", 4, 0.1), ("splitting", 6, 0.2),
+     ("splitting", 8, 0.4)],
 )  # fmt: skip
 def test_errors_at_the_methods_order(method: str, order: int | None, h: float) -> None:
     p = order or METHODS[method].default_order
@@ -234,7 +250,7 @@ def test_non_finite_states_are_cut() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"method": "euler"}, r"method must be one of \['RK45'.*'exact'\]"),
+        ({"method": "euler"}, r"method must be one of \['RK45'.*'exact', 'splitting'\]"),
         ({"method": "mv"}, "h: method 'mv' is a fixed-step method"),
         ({"method": "rkmk4", "h": 0.3}, "does not divide t_span"),
         ({"method": "mv", "h": 0.1, "t_eval": [0.05]}, "t_eval must be on the step grid"),
@@ -242,6 +258,10 @@ def test_non_finite_states_are_cut() -> None:
         ({"method": "rkmk4", "h": 0.1, "backend": "numba"}, "it takes none"),
         ({"method": "mv", "h": 0.1, "order": 3}, r"order must be one of \(2, 4, 6, 8, 10\)"),
         ({"method": "composition", "h": 0.1, "order": 10}, "order must be one of"),
+        ({"method": "splitting", "h": 0.1, "order": 3}, r"order must be one of \(2, 4, 6, 8\)"),
+        ({"method": "splitting", "h": 0.1, "backend": "fortran"}, "method must be one of"),
+        ({"method": "splitting", "h": 0.1, "kind": "suzuki"}, r"its options are \['backend'\]"),
+        ({"method": "splitting", "h": 0.1, "rtol": 1e-6}, "rtol, atol: method 'splitting'"),
         ({"method": "DOP853", "order": 4}, "has no order"),
         ({"method": "mv", "h": 0.1, "rtol": 1e-6}, "rtol, atol: method 'mv'"),
         ({"method": "mv", "h": 0.1, "progress": True}, "has no progress bar"),

@@ -28,8 +28,9 @@ M7 = claim(
     statement="`symrb.rigid_body.simulate` runs each method it offers at the accuracy that method "
     "has: the solve_ivp methods to their tolerances, the exact solution to rounding, and every "
     "fixed-step method (the Moser-Veselov engine at orders 2 to 10, each symmetric composition "
-    "of each order and kind, with either base step, RKMK4 and the implicit midpoint rule) at its "
-    "order; `t_eval` and `save_every` return the states at the times they name.",
+    "of each order and kind, with either base step, RKMK4, the implicit midpoint rule and the "
+    "splitting into planar rotations) at its order; `t_eval` and `save_every` return the states "
+    "at the times they name.",
     expected="holds",
     section="symrb",
     where="`symrb.rigid_body.simulate` (`symrb/rigid_body/entry.py`) and its adapters, the entry "
@@ -76,6 +77,8 @@ def _fixed_step_cases() -> list[tuple[str, int, dict[str, str]]]:
             cases.append(("composition", order, {"kind": kind}))
         cases.append(("composition", order, {"kind": kinds[-1], "step": "midpoint"}))
     cases += [("rkmk4", 4, {}), ("midpoint", 2, {})]
+    cases += [("splitting", p, {}) for p in (2, 4, 6, 8)]
+    cases += [("splitting", 4, {"backend": b}) for b in ["numpy"] + ["numba"] * _compiled.AVAILABLE]
     return cases
 
 
@@ -95,11 +98,12 @@ def _h_for(order: int, options: dict[str, str]) -> float:
 @M7.check(Level.MPMATH, tol=0.3)
 def m7_fixed_step_orders() -> float:
     r"""Every fixed-step method of simulate (mv at orders 2-10 and its backends, every composition
-    kind of orders 2-8 with the MV and the midpoint base step, RKMK4, midpoint): the order observed
-    from the errors at $T = 1$ with steps $h$ and $h/2$ against the 20-digit reference; the largest
-    distance of the observed order from the nominal one (an order or a base step not passed on, or
-    the momentum scale mixed up, moves it by 2 or more); inf when two compositions of one order
-    (another kind or base step) give the same result (a kind or a step not passed on)."""
+    kind of orders 2-8 with the MV and the midpoint base step, RKMK4, midpoint, the splitting at
+    orders 2-8 and its backends): the order observed from the errors at $T = 1$ with steps $h$
+    and $h/2$ against the 20-digit reference; the largest distance of the observed order from the
+    nominal one (an order or a base step not passed on, or the momentum scale mixed up, moves it
+    by 2 or more); inf when two compositions of one order (another kind or base step) give the
+    same result (a kind or a step not passed on)."""
     from symrb.rigid_body import simulate
 
     Q0, _ = _reference()
@@ -108,7 +112,7 @@ def m7_fixed_step_orders() -> float:
     for method, order, options in _fixed_step_cases():
         nominal = _FIXED_ORDER.get(method, order)
         h = _h_for(nominal, options)
-        kw = {"order": order} if method in ("mv", "composition") else {}
+        kw = {"order": order} if method in ("mv", "composition", "splitting") else {}
         errors = []
         for step in (h, h / 2):
             sol = simulate(Q0, ref.hat(_M0), _LAM, (0.0, _T), method=method, h=step,

@@ -18,7 +18,7 @@ from .. import _validate as v
 from .._docs import fill
 from .._validate import Array
 from ..errors import InputError
-from . import composition, exact, ivp, midpoint, mv, rkmk4
+from . import composition, exact, ivp, midpoint, mv, rkmk4, splitting
 from ._request import Method, Request, RigidBodySolution
 
 __all__ = ["simulate", "METHODS"]
@@ -34,6 +34,7 @@ METHODS: dict[str, Method] = {
     "rkmk4": rkmk4.METHOD,
     "midpoint": midpoint.METHOD,
     "exact": exact.METHOD,
+    "splitting": splitting.METHOD,
 }
 
 #: how far (in steps) a time may be off the grid t0 + k h and still be read as on it
@@ -182,15 +183,16 @@ def simulate(
         ``"BDF"``, ``"LSODA"`` (:func:`scipy.integrate.solve_ivp` through
         :func:`symrb.integrate`), ``"mv"`` (:func:`symrb.engine.mv_flow`), ``"composition"``
         (:func:`symrb.compose.composed_rigid_body_flow`), ``"rkmk4"``, ``"midpoint"``
-        (:mod:`symrb.compose`) and ``"exact"`` (:func:`symrb.exact.rigid_body_exact`, n = 3).
+        (:mod:`symrb.compose`), ``"exact"`` (:func:`symrb.exact.rigid_body_exact`, n = 3) and
+        ``"splitting"`` (:func:`symrb.splitting.splitting_flow`, explicit, any n).
     h : float, optional
         The time step, needed by the fixed-step methods (``"mv"``, ``"composition"``,
-        ``"rkmk4"``, ``"midpoint"``), which take ``(t1 - t0) / h`` steps (a whole number).
-        For the other methods it only sets the output grid :math:`t_0 + kh`.
+        ``"rkmk4"``, ``"midpoint"``, ``"splitting"``), which take ``(t1 - t0) / h`` steps (a
+        whole number).  For the other methods it only sets the output grid :math:`t_0 + kh`.
     order : int, optional
         ``"mv"``: 2 (default), or 4, 6, 8, 10 (the preprocessed method, n = 3);
-        ``"composition"``: 2, 4 (default), 6, 8; ``"rkmk4"`` is 4 and ``"midpoint"`` 2; the
-        others take none.
+        ``"composition"`` and ``"splitting"``: 2, 4 (default), 6, 8; ``"rkmk4"`` is 4 and
+        ``"midpoint"`` 2; the others take none.
     t_eval : array_like, optional
         Increasing output times in ``t_span``.  Fixed-step methods need them on the grid
         :math:`t_0 + kh` (they return the grid times); the others take any.
@@ -208,8 +210,9 @@ def simulate(
     **options
         Options of one method: ``backend`` (``"mv"``: ``"auto"``, ``"newton"``,
         ``"fixed-point"``, ``"numpy"``, ``"numba"``, the ``method`` of
-        :func:`~symrb.engine.mv_flow`), ``kind`` and ``step`` (``"composition"``),
-        ``condition`` (``solve_ivp`` methods), ``check`` (``"exact"``).
+        :func:`~symrb.engine.mv_flow`; ``"splitting"``: ``"auto"``, ``"numpy"``, ``"numba"``,
+        the ``method`` of :func:`~symrb.splitting.splitting_flow`), ``kind`` and ``step``
+        (``"composition"``), ``condition`` (``solve_ivp`` methods), ``check`` (``"exact"``).
 
     Returns
     -------

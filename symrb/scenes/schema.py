@@ -55,7 +55,7 @@ class SceneError(InputError):
     ...     print(exc.problems[0]["key"], exc.problems[0]["line"], exc.problems[0]["allowed"])
     ... # doctest: +NORMALIZE_WHITESPACE
     integrator.method 3 ['DOP853', 'RK45', 'RK23', 'Radau', 'BDF', 'LSODA', 'mv', 'composition',
-    'rkmk4', 'midpoint', 'exact', 'discrete', 'mv_algorithm2', 'mv_algorithm1']
+    'rkmk4', 'midpoint', 'exact', 'splitting', 'discrete', 'mv_algorithm2', 'mv_algorithm1']
     """
 
     def __init__(self, problems: list[dict[str, Any]], source: str = "scene") -> None:

@@ -45,6 +45,10 @@ METHOD_STYLE: dict[str, dict[str, Any]] = {
     "RKMK4": {"color": "#e377c2", "marker": "8", **_SYMRB},
     "midpoint": {"color": "#f7b6d2", "marker": "P", **_SYMRB},
     "exact": {"color": "#393b79", "marker": "X", **_SYMRB},
+    "split2": {"color": "#e7ba52", "marker": "1", **_SYMRB},
+    "split4": {"color": "#bd9e39", "marker": "2", **_SYMRB},
+    "split6": {"color": "#8c6d31", "marker": "3", **_SYMRB},
+    "split8": {"color": "#ad494a", "marker": "4", **_SYMRB},
     # the paper's algorithms (symrb.paper)
     "MV-Algorithm 1": {"color": "#aec7e8", "marker": "o", **_PAPER},
     "MV-Algorithm 2": {"color": "#6b6ecf", "marker": "s", **_PAPER},
@@ -74,6 +78,8 @@ ALIASES: dict[str, str] = {
     "rkmk4_rigid_body_flow": "RKMK4",
     "midpoint_rigid_body_flow": "midpoint",
     "rigid_body_exact": "exact",
+    "splitting": "split4",
+    "splitting_flow": "split4",
     "discrete_rigid_body_flow": "MV",
     "mv_algorithm1": "MV-Algorithm 1",
     "mv_algorithm2": "MV-Algorithm 2",
@@ -89,12 +95,13 @@ ALIASES: dict[str, str] = {
 
 #: The families whose order picks the style: (name, order) -> canonical name.
 _BY_ORDER = {"mv": "MV-pre{}", "mv_flow": "MV-pre{}", "composition": "MV-comp{}",
-             "composed_rigid_body_flow": "MV-comp{}"}  # fmt: skip
+             "composed_rigid_body_flow": "MV-comp{}", "splitting": "split{}",
+             "splitting_flow": "split{}"}  # fmt: skip
 
 
 def canonical(name: str, order: int | None = None) -> str:
     """The canonical name of a method given by any of its names (and its order, for the
-    families ``mv`` and ``composition`` of :data:`symrb.rigid_body.METHODS`).
+    families ``mv``, ``composition`` and ``splitting`` of :data:`symrb.rigid_body.METHODS`).
 
     Raises
     ------

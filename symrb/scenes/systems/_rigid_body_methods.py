@@ -83,6 +83,17 @@ class Exact(_Model):
     check: bool = True
 
 
+class Splitting(_Model):
+    """``method = "splitting"``: the explicit splitting into planar rotations
+    (:func:`symrb.splitting.splitting_flow`), ``order`` 2, 4, 6, 8, at step ``h``; ``backend``
+    its ``method``."""
+
+    method: Literal["splitting"]
+    h: float = Field(gt=0)
+    order: Literal[2, 4, 6, 8] = 4
+    backend: Literal["auto", "numpy", "numba"] = "auto"
+
+
 class Discrete(_Model):
     """``method = "discrete"``, the paper's: the symmetric representation of Section 2
     (``symrb.paper.discrete_rigid_body_flow`` or ``symrb.paper.symmetric_flow``) at step
@@ -123,7 +134,7 @@ class MVAlgorithm1(_Model):
 
 
 #: the methods of ``simulate`` a scene runs through it (the others are the paper's algorithms)
-SIMULATED = (SolveIVP, MV, Composition, RKMK4, Midpoint, Exact)
+SIMULATED = (SolveIVP, MV, Composition, RKMK4, Midpoint, Exact, Splitting)
 #: the paper's algorithms (symrb.paper), run as they are
 PAPER = (Discrete, MVAlgorithm1, MVAlgorithm2)
 #: every value of ``method``: simulate's methods, then the paper's algorithms
@@ -143,7 +154,16 @@ def _default_method(value: Any) -> Any:
 
 #: the integrator of a rigid-body scene (and of a rigid-body [compare] run)
 RigidBodyIntegrator = Annotated[
-    SolveIVP | MV | Composition | RKMK4 | Midpoint | Exact | Discrete | MVAlgorithm2 | MVAlgorithm1,
+    SolveIVP
+    | MV
+    | Composition
+    | RKMK4
+    | Midpoint
+    | Exact
+    | Splitting
+    | Discrete
+    | MVAlgorithm2
+    | MVAlgorithm1,
     Field(discriminator="method"),
     BeforeValidator(_default_method),
 ]

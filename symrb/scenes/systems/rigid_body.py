@@ -66,6 +66,7 @@ _MV_MODULES = (
 _COMPOSE_MODULES = ("compose", "composition", "base_steps", "engine", "solvers", "_stepping",
                     "_compiled", "_progress", "_generated.discrete_rigid_body")  # fmt: skip
 _EXACT_MODULES = ("exact",)
+_SPLITTING_MODULES = ("splitting", "composition", "_stepping")
 _MV_ALGORITHM_MODULES = (
     "paper",
     "_stepping",
@@ -278,7 +279,7 @@ _IMPLEMENTATIONS: dict[type, str] = {
     rbm.Composition: "symrb.compose.composed_rigid_body_flow",
     rbm.RKMK4: "symrb.compose.rkmk4_rigid_body_flow",
     rbm.Midpoint: "symrb.compose.midpoint_rigid_body_flow",
-    rbm.Exact: "symrb.exact.rigid_body_exact",
+    rbm.Exact: "symrb.exact.rigid_body_exact", rbm.Splitting: "symrb.splitting.splitting_flow",
 }  # fmt: skip
 
 
@@ -344,6 +345,24 @@ def _plan_composed(
     cost = _fixed_step_cost(fixed[0], stages * 16.0 * n**3, per, how)
     return _fixed_step_plan(fixed, _simulate_route(integ, "save_every"), ("Q", "M"), (), cost,
                             _MODULES + _COMPOSE_MODULES)  # fmt: skip
+
+
+def _plan_splitting(
+    sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
+) -> SystemPlan:
+    """The splitting into planar rotations: ``simulate`` at the step ``h``."""
+    integ: Any = sc.integrator
+    n = sc.parameters.n
+    if "attitude" not in sc.effects:
+        skipped.pop()
+        notes.append("simulate(method='splitting') rotates Q with M: Q is propagated, "
+                     "though not recorded")  # fmt: skip
+    stages = len(composition_coefficients(integ.order))
+    rotations = stages * (n * n - n + 1)  # about 2 n(n - 1)/2 planar rotations a stage
+    how = f" ({stages} stages of {n * (n - 1) // 2} planes, each rotated about twice)"
+    cost = _fixed_step_cost(fixed[0], rotations * 20.0 * n, rotations * 2e-6, how)
+    return _fixed_step_plan(fixed, _simulate_route(integ, "save_every"), ("Q", "M"), (), cost,
+                            _MODULES + _SPLITTING_MODULES)  # fmt: skip
 
 
 def _plan_mv_algorithm(
@@ -416,6 +435,7 @@ _FIXED_STEP_PLANS: dict[type, _PlanFixed] = {
     rbm.MV: _plan_mv, rbm.Composition: _plan_composed, rbm.RKMK4: _plan_composed,
     rbm.Midpoint: _plan_composed, rbm.MVAlgorithm1: _plan_mv_algorithm,
     rbm.MVAlgorithm2: _plan_mv_algorithm, rbm.Discrete: _plan_discrete,
+    rbm.Splitting: _plan_splitting,
 }  # fmt: skip
 _PlanAdaptive = Callable[[RigidBodyScene, list[str]], SystemPlan]
 #: the plan of each integrator without steps of its own
@@ -540,5 +560,5 @@ _RUNS: dict[type, _RunFn] = {
     rbm.SolveIVP: _run_continuous, rbm.MV: _run_mv, rbm.Composition: _run_simulate,
     rbm.RKMK4: _run_simulate, rbm.Midpoint: _run_simulate, rbm.Exact: _run_simulate,
     rbm.MVAlgorithm1: _mv_from_first_step, rbm.MVAlgorithm2: _run_mv_algorithm2,
-    rbm.Discrete: _run_discrete,
+    rbm.Discrete: _run_discrete, rbm.Splitting: _run_simulate,
 }  # fmt: skip
