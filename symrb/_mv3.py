@@ -85,15 +85,18 @@ def _s_cold(h: Any, m: Any, lam: Any) -> Any:
 
 def _branch3(s: float, h: float, m: Any, lam: Any) -> bool:
     """One body: U of the root s on the branch through I (every eigenvalue of U Lambda in the
-    open right half-plane).  A Cholesky factorisation of the symmetric part of U Lambda in
-    scalars (it exists: the symmetric part is positive definite, which suffices); when it does
-    not, :func:`_on_branch` decides from the eigenvalues."""
+    open right half-plane), U from the kernel at Q = I (:func:`_branch3_u`)."""
+    o = _kernel3(s, h, *m, *lam, *_I3)  # the increments D = U - I (Q = I)
+    u = (1.0 + o[5], o[6], o[7], o[8], 1.0 + o[9], o[10], o[11], o[12], 1.0 + o[13])
+    return _branch3_u(u, lam)
+
+
+def _branch3_u(u: Any, lam: Any) -> bool:
+    """U (9 floats, row-major) on the branch through I: a Cholesky factorisation of the
+    symmetric part of U Lambda in scalars (it exists when that part is positive definite, which
+    suffices); when it does not, :func:`_on_branch` decides from the eigenvalues."""
     l1, l2, l3 = lam
-    m1, m2, m3 = m
-    o = _kernel3(s, h, m1, m2, m3, l1, l2, l3, *_I3)  # the increments D = U - I (Q = I)
-    u11, u12, u13, u21, u22, u23, u31, u32, u33 = (
-        1.0 + o[5], o[6], o[7], o[8], 1.0 + o[9], o[10], o[11], o[12], 1.0 + o[13]
-    )  # fmt: skip
+    u11, u12, u13, u21, u22, u23, u31, u32, u33 = u
     a11, a22, a33 = u11 * l1, u22 * l2, u33 * l3
     a21, a31, a32 = (
         0.5 * (u21 * l1 + u12 * l2),
@@ -110,6 +113,31 @@ def _branch3(s: float, h: float, m: Any, lam: Any) -> bool:
                 return True
     U = np.array([[u11, u12, u13], [u21, u22, u23], [u31, u32, u33]])
     return bool(_on_branch(U[None], np.array([[l1, l2, l3]]))[0])
+
+
+def _first_step_one(s: float, h: float, m: Any, lam: Any, q: Any, tol: float
+                    ) -> tuple[tuple[Any, ...], int]:  # fmt: skip
+    """The first step of one body with an attitude (floats): :func:`_solve_s3_one` then
+    :func:`_step3`, with the branch check made on the step's own U = Q^T Q_1 instead of a
+    second kernel call; the outputs of :func:`_step3` and the iterations (Newton's + 1)."""
+    s1, ds, it = s, math.inf, 0
+    for it in range(1, _MAXITER + 1):  # noqa: B007
+        s1, ds = _snewton3(s1, h, *m, *lam)
+        if abs(ds) <= tol or not abs(ds) < 1e3:  # converged, or nan or diverging
+            break
+    if abs(ds) <= tol:
+        out = _step3(s1, h, *m, *lam, *q)
+        a, b, c, d, e, f, g, k, p = q
+        x1, x2, x3, x4, x5, x6, x7, x8, x9 = out[5:]
+        u = (
+            a * x1 + d * x4 + g * x7, a * x2 + d * x5 + g * x8, a * x3 + d * x6 + g * x9,
+            b * x1 + e * x4 + k * x7, b * x2 + e * x5 + k * x8, b * x3 + e * x6 + k * x9,
+            c * x1 + f * x4 + p * x7, c * x2 + f * x5 + p * x8, c * x3 + f * x6 + p * x9,
+        )  # U = Q^T Q_1  # fmt: skip
+        if _branch3_u(u, lam):
+            return out, it + 1
+    s1, it = _solve_s3_one(s, h, m, lam, tol)
+    return _step3(s1, h, *m, *lam, *q), it + 1
 
 
 def _solve_s3_one(s: float, h: float, m: Any, lam: Any, tol: float) -> tuple[float, int]:

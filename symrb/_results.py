@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -51,13 +52,21 @@ class Trajectory(dict):
         return sorted(set(super().__dir__()) | {str(k) for k in self})
 
 
+_sum = np.add.reduce
+
+
 def first_nonfinite(t: Array, y: Mapping[str, Array]) -> tuple[int, list[str]] | None:
     """The first index of the time axis at which ``t`` or a state of ``y`` (time first) holds a
     non-finite number, with the names of what is not finite there; None when all is finite."""
     K = t.shape[0]
     arrays = [np.asarray(x) for x in y.values()]
-    if np.isfinite(t).all() and all(np.isfinite(a).all() for a in arrays if a.dtype.kind in "fc"):
-        return None  # the common case, without the rows below
+    # the common case, without the rows below: a sum is finite only if every term is (inf - inf
+    # is nan); a finite array whose sum overflows goes on to the exact test below
+    if math.isfinite(_sum(t.ravel())) and all(
+        a.dtype.kind not in "fc" or (a.dtype.kind == "f" and math.isfinite(_sum(a.ravel())))
+        for a in arrays
+    ):
+        return None
     rows: dict[str, NDArray[np.bool_]] = {"t": np.asarray(np.isfinite(t))}
     for name, x in y.items():
         a = np.asarray(x)

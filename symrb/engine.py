@@ -68,6 +68,7 @@ from ._generated import discrete_rigid_body as _gen
 from ._mv3 import (
     _check_modified,
     _columns,
+    _first_step_one,
     _hat_cols,
     _max_abs,
     _on_branch,
@@ -325,7 +326,9 @@ class MVStepper:
         if not cold:
             out = _step3(s, h, *m, *lam, *q)
             it = 1
-        if out is None or not _max_abs(out[1]) <= self._tol_max:
+        if cold and type(s) is float and type(q[0]) is float and type(self._tol) is float:
+            out, it = _first_step_one(s, h, m, lam, q, self._tol)  # one body with an attitude
+        elif out is None or not _max_abs(out[1]) <= self._tol_max:
             s, it = _solve_s3(s, h, m, lam, self._tol, check=True)
             out = _step3(s, h, *m, *lam, *q)
             it += 1
