@@ -48,7 +48,8 @@ from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
 from ._generated import symmetric_rigid_body as _srb
 from ._results import STEP_FAILURES, DiscreteFlowSolution
-from ._stepping import _check_h, _check_steps, _prepare, _Run, _Stepper
+from ._stepping import _check_h, _check_steps, _engine_result, _prepare, _Run, _Stepper
+from .engine import mv_flow
 from ._validate import Array
 
 __all__ = [
@@ -198,19 +199,34 @@ def symmetric_flow(
     h = _check_h(h)
     steps, save_every = _check_steps(steps, save_every)
     L, (Q, P), batch = _prepare(lam, (Q0, "Q0", "SO"), (P0, "P0", "square"))
-    return _symmetric_run(
-        Q,
-        P,
-        L,
-        batch,
-        h,
-        steps,
-        save_every,
-        progress,
-        "symmetric representation",
-        bool(halve),
-        bool(diagnostics),
-    )
+    method = "symmetric representation"
+    if progress or halve or diagnostics:
+        return _symmetric_run(
+            Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
+        )
+    return _symmetric_engine(Q, P, L, batch, h, steps, save_every, method)
+
+
+def _symmetric_engine(
+    Q: Array,
+    P: Array,
+    L: Array,
+    batch: tuple[int, ...],
+    h: float,
+    steps: int,
+    save_every: int,
+    method: str,
+) -> DiscreteFlowSolution:
+    r""":func:`symmetric_flow` by :func:`symrb.engine.mv_flow`: :math:`(Q_k, M_k)` with
+    :math:`M_k = Q_k^TP_k - P_k^TQ_k` is its state at step ``h``, and
+    :math:`P_k = P_0U_0\cdots U_{k-1} = P_0Q_0^{-1}Q_k` is recovered at the saved states."""
+    sol = mv_flow(Q, _srb.symmetric_momentum(Q, P), L, h, steps, save_every=save_every)
+    Qs, Ms = sol.y["Q"], sol.y["M"]
+    with np.errstate(over="ignore", invalid="ignore"):
+        Ps = P @ np.linalg.solve(Q, Qs)
+    y = {"Q": Qs, "P": Ps, "M": Ms}
+    fold = lambda: _Stepper(L, batch).fold(h * Ms[-1])  # noqa: E731  (the state before)
+    return _engine_result(sol, y, sol.k, method=method, h=h, steps=steps, shift=0, fold=fold)
 
 
 #: The most halvings of one step: 2^12 substeps at most (the work doubles with each halving;
@@ -332,7 +348,51 @@ def mv_algorithm1(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qa, Qb), batch = _prepare(lam, (Q0, "Q0", "SO"), (Q1, "Q1", "SO"))
-    stepper = _Stepper(L, batch, bool(diagnostics))
+    if not (progress or diagnostics):
+        got = _mv1_engine(Qa, Qb, L, batch, steps, save_every)
+        if got is not None:
+            return got
+    return _mv1_reference(Qa, Qb, L, batch, steps, save_every, progress, bool(diagnostics))
+
+
+def _mv1_engine(
+    Qa: Array, Qb: Array, L: Array, batch: tuple[int, ...], steps: int, save_every: int
+) -> DiscreteFlowSolution | None:
+    r""":func:`mv_algorithm1` by :func:`symrb.engine.mv_flow` (h = 1): its state ``j`` is
+    :math:`(Q_j, M_{j+1})` from :math:`(Q_0, M_1)`, :math:`M_1` from (MV1), (MV2); its first step
+    recomputes :math:`Q_1 = Q_0U(M_1)`.  None when that :math:`U` is not the given
+    :math:`Q_0^TQ_1` (off the branch through the identity, or the solve fails): the reference
+    loop runs then."""
+    nn = L.shape[-1]
+    U1 = np.swapaxes(Qa, -1, -2) @ Qb  # Omega_1^T
+    M1 = _gen.mv_momentum(np.swapaxes(U1, -1, -2), np.broadcast_to(L, batch + (nn,)))
+    eig = np.linalg.eigvals(U1 * np.broadcast_to(L, batch + (nn,))[..., None, :])
+    if not np.all(eig.real > 0):  # the branch through the identity (solve_moser_veselov)
+        return None
+    sol = mv_flow(Qa, M1, L, 1.0, steps + 1, save_every=save_every)
+    if not sol.success and sol.k[-1] == 0:
+        return None  # the recomputation of Q_1 failed: not a step of the paper's map
+    Qs = sol.y["Q"].copy()
+    if save_every == 1 and Qs.shape[0] > 1:
+        Qs[1] = Qb  # the given Q_1 (the engine's equals it to rounding)
+    fold = lambda: _Stepper(L, batch).fold(sol.y["M"][-1])  # noqa: E731  (M_k of failed step k-1)
+    return _engine_result(
+        sol, {"Q": Qs}, sol.k, method="MV-Algorithm 1", h=None, steps=steps, shift=1, fold=fold
+    )
+
+
+def _mv1_reference(
+    Qa: Array,
+    Qb: Array,
+    L: Array,
+    batch: tuple[int, ...],
+    steps: int,
+    save_every: int,
+    progress: bool,
+    diagnostics: bool,
+) -> DiscreteFlowSolution:
+    """The step-by-step loop of :func:`mv_algorithm1` (the reference)."""
+    stepper = _Stepper(L, batch, diagnostics)
     run = _Run(steps, steps, "MV-Algorithm 1", progress)
     run.save(0, Q=Qa.copy())
     if save_every == 1:
@@ -412,7 +472,54 @@ def mv_algorithm2(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qk, Mk), batch = _prepare(lam, (Q, "Q", "SO"), (M, "M", "skew"))
-    stepper = _Stepper(L, batch, bool(diagnostics))
+    if not (progress or diagnostics):
+        got = _mv2_engine(Qk, Mk, L, batch, steps, save_every)
+        if got is not None:
+            return got
+    return _mv2_reference(Qk, Mk, L, batch, steps, save_every, progress, bool(diagnostics))
+
+
+def _mv2_engine(
+    Q0: Array, M0: Array, L: Array, batch: tuple[int, ...], steps: int, save_every: int
+) -> DiscreteFlowSolution | None:
+    r""":func:`mv_algorithm2` by :func:`symrb.engine.mv_flow` (h = 1): its state ``j`` is
+    :math:`(Q_j, M_{j+1})` from :math:`(Q_0, M_1)`, :math:`M_1 = \Omega_0M_0\Omega_0^T` (one
+    engine step of M alone); the saved :math:`M_j` (j > 0) is one batched engine step back from
+    :math:`-M_{j+1}` (:math:`J_D(V) = -M_{j+1}` is solved by :math:`V = \Omega_j`, and
+    :math:`V^T(-M_{j+1})V = -M_j`).  None when a solve outside the run fails (the reference loop
+    runs then and reports it)."""
+    eye = np.eye(L.shape[-1])
+    first = mv_flow(eye, M0, L, 1.0, 1)
+    if not first.success:
+        return None
+    sol = mv_flow(Q0, first.y["M"][-1], L, 1.0, steps, save_every=save_every)
+    Ms = sol.y["M"].copy()
+    Ms[0] = M0
+    if Ms.shape[0] > 1:
+        back = mv_flow(eye, -sol.y["M"][1:], L, 1.0, 1)
+        if not back.success:
+            return None
+        Ms[1:] = -back.y["M"][-1]
+    its = np.concatenate([first.iterations, sol.iterations])
+    fold = lambda: _Stepper(L, batch).fold(sol.y["M"][-1])  # noqa: E731  (M_k of failed step k)
+    return _engine_result(
+        sol, {"Q": sol.y["Q"], "M": Ms}, sol.k, method="MV-Algorithm 2", h=None, steps=steps,
+        shift=0, fold=fold, iterations=its.astype(np.int64),
+    )  # fmt: skip
+
+
+def _mv2_reference(
+    Qk: Array,
+    Mk: Array,
+    L: Array,
+    batch: tuple[int, ...],
+    steps: int,
+    save_every: int,
+    progress: bool,
+    diagnostics: bool,
+) -> DiscreteFlowSolution:
+    """The step-by-step loop of :func:`mv_algorithm2` (the reference)."""
+    stepper = _Stepper(L, batch, diagnostics)
     run = _Run(steps, steps + 1, "MV-Algorithm 2", progress)
     run.save(0, Q=Qk.copy(), M=Mk.copy())
     k = 1  # the solve before the loop belongs to the first step
@@ -503,6 +610,8 @@ def discrete_rigid_body_flow(
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     method = "discrete rigid body"
     P = Q @ (0.5 * M)
-    return _symmetric_run(
-        Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
-    )
+    if progress or halve or diagnostics:
+        return _symmetric_run(
+            Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
+        )
+    return _symmetric_engine(Q, P, L, batch, h, steps, save_every, method)
