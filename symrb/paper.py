@@ -1,7 +1,8 @@
 r"""The paper's algorithms by the paper's names (Bloch, Crouch and Ratiu 2024, Section 2).
 
-Three maps, each implemented from its own equations and sharing only the solver of
-:math:`J_D(U) = U\Lambda - \Lambda U^T = M` (:func:`symrb.solve_moser_veselov`):
+Three maps, each with a reference loop written from its own equations (sharing only the solver
+of :math:`J_D(U) = U\Lambda - \Lambda U^T = M`, as :func:`symrb.solve_moser_veselov` solves it)
+and computed by default by the engine (below):
 
 * the symmetric representation of the discrete rigid body (Section 2.1, equations
   ``discrbopteqns1`` and ``Ukdef1`` of the paper's source):
@@ -30,12 +31,39 @@ map is a second-order approximation of the rigid body flow :math:`\dot Q = Q\Ome
 :math:`\dot M = [M, \Omega]` at step :math:`h` (a symmetric variational integrator; measured in the
 book and the tests).
 
-Long runs: each step starts Newton from the previous :math:`U` (it changes by :math:`O(h^2)`),
-only every ``save_every``-th state is kept, and ``progress=True`` shows a progress bar (tqdm).
+Computed by the engine.  The three maps are the map of :func:`symrb.engine.mv_flow`
+(:math:`J_D(U_k) = hM_k`, :math:`Q_{k+1} = Q_kU_k`, :math:`M_{k+1} = U_k^TM_kU_k`), with other
+names for the states, so each runs as one ``mv_flow`` call (the compiled n = 3 loop for long runs;
+any n and batch axes) and only the saved states are converted:
+
+* symmetric representation: :math:`(Q_k, Q_k^TP_k - P_k^TQ_k)` is ``mv_flow``'s state at step
+  ``h``; :math:`P_k = P_0U_0\cdots U_{k-1} = P_0Q_0^{-1}Q_k` at the saved states;
+* MV-Algorithm 2: its :math:`Q_{k+1} = Q_k\Omega_{k+1}^T` uses the next momentum's solve, so
+  :math:`(Q_k, M_{k+1})` is ``mv_flow``'s state (h = 1) from :math:`(Q_0, M_1)`; a saved
+  :math:`M_k` is one engine step back from :math:`-M_{k+1}` (:math:`\Omega_k` solves
+  :math:`J_D(V) = -M_{k+1}`, because :math:`\Lambda U - U^T\Lambda = U^T(U\Lambda - \Lambda U^T)U`):
+  one solve per saved state (a batch), none per step;
+* MV-Algorithm 1: :math:`(Q_k, M_{k+1})` from :math:`(Q_0, M_1)`,
+  :math:`M_1 = \Omega_1^T\Lambda - \Lambda\Omega_1`, :math:`\Omega_1 = Q_1^TQ_0`; the first engine
+  step recomputes :math:`Q_1` (the given one is returned).
+
+The results are those of the step-by-step loops (to rounding; tests/test_paper_engine.py against
+a SciPy run of the paper's equations), about as fast as ``mv_flow`` and drifting as little (the
+energy and Casimir errors grow like :math:`\varepsilon\sqrt N`, not :math:`\varepsilon N`).
+What differs: ``iterations`` counts the engine's Newton iterations of each step (summed over a
+batch), and ``residual``, ``tol`` and ``condition`` are empty (the engine checks each solve
+against its own tolerance and reports no residual).  With ``progress``, ``halve`` or
+``diagnostics`` (and for MV-Algorithm 1 from a :math:`Q_0^TQ_1` off the branch through the
+identity, or a solve outside the engine run that fails) the reference loop runs instead: one
+:func:`symrb.solve_moser_veselov`-type Newton solve a step, started from the previous :math:`U`,
+with a progress bar (tqdm), the residual, tolerance and condition number of every solve and, with
+``halve``, steps past the fold taken as :math:`2^j` substeps.
+
 Arrays are batched: ``(..., n, n)``.  The flows return a :class:`DiscreteFlowSolution` (``t``,
 the states by name in ``y`` with the time axis first, the Newton iteration counts, ``success``
 and ``message``); a step that has no solution on the branch through the identity (past the fold
-of :math:`J_D`) ends the run early with ``success`` False rather than raising.
+of :math:`J_D`) ends the run early with ``success`` False rather than raising, with the fold
+diagnosis of that step's momentum (``fold``, ``h_max``) in either path.
 """
 
 from __future__ import annotations
@@ -157,6 +185,12 @@ def symmetric_flow(
     r"""Iterate the symmetric representation (paper, Section 2.1) ``steps`` times from
     :math:`(Q_0, P_0)`.
 
+    Computed by :func:`symrb.engine.mv_flow` from :math:`(Q_0, M_0)`,
+    :math:`M_0 = Q_0^TP_0 - P_0^TQ_0`, at step ``h``: its :math:`(Q_k, M_k)` are this map's, and
+    :math:`P_k = P_0Q_0^{-1}Q_k` (:math:`P_{k+1} = P_kU_k`) at the saved states.  With
+    ``progress``, ``halve`` or ``diagnostics`` the reference loop (one solve a step, the residual,
+    tolerance and condition number of each) runs instead; the two agree to rounding.
+
     Parameters
     ----------
     %(Q0)s
@@ -177,9 +211,10 @@ def symmetric_flow(
     DiscreteFlowSolution
         ``t`` the times :math:`kh`; ``y.Q``, ``y.P`` and the body momentum
         ``y.M`` :math:`= Q_k^TP_k - P_k^TQ_k` (continuous scale), each of shape ``(K, ..., n, n)``
-        with :math:`K = \lfloor steps/s\rfloor + 1`; the Newton iterations of each step.  When a
-        step fails (past the fold of :math:`J_D`), ``success`` is False, ``message`` says why and
-        the last state reached is the last one returned.
+        with :math:`K = \lfloor steps/s\rfloor + 1`; the Newton iterations of each step
+        (``residual``, ``tol`` and ``condition`` are empty unless the reference loop ran).  When
+        a step fails (past the fold of :math:`J_D`), ``success`` is False, ``message`` says why
+        (with ``fold`` and ``h_max``) and the last state reached is the last one returned.
 
     Examples
     --------
@@ -317,6 +352,13 @@ def mv_algorithm1(
     then :math:`Q_{k+2} = Q_{k+1}\Omega_{k+2}^T` (MV1).  For step h,
     start from :math:`Q_1 \approx Q(h)`.
 
+    Computed by :func:`symrb.engine.mv_flow` (h = 1) from :math:`(Q_0, M_1)`, whose state after
+    ``k`` steps is :math:`(Q_k, M_{k+1})`: ``steps + 1`` engine steps, the first recomputing
+    :math:`Q_1 = Q_0U(M_1)` (the given :math:`Q_1` is returned; the later :math:`Q_k` agree with
+    the reference loop's to its rounding, which forming :math:`M` from :math:`Q_{k+1}^TQ_k`
+    amplifies by about :math:`|\Lambda|/|M|`).  The reference loop runs instead with ``progress``
+    or ``diagnostics``, or when :math:`Q_0^TQ_1` is not on the branch through the identity.
+
     Parameters
     ----------
     Q0, Q1 : array_like, shape (..., n, n)
@@ -333,7 +375,8 @@ def mv_algorithm1(
     -------
     DiscreteFlowSolution
         ``y.Q`` of shape ``(K, ..., n, n)``, ``K = floor((steps + 1)/s) + 1``; ``t`` and ``k``
-        are the step indices.  A failed step gives ``success`` False (see
+        are the step indices; ``iterations`` those of the ``steps + 1`` engine steps (the
+        reference loop: of its ``steps`` solves).  A failed step gives ``success`` False (see
         :class:`DiscreteFlowSolution`).
 
     Examples
@@ -437,6 +480,12 @@ def mv_algorithm2(
     same (MV2) for :math:`\Omega_{k+1}`, :math:`Q_{k+1} = Q_k\Omega_{k+1}^T` (MV1).  The solution
     for :math:`\Omega_{k+1}` is the next step's :math:`\Omega_k` (same equation), so one solve per
     step (and one before the first).
+
+    Computed by :func:`symrb.engine.mv_flow` (h = 1): one engine step of :math:`M_0` gives
+    :math:`M_1`, and the run from :math:`(Q_0, M_1)` has the state :math:`(Q_k, M_{k+1})` after
+    ``k`` steps; each saved :math:`M_k` (k > 0) is one batched engine step back from
+    :math:`-M_{k+1}` (module docstring).  The reference loop runs instead with ``progress`` or
+    ``diagnostics`` (or when a solve outside the run fails); the two agree to rounding.
 
     Parameters
     ----------
@@ -563,7 +612,9 @@ def discrete_rigid_body_flow(
     :math:`SO(n)`, :math:`Q_0\exp(\sinh^{-1}(M_0/2))`, gives the same :math:`Q_k`, claim D7).
     :math:`(Q_k, M_k)` with :math:`M_k = Q_k^TP_k - P_k^TQ_k` is a second-order approximation of
     :math:`(Q(t_k), M(t_k))`, :math:`t_k = kh`, of :math:`\dot Q = Q\Omega`,
-    :math:`\dot M = [M,\Omega]`, :math:`\Omega = J^{-1}(M)`.
+    :math:`\dot M = [M,\Omega]`, :math:`\Omega = J^{-1}(M)`.  Computed as
+    :func:`symmetric_flow` is: one :func:`symrb.engine.mv_flow` run from :math:`(Q_0, M_0)`
+    (the reference loop with ``progress``, ``halve`` or ``diagnostics``).
 
     Parameters
     ----------
