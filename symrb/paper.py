@@ -77,8 +77,8 @@ from ._generated import discrete_rigid_body as _gen
 from ._generated import symmetric_rigid_body as _srb
 from ._results import STEP_FAILURES, DiscreteFlowSolution
 from ._stepping import _check_h, _check_steps, _engine_result, _prepare, _Run, _Stepper
-from .engine import mv_flow
 from ._validate import Array
+from .engine import mv_flow
 
 __all__ = [
     "jd_residual",

@@ -84,7 +84,7 @@ def _inputs(n: int, batch: bool):
     return symrb.random_SO(n, size=shape, seed=rng), symrb.random_so(n, size=shape, seed=rng)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _reference(flow: str, n: int, batch: bool, steps: int):
     Q0, X = _inputs(n, batch)
     lam = LAMS[n]
