@@ -549,11 +549,11 @@ def _mv2_engine(
         if not back.success:
             return None
         Ms[1:] = -back.y["M"][-1]
-    its = np.concatenate([first.iterations, sol.iterations])
+    its = np.concatenate([first.iterations, sol.iterations], dtype=np.int64)
     fold = lambda: _Stepper(L, batch).fold(sol.y["M"][-1])  # noqa: E731  (M_k of failed step k)
     return _engine_result(
         sol, {"Q": sol.y["Q"], "M": Ms}, sol.k, method="MV-Algorithm 2", h=None, steps=steps,
-        shift=0, fold=fold, iterations=its.astype(np.int64),
+        shift=0, fold=fold, iterations=its,
     )  # fmt: skip
 
 
