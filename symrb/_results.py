@@ -102,7 +102,8 @@ class DiscreteFlowSolution:
         The saved states by name, each of shape ``(K, ..., n, n)``: ``Q`` always, ``P`` and the
         body momentum ``M`` for the symmetric representation, ``M`` for MV-Algorithm 2.
     iterations : ndarray of int, shape (number of solves,)
-        Newton iterations of each solve of :math:`J_D(U) = M`, in order (summed over a batch).
+        Newton iterations of each solve of :math:`J_D(U) = M`, in order (summed over a batch);
+        for a run by the engine (the default of :mod:`symrb.paper`), of each engine step.
     success : bool
         True when every step was taken and every number of ``t``, ``y``, ``residual`` and
         ``tol`` is finite (``condition`` is NaN unless computed).  A run whose state, residual
@@ -118,6 +119,9 @@ class DiscreteFlowSolution:
         The time step, or None for the Moser-Veselov maps.
     residual : ndarray, shape (number of solves,)
         :math:`\|U\Lambda - \Lambda U^T - M\|_F` of each solve (the largest over a batch).
+        ``residual``, ``tol`` and ``condition`` are those of the reference loop (with
+        ``progress``, ``halve`` or ``diagnostics``); empty for a run by the engine, which checks
+        each solve against its own tolerance.
     tol : ndarray, shape (number of solves,)
         The tolerance each residual met (the default of :func:`symrb.solve_moser_veselov`: ten
         times the rounding error of evaluating the residual): every entry of ``residual`` is at

@@ -3,8 +3,11 @@ step arguments, the warm-started solver of :math:`J_D(U) = M` and the bookkeepin
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
+
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from . import _validate as v
 from ._progress import progress_bar
@@ -119,6 +122,72 @@ def _prepare(
     return L, arrays, batch
 
 
+def _failure(
+    k: int, steps: int, reason: str, fold: float | None, h: float | None
+) -> tuple[str, float | None]:
+    """The message of a failed step ``k`` (``reason`` why; ``fold`` the fold scale of its
+    momentum, ``h`` the time step of a flow that has one) and ``h_max`` (None without ``h``)."""
+    note, h_max = "", None
+    if fold is not None and np.isfinite(fold):
+        if fold <= 1.0:
+            note = f" (the step's momentum is {(1.0 / fold - 1.0) * 100:.4g} % past the fold"
+            if h is not None:
+                h_max = fold * h
+                note += (
+                    f"; h = {h:.10g}, the largest step that works there is just below "
+                    f"h_max = {h_max:.10g})"
+                )
+            else:
+                note += f"; the momentum scaled by less than {fold:.10g} works)"
+        else:
+            note = f" (the step's momentum is inside the fold by {(1.0 - 1.0 / fold) * 100:.4g} %)"
+    return f"step {k} of {steps} failed: {reason}{note}", h_max
+
+
+_ENGINE_FAILURE = re.compile(r"step (\d+) of \d+ failed: (.*)", re.S)
+
+
+def _engine_result(
+    sol: DiscreteFlowSolution,
+    y: dict[str, Array],
+    k: NDArray[np.int64],
+    *,
+    method: str,
+    h: float | None,
+    steps: int,
+    shift: int,
+    fold: Callable[[], float | None],
+    iterations: NDArray[np.int64] | None = None,
+) -> DiscreteFlowSolution:
+    """A paper map's result from the :func:`symrb.engine.mv_flow` run ``sol`` that computed it:
+    the states ``y`` at the steps ``k``, the engine's failure (its step minus ``shift``) with the
+    fold diagnosis ``fold()`` of that step's momentum, as the reference loop reports it.  The
+    engine checks each solve against its own tolerance but reports no residual: ``residual``,
+    ``tol`` and ``condition`` are empty."""
+    message, failed, fold_t, h_max = f"all {steps} steps taken", None, None, None
+    if not sol.success:
+        got = _ENGINE_FAILURE.fullmatch(sol.message)
+        if got is None:  # not a failed solve (an overflow): the engine's words
+            message, failed = sol.message, sol.failed_step
+        else:
+            failed, fold_t = int(got.group(1)) - shift, fold()
+            message, h_max = _failure(failed, steps, got.group(2), fold_t, h)
+    return DiscreteFlowSolution(
+        t=k.astype(np.float64) * (1.0 if h is None else h),
+        k=k,
+        y=Trajectory(y),
+        iterations=sol.iterations if iterations is None else iterations,
+        success=sol.success,
+        status=sol.status,
+        message=message,
+        method=method,
+        h=h,
+        failed_step=failed,
+        fold=fold_t,
+        h_max=h_max,
+    )
+
+
 class _Run:
     """Bookkeeping of a discrete run: saved states, Newton counts, failure, progress bar."""
 
@@ -160,23 +229,7 @@ class _Run:
         self, k: int, exc: Exception, fold: float | None = None, h: float | None = None
     ) -> None:
         self.failed_step, self.fold = k, fold
-        note = ""
-        if fold is not None and np.isfinite(fold):
-            if fold <= 1.0:
-                note = f" (the step's momentum is {(1.0 / fold - 1.0) * 100:.4g} % past the fold"
-                if h is not None:
-                    self.h_max = fold * h
-                    note += (
-                        f"; h = {h:.10g}, the largest step that works there is just below "
-                        f"h_max = {self.h_max:.10g})"
-                    )
-                else:
-                    note += f"; the momentum scaled by less than {fold:.10g} works)"
-            else:
-                note = (
-                    f" (the step's momentum is inside the fold by {(1.0 - 1.0 / fold) * 100:.4g} %)"
-                )
-        self.failure = f"step {k} of {self.steps} failed: {step_failure(exc)}{note}"
+        self.failure, self.h_max = _failure(k, self.steps, step_failure(exc), fold, h)
 
     def result(self, t_scale: float | None) -> DiscreteFlowSolution:
         self.bar.close()

@@ -1,7 +1,8 @@
 r"""The paper's algorithms by the paper's names (Bloch, Crouch and Ratiu 2024, Section 2).
 
-Three maps, each implemented from its own equations and sharing only the solver of
-:math:`J_D(U) = U\Lambda - \Lambda U^T = M` (:func:`symrb.solve_moser_veselov`):
+Three maps, each with a reference loop written from its own equations (sharing only the solver
+of :math:`J_D(U) = U\Lambda - \Lambda U^T = M`, as :func:`symrb.solve_moser_veselov` solves it)
+and computed by default by the engine (below):
 
 * the symmetric representation of the discrete rigid body (Section 2.1, equations
   ``discrbopteqns1`` and ``Ukdef1`` of the paper's source):
@@ -30,12 +31,39 @@ map is a second-order approximation of the rigid body flow :math:`\dot Q = Q\Ome
 :math:`\dot M = [M, \Omega]` at step :math:`h` (a symmetric variational integrator; measured in the
 book and the tests).
 
-Long runs: each step starts Newton from the previous :math:`U` (it changes by :math:`O(h^2)`),
-only every ``save_every``-th state is kept, and ``progress=True`` shows a progress bar (tqdm).
+Computed by the engine.  The three maps are the map of :func:`symrb.engine.mv_flow`
+(:math:`J_D(U_k) = hM_k`, :math:`Q_{k+1} = Q_kU_k`, :math:`M_{k+1} = U_k^TM_kU_k`), with other
+names for the states, so each runs as one ``mv_flow`` call (the compiled n = 3 loop for long runs;
+any n and batch axes) and only the saved states are converted:
+
+* symmetric representation: :math:`(Q_k, Q_k^TP_k - P_k^TQ_k)` is ``mv_flow``'s state at step
+  ``h``; :math:`P_k = P_0U_0\cdots U_{k-1} = P_0Q_0^{-1}Q_k` at the saved states;
+* MV-Algorithm 2: its :math:`Q_{k+1} = Q_k\Omega_{k+1}^T` uses the next momentum's solve, so
+  :math:`(Q_k, M_{k+1})` is ``mv_flow``'s state (h = 1) from :math:`(Q_0, M_1)`; a saved
+  :math:`M_k` is one engine step back from :math:`-M_{k+1}` (:math:`\Omega_k` solves
+  :math:`J_D(V) = -M_{k+1}`, because :math:`\Lambda U - U^T\Lambda = U^T(U\Lambda - \Lambda U^T)U`):
+  one solve per saved state (a batch), none per step;
+* MV-Algorithm 1: :math:`(Q_k, M_{k+1})` from :math:`(Q_0, M_1)`,
+  :math:`M_1 = \Omega_1^T\Lambda - \Lambda\Omega_1`, :math:`\Omega_1 = Q_1^TQ_0`; the first engine
+  step recomputes :math:`Q_1` (the given one is returned).
+
+The results are those of the step-by-step loops (to rounding; tests/test_paper_engine.py against
+a SciPy run of the paper's equations), about as fast as ``mv_flow`` and drifting as little (the
+energy and Casimir errors grow like :math:`\varepsilon\sqrt N`, not :math:`\varepsilon N`).
+What differs: ``iterations`` counts the engine's Newton iterations of each step (summed over a
+batch), and ``residual``, ``tol`` and ``condition`` are empty (the engine checks each solve
+against its own tolerance and reports no residual).  With ``progress``, ``halve`` or
+``diagnostics`` (and for MV-Algorithm 1 from a :math:`Q_0^TQ_1` off the branch through the
+identity, or a solve outside the engine run that fails) the reference loop runs instead: one
+:func:`symrb.solve_moser_veselov`-type Newton solve a step, started from the previous :math:`U`,
+with a progress bar (tqdm), the residual, tolerance and condition number of every solve and, with
+``halve``, steps past the fold taken as :math:`2^j` substeps.
+
 Arrays are batched: ``(..., n, n)``.  The flows return a :class:`DiscreteFlowSolution` (``t``,
 the states by name in ``y`` with the time axis first, the Newton iteration counts, ``success``
 and ``message``); a step that has no solution on the branch through the identity (past the fold
-of :math:`J_D`) ends the run early with ``success`` False rather than raising.
+of :math:`J_D`) ends the run early with ``success`` False rather than raising, with the fold
+diagnosis of that step's momentum (``fold``, ``h_max``) in either path.
 """
 
 from __future__ import annotations
@@ -48,8 +76,9 @@ from ._docs import fill
 from ._generated import discrete_rigid_body as _gen
 from ._generated import symmetric_rigid_body as _srb
 from ._results import STEP_FAILURES, DiscreteFlowSolution
-from ._stepping import _check_h, _check_steps, _prepare, _Run, _Stepper
+from ._stepping import _check_h, _check_steps, _engine_result, _prepare, _Run, _Stepper
 from ._validate import Array
+from .engine import mv_flow
 
 __all__ = [
     "jd_residual",
@@ -156,6 +185,12 @@ def symmetric_flow(
     r"""Iterate the symmetric representation (paper, Section 2.1) ``steps`` times from
     :math:`(Q_0, P_0)`.
 
+    Computed by :func:`symrb.engine.mv_flow` from :math:`(Q_0, M_0)`,
+    :math:`M_0 = Q_0^TP_0 - P_0^TQ_0`, at step ``h``: its :math:`(Q_k, M_k)` are this map's, and
+    :math:`P_k = P_0Q_0^{-1}Q_k` (:math:`P_{k+1} = P_kU_k`) at the saved states.  With
+    ``progress``, ``halve`` or ``diagnostics`` the reference loop (one solve a step, the residual,
+    tolerance and condition number of each) runs instead; the two agree to rounding.
+
     Parameters
     ----------
     %(Q0)s
@@ -176,9 +211,10 @@ def symmetric_flow(
     DiscreteFlowSolution
         ``t`` the times :math:`kh`; ``y.Q``, ``y.P`` and the body momentum
         ``y.M`` :math:`= Q_k^TP_k - P_k^TQ_k` (continuous scale), each of shape ``(K, ..., n, n)``
-        with :math:`K = \lfloor steps/s\rfloor + 1`; the Newton iterations of each step.  When a
-        step fails (past the fold of :math:`J_D`), ``success`` is False, ``message`` says why and
-        the last state reached is the last one returned.
+        with :math:`K = \lfloor steps/s\rfloor + 1`; the Newton iterations of each step
+        (``residual``, ``tol`` and ``condition`` are empty unless the reference loop ran).  When
+        a step fails (past the fold of :math:`J_D`), ``success`` is False, ``message`` says why
+        (with ``fold`` and ``h_max``) and the last state reached is the last one returned.
 
     Examples
     --------
@@ -198,19 +234,34 @@ def symmetric_flow(
     h = _check_h(h)
     steps, save_every = _check_steps(steps, save_every)
     L, (Q, P), batch = _prepare(lam, (Q0, "Q0", "SO"), (P0, "P0", "square"))
-    return _symmetric_run(
-        Q,
-        P,
-        L,
-        batch,
-        h,
-        steps,
-        save_every,
-        progress,
-        "symmetric representation",
-        bool(halve),
-        bool(diagnostics),
-    )
+    method = "symmetric representation"
+    if progress or halve or diagnostics:
+        return _symmetric_run(
+            Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
+        )
+    return _symmetric_engine(Q, P, L, batch, h, steps, save_every, method)
+
+
+def _symmetric_engine(
+    Q: Array,
+    P: Array,
+    L: Array,
+    batch: tuple[int, ...],
+    h: float,
+    steps: int,
+    save_every: int,
+    method: str,
+) -> DiscreteFlowSolution:
+    r""":func:`symmetric_flow` by :func:`symrb.engine.mv_flow`: :math:`(Q_k, M_k)` with
+    :math:`M_k = Q_k^TP_k - P_k^TQ_k` is its state at step ``h``, and
+    :math:`P_k = P_0U_0\cdots U_{k-1} = P_0Q_0^{-1}Q_k` is recovered at the saved states."""
+    sol = mv_flow(Q, _srb.symmetric_momentum(Q, P), L, h, steps, save_every=save_every)
+    Qs, Ms = sol.y["Q"], sol.y["M"]
+    with np.errstate(over="ignore", invalid="ignore"):
+        Ps = P @ np.linalg.solve(Q, Qs)
+    y = {"Q": Qs, "P": Ps, "M": Ms}
+    fold = lambda: _Stepper(L, batch).fold(h * Ms[-1])  # noqa: E731  (the state before)
+    return _engine_result(sol, y, sol.k, method=method, h=h, steps=steps, shift=0, fold=fold)
 
 
 #: The most halvings of one step: 2^12 substeps at most (the work doubles with each halving;
@@ -301,6 +352,13 @@ def mv_algorithm1(
     then :math:`Q_{k+2} = Q_{k+1}\Omega_{k+2}^T` (MV1).  For step h,
     start from :math:`Q_1 \approx Q(h)`.
 
+    Computed by :func:`symrb.engine.mv_flow` (h = 1) from :math:`(Q_0, M_1)`, whose state after
+    ``k`` steps is :math:`(Q_k, M_{k+1})`: ``steps + 1`` engine steps, the first recomputing
+    :math:`Q_1 = Q_0U(M_1)` (the given :math:`Q_1` is returned; the later :math:`Q_k` agree with
+    the reference loop's to its rounding, which forming :math:`M` from :math:`Q_{k+1}^TQ_k`
+    amplifies by about :math:`|\Lambda|/|M|`).  The reference loop runs instead with ``progress``
+    or ``diagnostics``, or when :math:`Q_0^TQ_1` is not on the branch through the identity.
+
     Parameters
     ----------
     Q0, Q1 : array_like, shape (..., n, n)
@@ -317,7 +375,8 @@ def mv_algorithm1(
     -------
     DiscreteFlowSolution
         ``y.Q`` of shape ``(K, ..., n, n)``, ``K = floor((steps + 1)/s) + 1``; ``t`` and ``k``
-        are the step indices.  A failed step gives ``success`` False (see
+        are the step indices; ``iterations`` those of the ``steps + 1`` engine steps (the
+        reference loop: of its ``steps`` solves).  A failed step gives ``success`` False (see
         :class:`DiscreteFlowSolution`).
 
     Examples
@@ -332,7 +391,51 @@ def mv_algorithm1(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qa, Qb), batch = _prepare(lam, (Q0, "Q0", "SO"), (Q1, "Q1", "SO"))
-    stepper = _Stepper(L, batch, bool(diagnostics))
+    if not (progress or diagnostics):
+        got = _mv1_engine(Qa, Qb, L, batch, steps, save_every)
+        if got is not None:
+            return got
+    return _mv1_reference(Qa, Qb, L, batch, steps, save_every, progress, bool(diagnostics))
+
+
+def _mv1_engine(
+    Qa: Array, Qb: Array, L: Array, batch: tuple[int, ...], steps: int, save_every: int
+) -> DiscreteFlowSolution | None:
+    r""":func:`mv_algorithm1` by :func:`symrb.engine.mv_flow` (h = 1): its state ``j`` is
+    :math:`(Q_j, M_{j+1})` from :math:`(Q_0, M_1)`, :math:`M_1` from (MV1), (MV2); its first step
+    recomputes :math:`Q_1 = Q_0U(M_1)`.  None when that :math:`U` is not the given
+    :math:`Q_0^TQ_1` (off the branch through the identity, or the solve fails): the reference
+    loop runs then."""
+    nn = L.shape[-1]
+    U1 = np.swapaxes(Qa, -1, -2) @ Qb  # Omega_1^T
+    M1 = _gen.mv_momentum(np.swapaxes(U1, -1, -2), np.broadcast_to(L, batch + (nn,)))
+    eig = np.linalg.eigvals(U1 * np.broadcast_to(L, batch + (nn,))[..., None, :])
+    if not np.all(eig.real > 0):  # the branch through the identity (solve_moser_veselov)
+        return None
+    sol = mv_flow(Qa, M1, L, 1.0, steps + 1, save_every=save_every)
+    if not sol.success and sol.k[-1] == 0:
+        return None  # the recomputation of Q_1 failed: not a step of the paper's map
+    Qs = sol.y["Q"].copy()
+    if save_every == 1 and Qs.shape[0] > 1:
+        Qs[1] = Qb  # the given Q_1 (the engine's equals it to rounding)
+    fold = lambda: _Stepper(L, batch).fold(sol.y["M"][-1])  # noqa: E731  (M_k of failed step k-1)
+    return _engine_result(
+        sol, {"Q": Qs}, sol.k, method="MV-Algorithm 1", h=None, steps=steps, shift=1, fold=fold
+    )
+
+
+def _mv1_reference(
+    Qa: Array,
+    Qb: Array,
+    L: Array,
+    batch: tuple[int, ...],
+    steps: int,
+    save_every: int,
+    progress: bool,
+    diagnostics: bool,
+) -> DiscreteFlowSolution:
+    """The step-by-step loop of :func:`mv_algorithm1` (the reference)."""
+    stepper = _Stepper(L, batch, diagnostics)
     run = _Run(steps, steps, "MV-Algorithm 1", progress)
     run.save(0, Q=Qa.copy())
     if save_every == 1:
@@ -378,6 +481,12 @@ def mv_algorithm2(
     for :math:`\Omega_{k+1}` is the next step's :math:`\Omega_k` (same equation), so one solve per
     step (and one before the first).
 
+    Computed by :func:`symrb.engine.mv_flow` (h = 1): one engine step of :math:`M_0` gives
+    :math:`M_1`, and the run from :math:`(Q_0, M_1)` has the state :math:`(Q_k, M_{k+1})` after
+    ``k`` steps; each saved :math:`M_k` (k > 0) is one batched engine step back from
+    :math:`-M_{k+1}` (module docstring).  The reference loop runs instead with ``progress`` or
+    ``diagnostics`` (or when a solve outside the run fails); the two agree to rounding.
+
     Parameters
     ----------
     Q : array_like, shape (..., n, n)
@@ -412,7 +521,54 @@ def mv_algorithm2(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qk, Mk), batch = _prepare(lam, (Q, "Q", "SO"), (M, "M", "skew"))
-    stepper = _Stepper(L, batch, bool(diagnostics))
+    if not (progress or diagnostics):
+        got = _mv2_engine(Qk, Mk, L, batch, steps, save_every)
+        if got is not None:
+            return got
+    return _mv2_reference(Qk, Mk, L, batch, steps, save_every, progress, bool(diagnostics))
+
+
+def _mv2_engine(
+    Q0: Array, M0: Array, L: Array, batch: tuple[int, ...], steps: int, save_every: int
+) -> DiscreteFlowSolution | None:
+    r""":func:`mv_algorithm2` by :func:`symrb.engine.mv_flow` (h = 1): its state ``j`` is
+    :math:`(Q_j, M_{j+1})` from :math:`(Q_0, M_1)`, :math:`M_1 = \Omega_0M_0\Omega_0^T` (one
+    engine step of M alone); the saved :math:`M_j` (j > 0) is one batched engine step back from
+    :math:`-M_{j+1}` (:math:`J_D(V) = -M_{j+1}` is solved by :math:`V = \Omega_j`, and
+    :math:`V^T(-M_{j+1})V = -M_j`).  None when a solve outside the run fails (the reference loop
+    runs then and reports it)."""
+    eye = np.eye(L.shape[-1])
+    first = mv_flow(eye, M0, L, 1.0, 1)
+    if not first.success:
+        return None
+    sol = mv_flow(Q0, first.y["M"][-1], L, 1.0, steps, save_every=save_every)
+    Ms = sol.y["M"].copy()
+    Ms[0] = M0
+    if Ms.shape[0] > 1:
+        back = mv_flow(eye, -sol.y["M"][1:], L, 1.0, 1)
+        if not back.success:
+            return None
+        Ms[1:] = -back.y["M"][-1]
+    its = np.concatenate([first.iterations, sol.iterations], dtype=np.int64)
+    fold = lambda: _Stepper(L, batch).fold(sol.y["M"][-1])  # noqa: E731  (M_k of failed step k)
+    return _engine_result(
+        sol, {"Q": sol.y["Q"], "M": Ms}, sol.k, method="MV-Algorithm 2", h=None, steps=steps,
+        shift=0, fold=fold, iterations=its,
+    )  # fmt: skip
+
+
+def _mv2_reference(
+    Qk: Array,
+    Mk: Array,
+    L: Array,
+    batch: tuple[int, ...],
+    steps: int,
+    save_every: int,
+    progress: bool,
+    diagnostics: bool,
+) -> DiscreteFlowSolution:
+    """The step-by-step loop of :func:`mv_algorithm2` (the reference)."""
+    stepper = _Stepper(L, batch, diagnostics)
     run = _Run(steps, steps + 1, "MV-Algorithm 2", progress)
     run.save(0, Q=Qk.copy(), M=Mk.copy())
     k = 1  # the solve before the loop belongs to the first step
@@ -456,7 +612,9 @@ def discrete_rigid_body_flow(
     :math:`SO(n)`, :math:`Q_0\exp(\sinh^{-1}(M_0/2))`, gives the same :math:`Q_k`, claim D7).
     :math:`(Q_k, M_k)` with :math:`M_k = Q_k^TP_k - P_k^TQ_k` is a second-order approximation of
     :math:`(Q(t_k), M(t_k))`, :math:`t_k = kh`, of :math:`\dot Q = Q\Omega`,
-    :math:`\dot M = [M,\Omega]`, :math:`\Omega = J^{-1}(M)`.
+    :math:`\dot M = [M,\Omega]`, :math:`\Omega = J^{-1}(M)`.  Computed as
+    :func:`symmetric_flow` is: one :func:`symrb.engine.mv_flow` run from :math:`(Q_0, M_0)`
+    (the reference loop with ``progress``, ``halve`` or ``diagnostics``).
 
     Parameters
     ----------
@@ -503,6 +661,8 @@ def discrete_rigid_body_flow(
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     method = "discrete rigid body"
     P = Q @ (0.5 * M)
-    return _symmetric_run(
-        Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
-    )
+    if progress or halve or diagnostics:
+        return _symmetric_run(
+            Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
+        )
+    return _symmetric_engine(Q, P, L, batch, h, steps, save_every, method)

@@ -164,15 +164,18 @@ def algorithm_agreement(
     Rt = R.T
 
     start = time.perf_counter()
+    # the step-by-step loops (diagnostics=True), as the agreement scenes run them (loop =
+    # "reference"): by default the three algorithms are one engine run each
+    ref = {"diagnostics": True}
     with _one_blas_thread():
-        sym = symrb.symmetric_flow(Q0, P0, L, 1.0, steps)
+        sym = symrb.symmetric_flow(Q0, P0, L, 1.0, steps, **ref)
         Qs, Ms = sym.y.Q, sym.y.M
         M1 = symrb.symmetric.symmetric_momentum(Q0, P0)
-        mv2 = symrb.mv_algorithm2(Qs[1], M1, L, steps - 1)
-        mv1 = symrb.mv_algorithm1(Q0, Qs[1], L, steps - 1)
-        sym_r = symrb.symmetric_flow(R @ Q0, R @ P0, L, 1.0, steps)
-        mv1_r = symrb.mv_algorithm1(R @ Q0, R @ Qs[1], L, steps - 1)
-        wrong = symrb.mv_algorithm2(Q0, M1, L, steps - 1)
+        mv2 = symrb.mv_algorithm2(Qs[1], M1, L, steps - 1, **ref)
+        mv1 = symrb.mv_algorithm1(Q0, Qs[1], L, steps - 1, **ref)
+        sym_r = symrb.symmetric_flow(R @ Q0, R @ P0, L, 1.0, steps, **ref)
+        mv1_r = symrb.mv_algorithm1(R @ Q0, R @ Qs[1], L, steps - 1, **ref)
+        wrong = symrb.mv_algorithm2(Q0, M1, L, steps - 1, **ref)
     seconds = time.perf_counter() - start
     runs = (sym, mv2, mv1, sym_r, mv1_r, wrong)
     failed = [r.message for r in runs if not r.success]

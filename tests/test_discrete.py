@@ -181,10 +181,42 @@ def test_a_solve_past_the_fold_stops_the_run_with_a_message():
     assert not mv2.success and "step 1 of 5 failed" in mv2.message
 
 
+def _failing_engine(monkeypatch, fail_at):
+    """symrb.paper's engine (mv_flow) with a run of more than ``fail_at`` steps failing at step
+    ``fail_at`` as mv_flow reports a failure: the states saved before it, then the state before
+    the failed step, the iterations of the steps taken, the message "step k of N failed: ..."."""
+    import dataclasses
+
+    import symrb.paper as paper
+
+    real = paper.mv_flow
+
+    def fake(Q0, M0, lam, h, steps, *, save_every=1, **kw):
+        if steps <= fail_at:  # the single solves around the run
+            return real(Q0, M0, lam, h, steps, save_every=save_every, **kw)
+        done = real(Q0, M0, lam, h, fail_at - 1, save_every=1, **kw)
+        keep = (done.k % save_every == 0) | (done.k == fail_at - 1)
+        return dataclasses.replace(
+            done,
+            t=done.t[keep],
+            k=done.k[keep],
+            y=type(done.y)({name: x[keep] for name, x in done.y.items()}),
+            success=False,
+            status=-1,
+            message=f"step {fail_at} of {steps} failed: no solution (test)",
+        )
+
+    monkeypatch.setattr(paper, "mv_flow", fake)
+
+
+@pytest.mark.parametrize("path", ["reference", "engine"])
 @pytest.mark.parametrize("flow", ["symmetric", "mv1", "mv2"])
-def test_a_failure_mid_run_keeps_the_states_reached(monkeypatch, flow):
+def test_a_failure_mid_run_keeps_the_states_reached(monkeypatch, flow, path):
     """The fourth solve raises: the run returns the states up to the last completed step (appended
-    when save_every would have skipped it), the iterations of the solves done, and the reason."""
+    when save_every would have skipped it), the iterations of the solves done, and the reason.
+    The reference loop (diagnostics=True) and the engine path (mv_flow failing at the engine step
+    of that solve: the engine's first step of MV-Algorithm 1 recomputes Q_1, MV-Algorithm 2 solves
+    once before the run) report the same."""
     import symrb._stepping as dm
     from symrb.errors import OutOfDomainError
 
@@ -197,22 +229,30 @@ def test_a_failure_mid_run_keeps_the_states_reached(monkeypatch, flow):
             raise OutOfDomainError("no solution (test)")
         return original(self, M)
 
-    monkeypatch.setattr(dm._Stepper, "solve", failing)
+    diag = path == "reference"
+    if diag:
+        monkeypatch.setattr(dm._Stepper, "solve", failing)
+    else:
+        _failing_engine(monkeypatch, {"symmetric": 4, "mv1": 5, "mv2": 3}[flow])
     Q0, M, _ = _start(11, scale=0.2)
     if flow == "symmetric":
-        sol = symmetric_flow(Q0, Q0 @ M, LAM3, 0.5, 10, save_every=2)
+        sol = symmetric_flow(Q0, Q0 @ M, LAM3, 0.5, 10, save_every=2, diagnostics=diag)
         last = 3  # steps 1-3 done, step 4 failed
     elif flow == "mv1":
-        Q1 = solve_moser_veselov(0.1 * M, LAM3)
-        sol = mv_algorithm1(Q0, Q1, LAM3, 10, save_every=2)
+        Q1 = Q0 @ solve_moser_veselov(0.1 * M, LAM3)
+        sol = mv_algorithm1(Q0, Q1, LAM3, 10, save_every=2, diagnostics=diag)
         last = 4  # Q_2, Q_3, Q_4 computed (steps 1-3), step 4 (Q_5) failed
     else:
-        sol = mv_algorithm2(Q0, 0.1 * M, LAM3, 10, save_every=2)
+        sol = mv_algorithm2(Q0, 0.1 * M, LAM3, 10, save_every=2, diagnostics=diag)
         last = 2  # the first solve and steps 1, 2; step 3 failed
     assert not sol.success and sol.status == -1
     assert "failed: no solution (test)" in sol.message
     assert sol.k[-1] == last and sol.y.Q.shape[0] == len(sol.k)
-    assert sol.iterations.shape == (3,)
+    assert sol.failed_step == (last if flow == "mv1" else last + 1)
+    assert f"step {sol.failed_step} of 10 failed" in sol.message
+    assert sol.iterations.shape == ((3,) if diag or flow != "mv1" else (4,))
+    # the fold diagnosis of the failed step's momentum (inside the fold here)
+    assert sol.fold is not None and sol.fold > 1 and "inside the fold" in sol.message
 
 
 def test_progress_bar(capsys, monkeypatch):

@@ -303,22 +303,25 @@ def test_discrete_flows_invariants_per_step_at_rounding(name, n, data):
 @given(dimensions(2, 5), st.data())
 def test_flow_near_the_fold_completes_or_says_where_and_what_works(n, data):
     """A step h close to the fold: every solve within tol, or a failure naming the step, how far
-    past the fold and h_max, and h_max works for that step."""
+    past the fold and h_max, and h_max works for that step; by the engine (the default) and by
+    the step-by-step loop (diagnostics=True, which reports every solve's residual)."""
     lam = data.draw(inertias(n=n, kinds=("moderate", "near_equal", "spherical")))
     M0 = symrb.random_so(n, seed=data.draw(seeds()))
     h, h_fold = data.draw(step_sizes(M0, lam))
     Q0 = np.eye(n)
-    sol = symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 8)
-    assert np.all(sol.residual <= sol.tol)
-    if sol.success:
-        return
-    k = sol.failed_step
-    assert k is not None and 1 <= k <= 8 and sol.h_max is not None and sol.h_max < h
-    assert f"step {k} of 8 failed" in sol.message and "% past the fold" in sol.message
-    assert "h_max" in sol.message
-    Qk, Pk = sol.y["Q"][-1], sol.y["P"][-1]
-    ok = symrb.symmetric_flow(Qk, Pk, lam, (1 - 1e-6) * sol.h_max, 1)
-    assert ok.success, ok.message
+    for diagnostics in (False, True):
+        sol = symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 8, diagnostics=diagnostics)
+        assert np.all(sol.residual <= sol.tol)
+        assert sol.residual.size == (sol.iterations.size if diagnostics else 0)
+        if sol.success:
+            continue
+        k = sol.failed_step
+        assert k is not None and 1 <= k <= 8 and sol.h_max is not None and sol.h_max < h
+        assert f"step {k} of 8 failed" in sol.message and "% past the fold" in sol.message
+        assert "h_max" in sol.message
+        Qk, Pk = sol.y["Q"][-1], sol.y["P"][-1]
+        ok = symrb.symmetric_flow(Qk, Pk, lam, (1 - 1e-6) * sol.h_max, 1)
+        assert ok.success, ok.message
 
 
 @examples(1)

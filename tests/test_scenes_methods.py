@@ -113,7 +113,7 @@ energy = "end"
         ("exact", "h = 0.5", "integrator.h", ["method", "check"]),
         ("DOP853", "order = 4", "integrator.order", ["method", "rtol", "atol", "condition"]),
         ("mv", "h = 0.5\nrtol = 1e-8", "integrator.rtol", ["method", "h", "order", "backend"]),
-        ("mv_algorithm1", "h = 0.5\nstart = 'Q1_M1'", "integrator.start", ["method", "h"]),
+        ("mv_algorithm1", "h = 0.5\nstart = 'Q1_M1'", "integrator.start", ["method", "h", "loop"]),
         ("midpoint", "h = 0.5\nprogress = true", "integrator.progress", ["method", "h", "order"]),
     ],
 )  # fmt: skip

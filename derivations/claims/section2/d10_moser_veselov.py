@@ -61,8 +61,10 @@ D10 = claim(
     "$\\Omega_k$, $M_k$ and $M_{k+1}$, and the paragraphs 'MV-Algorithm 1' and 'MV-Algorithm 2'",
     note="The third Moser-Veselov equation with the second gives $M_{k+1} = \\Lambda\\Omega_k^T - "
     "\\Omega_k\\Lambda = -J_D(\\Omega_k)$: the momentum is transported by a conjugation. symrb's "
-    "`mv_algorithm1`, `mv_algorithm2` and `symmetric_flow` are written from their own equations "
-    "and share only the solver of the second equation.",
+    "`mv_algorithm1`, `mv_algorithm2` and `symmetric_flow` have step-by-step loops written from "
+    "their own equations (run with `diagnostics=True`), sharing only the solver of the second "
+    "equation; by default each is one run of the engine `mv_flow`, whose state is theirs with "
+    "the momentum index shifted by one for the two MV-Algorithms.",
 )
 
 
@@ -163,17 +165,21 @@ def d10_fold_n3() -> float:
 @D10.check(Level.FLOAT64, tol=1e-13)
 def d10_symrb_algorithms_against_50_digits() -> float:
     """symrb.mv_algorithm1 from $(Q_0, Q_1)$, symrb.mv_algorithm2 from $(Q_1, M_1)$ and
-    symrb.symmetric_flow from $(Q_0, P_0)$ (float64, $n = 3$, 12 steps) against the $Q_k$ of the
-    50-digit reference run of the symmetric representation ($h = 0.1$; $M_1 = h(Q_0^T P_0 - P_0^T
-    Q_0)$): max absolute error."""
+    symrb.symmetric_flow from $(Q_0, P_0)$ (float64, $n = 3$, 12 steps), each by the engine (the
+    default) and by its step-by-step loop (diagnostics=True), against the $Q_k$ of the 50-digit
+    reference run of the symmetric representation ($h = 0.1$; $M_1 = h(Q_0^T P_0 - P_0^T Q_0)$):
+    max absolute error."""
     import symrb
 
     run = _mp_run()
     Qf = run["Qf"]
-    QA = symrb.mv_algorithm1(run["Q0"], Qf[1], _LAM3, _STEPS - 1).y.Q
-    QB = symrb.mv_algorithm2(Qf[1], run["Msf"][0], _LAM3, _STEPS - 1).y.Q
-    QS = symrb.symmetric_flow(run["Q0"], run["P0"], _LAM3, _H, _STEPS).y.Q
-    errs = [np.abs(QA - Qf).max(), np.abs(QB - Qf[1:]).max(), np.abs(QS - Qf).max()]
+    errs = []
+    for diagnostics in (False, True):
+        QA = symrb.mv_algorithm1(run["Q0"], Qf[1], _LAM3, _STEPS - 1, diagnostics=diagnostics)
+        QB = symrb.mv_algorithm2(Qf[1], run["Msf"][0], _LAM3, _STEPS - 1, diagnostics=diagnostics)
+        QS = symrb.symmetric_flow(run["Q0"], run["P0"], _LAM3, _H, _STEPS, diagnostics=diagnostics)
+        errs += [np.abs(QA.y.Q - Qf).max(), np.abs(QB.y.Q - Qf[1:]).max()]
+        errs.append(np.abs(QS.y.Q - Qf).max())
     return float(np.max(errs))
 
 

@@ -26,8 +26,9 @@ from ..schema import Matrix, SceneError, Vector, _Model, _SceneBase, _skew_from
 _RB_MODULES = ("continuous", "symmetric", "rigid_body", "algebra", "_validate", "_generated.rigid_body",
                "_results", "scenes.systems._body")  # fmt: skip
 #: the modules of the symmetric representation's map (``symmetric_flow``)
-_SYMMETRIC_MAP_MODULES = ("paper", "_stepping", "solvers", "_generated.discrete_rigid_body",
-                          "_generated.symmetric_rigid_body", "_progress")  # fmt: skip
+_SYMMETRIC_MAP_MODULES = ("paper", "engine", "_compiled", "_stepping", "solvers",
+                          "_generated.discrete_rigid_body", "_generated.symmetric_rigid_body",
+                          "_progress")  # fmt: skip
 
 #: the components of ``casimirs`` (:func:`symrb.rigid_body.casimir_traces`), for plot legends
 CASIMIR_LABELS = (r"$\mathrm{tr}\,M^2$", r"$\mathrm{tr}\,M^4$", r"$\mathrm{tr}\,M^6$")

@@ -97,10 +97,12 @@ class Splitting(_Model):
 class Discrete(_Model):
     """``method = "discrete"``, the paper's: the symmetric representation of Section 2
     (``symrb.paper.discrete_rigid_body_flow`` or ``symrb.paper.symmetric_flow``) at step
-    ``h``."""
+    ``h``.  ``loop = "reference"`` runs the step-by-step loop of :mod:`symrb.paper`
+    (``diagnostics=True``) instead of the engine (``"engine"``, the default; the same map)."""
 
     method: Literal["discrete"]
     h: float = Field(gt=0)
+    loop: Literal["engine", "reference"] = "engine"
 
 
 class MVAlgorithm2(_Model):
@@ -114,11 +116,13 @@ class MVAlgorithm2(_Model):
     ``symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1)``, which gives :math:`Q_1` and
     :math:`M_1 = h(Q_0^TP_0 - P_0^TQ_0)` (claim D12), and MV-Algorithm 2 runs from
     :math:`(Q_1, M_1)`; it records :math:`Q_k` and :math:`M_{k+1}/h` at :math:`t_k`.  Against
-    the symmetric algorithm, ``"Q0_M0"`` is one index off."""
+    the symmetric algorithm, ``"Q0_M0"`` is one index off.  ``loop = "reference"`` runs the step-by-step loop of :mod:`symrb.paper`
+    (``diagnostics=True``) instead of the engine (``"engine"``, the default; the same map)."""
 
     method: Literal["mv_algorithm2"]
     h: float = Field(gt=0)
     start: Literal["Q0_M0", "Q1_M1"] = "Q0_M0"
+    loop: Literal["engine", "reference"] = "engine"
 
 
 class MVAlgorithm1(_Model):
@@ -127,10 +131,12 @@ class MVAlgorithm1(_Model):
     algorithm, ``symrb.discrete_rigid_body_flow(Q0, M0, lam, h, 1)`` (the step with
     :math:`M_1 = h(Q_0^TP_0 - P_0^TQ_0)`, claim D12), then
     :math:`(Q_k, Q_{k+1}) \mapsto (Q_{k+1}, Q_{k+2})`.  It records :math:`Q_k` at :math:`t_k`
-    (observables ``Q``, ``orthogonality``, ``Q_gap``; the effect ``attitude``)."""
+    (observables ``Q``, ``orthogonality``, ``Q_gap``; the effect ``attitude``).  ``loop = "reference"`` runs the step-by-step loop of :mod:`symrb.paper`
+    (``diagnostics=True``) instead of the engine (``"engine"``, the default; the same map)."""
 
     method: Literal["mv_algorithm1"]
     h: float = Field(gt=0)
+    loop: Literal["engine", "reference"] = "engine"
 
 
 #: the methods of ``simulate`` a scene runs through it (the others are the paper's algorithms)

@@ -69,6 +69,8 @@ _EXACT_MODULES = ("exact",)
 _SPLITTING_MODULES = ("splitting", "composition", "_stepping")
 _MV_ALGORITHM_MODULES = (
     "paper",
+    "engine",
+    "_compiled",
     "_stepping",
     "solvers",
     "_generated.discrete_rigid_body",
@@ -405,9 +407,17 @@ def _plan_mv_algorithm(
     if not isinstance(integ, rbm.MVAlgorithm2) or integ.start == "Q1_M1":
         modules += ("_generated.symmetric_rigid_body",)
         kernels += ("symmetric_rigid_body.symmetric_momentum",)
-    per = 40e-6 + 16.0 * n**3 / 1.5e9
+    route += _LOOPS[integ.loop]
+    per = (40e-6 if integ.loop == "reference" else 5e-6) + 16.0 * n**3 / 1.5e9
     cost = _fixed_step_cost(steps, 16.0 * n**3, per, " (one solve of J_D(Omega^T) = M a step)")
     return _fixed_step_plan(fixed, route, propagated, kernels, cost, modules)
+
+
+#: how symrb.paper computes the paper's algorithm (``loop`` of the integrator table)
+_LOOPS = {
+    "engine": "; computed by the engine, one symrb.engine.mv_flow run",
+    "reference": "; the step-by-step loop (diagnostics=True), not the engine",
+}
 
 
 def _plan_discrete(
@@ -420,9 +430,9 @@ def _plan_discrete(
         skipped.pop()
         notes.append("the symmetric representation's state is (Q, P): Q is "
                      "propagated by the map itself, though not recorded")  # fmt: skip
-    per = 60e-6 + 30.0 * n**3 / 1.5e9
+    per = (60e-6 if integ.loop == "reference" else 5e-6) + 30.0 * n**3 / 1.5e9
     return _fixed_step_plan(
-        fixed, f"symrb.discrete_rigid_body_flow(h={integ.h:g})", ("Q", "P"),
+        fixed, f"symrb.discrete_rigid_body_flow(h={integ.h:g})" + _LOOPS[integ.loop], ("Q", "P"),
         ("symmetric_rigid_body.symmetric_momentum",),
         _fixed_step_cost(steps, 30.0 * n**3, per, " (a Newton solve of J_D(U) = hM a step)"),
         _MODULES + _SYMMETRIC_MAP_MODULES,
@@ -491,7 +501,7 @@ def _run_mv_algorithm2(
         return _mv_from_first_step(sc, plan, x, rotation)
     steps, every = plan.save["steps"], plan.save["save_every"]
     dsol = mv_algorithm2(_rot(rotation, x["Q0"]), integ.h * x["M0"], x["lam"], steps,
-                         save_every=every)  # fmt: skip
+                         save_every=every, diagnostics=integ.loop == "reference")  # fmt: skip
     keep = ("Q",) if "attitude" in sc.effects else ()
     states = {k: dsol.y[k] for k in keep}
     states["M"] = dsol.y.M / integ.h
@@ -504,14 +514,14 @@ def _run_discrete(
 ) -> _Run:
     integ: Any = sc.integrator
     steps, every = plan.save["steps"], plan.save["save_every"]
-    lam = x["lam"]
+    lam, diag = x["lam"], integ.loop == "reference"
     if rotation is None:
         dsol = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, steps,
-                                        save_every=every)  # fmt: skip
+                                        save_every=every, diagnostics=diag)  # fmt: skip
     else:  # the state (Q0, P0) of the symmetric algorithm, rotated: P0 as the flow sets it
         P0 = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, integ.h, 1).y.P[0]
         dsol = symmetric_flow(_rot(rotation, x["Q0"]), _rot(rotation, P0), lam, integ.h, steps,
-                              save_every=every)  # fmt: skip
+                              save_every=every, diagnostics=diag)  # fmt: skip
     keep = ("Q", "M") if "attitude" in sc.effects else ("M",)
     states = _rotate_back({k: dsol.y[k] for k in keep}, rotation)
     return dsol.t, states, "" if dsol.success else dsol.message
@@ -522,15 +532,15 @@ def _mv_from_first_step(sc: Any, plan: Plan, x: dict[str, Any], rotation: Array 
     Q_1 and M_1 from the symmetric algorithm's first step; Q_k and M_{k+1}/h at t_k."""
     integ, lam, h = sc.integrator, x["lam"], sc.integrator.h
     steps, every = plan.save["steps"], plan.save["save_every"]
-    first = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, h, 1)
+    diag = integ.loop == "reference"
+    first = discrete_rigid_body_flow(x["Q0"], x["M0"], lam, h, 1, diagnostics=diag)
     if not first.success:
         empty = np.zeros((0,) + x["Q0"].shape)
         return np.zeros(0), {"Q": empty, "M": empty}, first.message
     Q1, M1 = first.y.Q[1], h * first.y.M[0]
     if isinstance(integ, rbm.MVAlgorithm1):
-        dsol = mv_algorithm1(
-            _rot(rotation, x["Q0"]), _rot(rotation, Q1), lam, steps - 1, save_every=every
-        )
+        dsol = mv_algorithm1(_rot(rotation, x["Q0"]), _rot(rotation, Q1), lam, steps - 1,
+                             save_every=every, diagnostics=diag)  # fmt: skip
         return (np.asarray(dsol.k, dtype=float) * h, _rotate_back({"Q": dsol.y.Q}, rotation),
                 "" if dsol.success else dsol.message)  # fmt: skip
     need_Q = any(o.removesuffix("_gap") in ("Q", "orthogonality") for o in plan.index)
@@ -538,9 +548,8 @@ def _mv_from_first_step(sc: Any, plan: Plan, x: dict[str, Any], rotation: Array 
     # Q_k is the (k - 1)-th state of the run from Q_1: with Q asked for every e > 1 steps the
     # run saves every step; M_{k+1}, its k-th momentum, is saved at the steps asked for
     save = every if every == 1 or not need_Q else 1
-    dsol = mv_algorithm2(
-        _rot(rotation, Q1), M1, lam, steps if need_M else steps - 1, save_every=save
-    )
+    dsol = mv_algorithm2(_rot(rotation, Q1), M1, lam, steps if need_M else steps - 1,
+                         save_every=save, diagnostics=diag)  # fmt: skip
     states: dict[str, Array] = {}
     if need_Q:
         Qs = np.concatenate([_rot(rotation, x["Q0"])[None], dsol.y.Q])[: steps + 1]
