@@ -20,7 +20,7 @@ from .costs import _cold_start, _long_horizon, _step_costs
 from .goals import _goals
 from .precision import LONG_FLOWS, _long_time, _work_precision
 from .problems import _modules
-from .result import BenchResult, _jsonable
+from .result import BenchResult, _jsonable, previous_goals
 from .speed import _cost_vs_n, _evidence, _throughput
 
 
@@ -220,6 +220,8 @@ def run(
         ),
         notes=notes,
     )
+    if checkpoint is not None:  # the goals of the run the file holds, before it is overwritten
+        res.previous_goals = previous_goals(checkpoint)
     mods = _modules(notes)
     limiter: Any = None
     section_seconds: dict[str, float] = {}
