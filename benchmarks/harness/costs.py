@@ -321,7 +321,7 @@ def _long_horizon(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], 
             continue
         eH, eC = _invariant_errors(Ms, lam, M0)
         runs.append({"method": kind, "h": T / steps, "steps": steps, "cpu": cpu, "energy": eH,
-                     "casimir": eC})  # fmt: skip
+                     "casimir": eC, "profile": profile_text(lambda go=go: go(100))})  # fmt: skip
     return {"n": n, "T": T, "lean_field": lean, "budget_per_run": budget, "runs": runs,
             "timer": "process CPU time of one run"}  # fmt: skip
 

@@ -140,8 +140,9 @@ def _long_horizon_goal(lh: dict[str, Any] | None, quick: bool, sections: Sequenc
             )
         ]
     x = dop["cpu"] / sym["cpu"]
-    return [_goal(name, x, ">= 2", x >= 2, f"cheapest measured runs: {_run_text(dop)} / "
-                  f"{_run_text(sym)}; one run each, CPU time")]  # fmt: skip
+    g = _goal(name, x, ">= 2", x >= 2, f"cheapest measured runs: {_run_text(dop)} / "
+              f"{_run_text(sym)}; one run each, CPU time")  # fmt: skip
+    return [_with_profile(g, sym.get("profile") and f"(1/100 of the run) {sym['profile']}")]
 
 
 def _cold_goal(cs: dict[str, Any] | None, sections: Sequence[str]) -> list[dict[str, Any]]:
