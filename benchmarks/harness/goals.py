@@ -1,4 +1,4 @@
-"""The goals of issue 9, evaluated on the measurements of a run."""
+"""The goals of issues 9 and 23, evaluated on the measurements of a run."""
 
 from __future__ import annotations
 
@@ -348,7 +348,7 @@ def _integrate_goal(r: _Run) -> list[dict[str, Any]]:
 
 
 def _goals(res: BenchResult, quick: bool, sections: Sequence[str]) -> list[dict[str, Any]]:
-    """Every goal of issue 9, in the order of the report, measured or with why not."""
+    """Every goal of issues 9 and 23, in the order of the report, measured or with why not."""
     r = _Run.of(res, quick, sections)
     return [
         *_step_cost_goals(r),

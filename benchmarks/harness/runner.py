@@ -158,7 +158,7 @@ def run(
     config: Mapping[str, Any] | None = None,
     checkpoint: str | os.PathLike[str] | None = None,
 ) -> BenchResult:
-    """Run the benchmarks and evaluate the goals of issue 9.
+    """Run the benchmarks and evaluate the goals of issues 9 and 23.
 
     Parameters
     ----------

@@ -57,11 +57,13 @@ def label_of(w: dict[str, Any], m: str) -> str:
     return m
 
 
-def look_of(m: str) -> dict[str, Any]:
-    """The style of ``m``: the generated field's runs in their method's colour, dotted and
-    hollow."""
+def look_of(w: dict[str, Any], m: str) -> dict[str, Any]:
+    """The style of ``m`` in setting ``w``: SciPy's runs on the generated field in their
+    method's colour, dotted and hollow (so too an old run's, which had no other field)."""
     if m.endswith("-gen"):
         return method_style(m[:-4], ls=":", mfc="white")
+    if m in SCIPY and not lean_recorded(w):
+        return method_style(m, ls=":", mfc="white")
     return method_style(m)
 
 
@@ -119,11 +121,13 @@ def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str, left:
         bars = [[q["cpu"]["median"] - q["cpu"]["min"] for q in pts],
                 [q["cpu"]["max"] - q["cpu"]["median"] for q in pts]]  # fmt: skip
         ax.errorbar(err, med, yerr=bars, ms=6, capsize=2, lw=1.4, label=label_of(w, m),
-                    **look_of(m))  # fmt: skip
+                    **look_of(w, m))  # fmt: skip
         low = [(e, c) for q, e, c in zip(pts, err, med, strict=True) if q["error"] < floor]
         clipped += len(low)
         if low:
-            ax.plot(*zip(*low, strict=True), ms=11, **{**look_of(m), "ls": "none", "mfc": "white"})
+            ax.plot(
+                *zip(*low, strict=True), ms=11, **{**look_of(w, m), "ls": "none", "mfc": "white"}
+            )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.axvspan(left, floor, color="0.85", lw=0, label="below the reference's own error")
