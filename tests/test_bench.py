@@ -447,7 +447,10 @@ def test_issue23_sections_record_their_fields(tiny: bench.BenchResult) -> None:
     sc = ms["step-costs"]
     assert sc["one_call"]["cpu"]["median"] > 0 and sc["one_call"]["profile"]
     assert set(sc["paper"]) == {"mv_flow", "mv_algorithm2", "symmetric_flow"}
-    assert len({tuple(d["K"]) for d in sc["paper"].values()}) == 1  # the same run lengths
+    same = sc["paper_same_length"]  # whole runs of one length, beside the marginal costs
+    assert set(same) == {"K", "mv_flow", "mv_algorithm2", "symmetric_flow"}
+    assert same["K"] == sc["paper"]["mv_algorithm2"]["K"][1]
+    assert all(isinstance(d["reliable"], bool) for d in sc["paper"].values())
     st = sc["stages"]["3"]["methods"]
     assert st["MV-comp8"]["stages"] == 17 and st["RKMK4"]["stages"] == 4
     assert st["midpoint"]["stages"] == 1

@@ -64,33 +64,32 @@ def profile_text(fn: Callable[[], Any], top: int = 4) -> str:
     return "; ".join(r[1] for r in rows[:top])
 
 
-def _probe(make: Callable[[int], Callable[[], Any]]) -> float:
-    """A rough CPU time per step (two runs, once each): only used to pick run lengths."""
-    t = []
-    for k in (16, 80):
+def _probe(make: Callable[[int], Callable[[], Any]], target: float) -> float:
+    """A rough CPU time per step, only used to pick run lengths: runs of 16, 128, ... steps
+    (each once, after a warm-up) until one lasts a quarter of ``target``; the difference of the
+    last two over their difference in steps."""
+    k, prev = 16, None
+    while True:
         fn = make(k)
         fn()
         t0 = time.process_time()
         fn()
-        t.append(time.process_time() - t0)
-    return max((t[1] - t[0]) / 64, 1e-9)
+        t = time.process_time() - t0
+        if prev is not None and (t >= target / 4 or k >= 10**6):
+            return max((t - prev[1]) / (k - prev[0]), 1e-10)
+        prev = (k, t)
+        k *= 8
 
 
 def marginal_costs(
-    makes: dict[str, Callable[[int], Callable[[], Any]]],
-    p: dict[str, Any],
-    same_length: bool = False,
+    makes: dict[str, Callable[[int], Callable[[], Any]]], p: dict[str, Any]
 ) -> dict[str, dict[str, Any]]:
-    """The marginal CPU cost of a step of each run ``makes[name](K)``: ``per_step``, ``K``.
-
-    With ``same_length`` every run gets the same K (the largest needed, capped so that the
-    slowest run lasts at most ten times ``marginal_time``)."""
+    """The marginal CPU cost of a step of each run ``makes[name](K)``: ``per_step``, ``K``
+    (K1, K2; K2 from a probe so that a run lasts about ``marginal_time``), ``reliable`` (the
+    difference of the two runs exceeds the spread of either over the rounds)."""
     target = float(p["marginal_time"])
-    per = {name: _probe(make) for name, make in makes.items()}
+    per = {name: _probe(make, target) for name, make in makes.items()}
     k2 = {name: int(min(max(24, math.ceil(target / c)), 10**7)) for name, c in per.items()}
-    if same_length:
-        k = min(max(k2.values()), max(24, int(10 * target / max(per.values()))))
-        k2 = dict.fromkeys(k2, k)
     fns = {}
     for name, make in makes.items():
         fns[f"{name} K1"] = make(max(1, k2[name] // 6))
@@ -99,20 +98,39 @@ def marginal_costs(
     out = {}
     for name in makes:
         k1 = max(1, k2[name] // 6)
-        lo, hi = t[f"{name} K1"]["median"], t[f"{name} K2"]["median"]
-        out[name] = {"per_step": (hi - lo) / (k2[name] - k1), "K": [k1, k2[name]],
-                     "run_K2": t[f"{name} K2"]}  # fmt: skip
+        a, b = t[f"{name} K1"], t[f"{name} K2"]
+        # reliable: the difference of the two runs exceeds the spread of either over the rounds
+        spread = max(a["max"] - a["min"], b["max"] - b["min"])
+        out[name] = {"per_step": (b["median"] - a["median"]) / (k2[name] - k1),
+                     "K": [k1, k2[name]], "run_K2": b,
+                     "reliable": bool(b["median"] - a["median"] > spread)}  # fmt: skip
     return out
 
 
+def mv_long_run_method(mv: Callable[..., Any], lam: Array, Q0: Array, M0: Array) -> str:
+    """The method ``mv_flow`` uses for a long run at this n, pinned so that the two runs of a
+    marginal cost never straddle its automatic switch: ``"numba"`` when numba is installed and
+    ``mv_flow`` accepts it at this n, else ``"numpy"`` (n = 3) or ``"auto"``."""
+    n = lam.shape[-1]
+    if _compiled.AVAILABLE:
+        try:
+            mv(Q0, M0, lam, _H, 2, method="numba")
+            return "numba"
+        except Exception:  # noqa: BLE001 - not accepted at this n
+            pass
+    return "numpy" if n == 3 else "auto"
+
+
 def _paper_makes(mods: dict[str, Any]) -> dict[str, Callable[[int], Callable[[], Any]]]:
-    """n = 3 runs of K steps of mv_flow (default method), mv_algorithm2 (discrete momentum
-    h M0, the paper's h = 1 convention) and symmetric_flow (P0 = Q0 M0 / 2)."""
+    """n = 3 runs of K steps of mv_flow (the method of its long runs, pinned:
+    :func:`mv_long_run_method`), mv_algorithm2 (discrete momentum h M0, the paper's h = 1
+    convention) and symmetric_flow (P0 = Q0 M0 / 2)."""
     lam, Q0, M0 = _problem(3, 0)
     makes: dict[str, Callable[[int], Callable[[], Any]]] = {}
     mv = _find(mods.get("engine"), ["mv_flow"])
     if mv is not None:
-        makes["mv_flow"] = lambda K: lambda: mv(Q0, M0, lam, _H, K, save_every=K)
+        how = mv_long_run_method(mv, lam, Q0, M0)
+        makes["mv_flow"] = lambda K: lambda: mv(Q0, M0, lam, _H, K, save_every=K, method=how)
     Md, P0 = _H * M0, Q0 @ (M0 / 2)
     makes["mv_algorithm2"] = lambda K: lambda: paper.mv_algorithm2(Q0, Md, lam, K, save_every=K)
     makes["symmetric_flow"] = lambda K: (
@@ -136,8 +154,10 @@ def _stage_costs(n: int, p: dict[str, Any], mods: dict[str, Any]) -> dict[str, A
     lam, Q0, M0 = _problem(n, p["seed"])
     mv = _find(mods.get("engine"), ["mv_flow"])
     makes: dict[str, Callable[[int], Callable[[], Any]]] = {}
+    how = None
     if mv is not None:
-        makes["mv_flow"] = lambda K: lambda: mv(Q0, M0, lam, _H, K, save_every=K)
+        how = mv_long_run_method(mv, lam, Q0, M0)
+        makes["mv_flow"] = lambda K: lambda: mv(Q0, M0, lam, _H, K, save_every=K, method=how)
     missing = []
     for kind in ("MV-comp4", "MV-comp6", "MV-comp8", "RKMK4", "midpoint"):
         flow = _step_flow(kind, mods)
@@ -146,7 +166,8 @@ def _stage_costs(n: int, p: dict[str, Any], mods: dict[str, Any]) -> dict[str, A
             continue
         makes[kind] = lambda K, flow=flow: lambda: flow(Q0, M0, lam, _H, K, save_every=K)
     got = marginal_costs(makes, p)
-    out: dict[str, Any] = {"n": n, "h": _H, "unavailable": missing, "methods": {}}
+    out: dict[str, Any] = {"n": n, "h": _H, "unavailable": missing, "methods": {},
+                           "mv_flow_method": how}  # fmt: skip
     base = got.get("mv_flow", {}).get("per_step")
     out["mv_flow_per_step"] = base
     for kind in makes:
@@ -159,6 +180,7 @@ def _stage_costs(n: int, p: dict[str, Any], mods: dict[str, Any]) -> dict[str, A
             "stages": st,
             "per_stage": per / st,
             "over_mv_flow_step": None if not base else per / st / base,
+            "reliable": got[kind]["reliable"] and got.get("mv_flow", {}).get("reliable", False),
             "K": got[kind]["K"],
             "profile": profile_text(makes[kind](50)),
         }
@@ -239,10 +261,20 @@ def _step_costs(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
             "what": "mv_flow(Q0, M0, lam, 0.01, 1), n = 3, default method",
         }
     makes = _paper_makes(mods)
-    got = marginal_costs(makes, p, same_length=True)
+    # each at run lengths long enough for its own marginal cost (a compiled mv_flow step is a
+    # thousand times cheaper than a step of the paper's maps today); beside it, whole runs of
+    # the same length (the paper map's longer run) for all three
+    got = marginal_costs(makes, p)
     out["paper"] = {
         name: dict(g, profile=profile_text(makes[name](200))) for name, g in got.items()
     }
+    K = got["mv_algorithm2"]["K"][1]
+    same = time_interleaved({k: make(K) for k, make in makes.items()}, rounds=p["rounds"],
+                            min_time=p["min_time"])  # fmt: skip
+    out["paper_same_length"] = {"K": K, **{k: v["median"] for k, v in same.items()}}
+    if mv is not None:
+        lam3, Q3, M3 = _problem(3, 0)
+        out["paper"]["mv_flow"]["method"] = mv_long_run_method(mv, lam3, Q3, M3)
     out["stages"] = {str(n): _stage_costs(n, p, mods) for n in p["stage_n"]}
     out["n10_compiled"] = _n10_compiled(p, mods)
     return out
