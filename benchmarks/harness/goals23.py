@@ -69,28 +69,33 @@ def _paper_goals(sc: dict[str, Any] | None, sections: Sequence[str]) -> list[dic
     return goals
 
 
+_STAGED = ("MV-comp4", "MV-comp6", "MV-comp8", "RKMK4", "midpoint")
+
+
 def _stage_goals(sc: dict[str, Any] | None, sections: Sequence[str]) -> list[dict[str, Any]]:
-    """Compositions, RKMK4, midpoint: cost per stage at most 2x an mv_flow step, n = 3 and 10."""
+    """Compositions, RKMK4, midpoint: cost per stage at most 2x an mv_flow step, n = 3 and 10;
+    one goal per n, measured by the worst of the methods (each named in the note)."""
     goals = []
     stages = (sc or {}).get("stages", {})
     for n in ("3", "10"):
-        for kind in ("MV-comp4", "MV-comp6", "MV-comp8", "RKMK4", "midpoint"):
-            name = f"n = {n}: a {kind} stage <= 2x an mv_flow step"
-            d = stages.get(n, {}).get("methods", {}).get(kind)
-            if d is None or d["over_mv_flow_step"] is None:
-                goals.append(_goal(name, None, "<= 2", None, _why("step-costs", sections)
-                                   if not stages else "not available"))  # fmt: skip
-                continue
-            if not d.get("reliable", True):
-                goals.append(_goal(name, None, "<= 2", None, "a marginal cost below the timing "
-                                   "noise"))  # fmt: skip
-                continue
-            x = d["over_mv_flow_step"]
-            note = (f"marginal cost of a step / {d['stages']} stages = {d['per_stage'] * 1e6:.3g} us"
-                    f" against an mv_flow step (method={stages[n].get('mv_flow_method')!r}, its "
-                    "method for long runs) of "
-                    f"{stages[n]['mv_flow_per_step'] * 1e6:.3g} us")  # fmt: skip
-            goals.append(_with_profile(_goal(name, x, "<= 2", x <= 2, note), d.get("profile")))
+        name = f"n = {n}: a stage of every composition, RKMK4, midpoint <= 2x an mv_flow step"
+        got = stages.get(n, {}).get("methods", {})
+        ok = {k: d for k, d in got.items() if d.get("reliable", True) and d["over_mv_flow_step"]}
+        if not ok:
+            why = _why("step-costs", sections) if not stages else "not available"
+            goals.append(_goal(name, None, "<= 2", None, why))
+            continue
+        worst = max(ok, key=lambda k: ok[k]["over_mv_flow_step"])
+        x = ok[worst]["over_mv_flow_step"]
+        parts = [f"{k} {d['over_mv_flow_step']:.3g} ({d['per_stage'] * 1e6:.3g} us a stage, "
+                 f"{d['stages']} a step)" for k, d in ok.items()]  # fmt: skip
+        left = [k for k in _STAGED if k not in ok]
+        note = (f"the worst, {worst}; per method, a stage over an mv_flow step "
+                f"(method={stages[n].get('mv_flow_method')!r}, its method for long runs, "
+                f"{stages[n]['mv_flow_per_step'] * 1e6:.3g} us): " + "; ".join(parts)
+                + (f"; not measured: {', '.join(left)}" if left else ""))  # fmt: skip
+        g = _goal(name, x, "<= 2", x <= 2, note)
+        goals.append(_with_profile(g, ok[worst].get("profile")))
     return goals
 
 

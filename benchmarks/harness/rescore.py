@@ -68,7 +68,10 @@ def _rescore_setting(w: dict[str, Any], p: dict[str, Any], mods: dict[str, Any])
         for point in rows:
             (new,) = [meta[k] for k in configs if _same_config(point, meta[k])]
             point.update({k: new[k] for k in ("error", "error_Q", "error_M")})
+        profile = w["methods"][m].get("profile")  # of the timed run: kept
         w["methods"][m] = _method_entry(m, rows, w)
+        if profile:
+            w["methods"][m]["profile"] = profile
         if m in _STEP_ORDERS and "nominal_order" not in w["methods"][m]:  # pragma: no cover
             raise RuntimeError(m)
 
