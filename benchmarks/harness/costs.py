@@ -29,6 +29,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -139,6 +140,11 @@ def _paper_makes(mods: dict[str, Any]) -> dict[str, Callable[[int], Callable[[],
     return makes
 
 
+def _run_of(flow: Callable[..., Any], Q0: Array, M0: Array, lam: Array, K: int):
+    """A thunk: ``flow`` for K steps of h = 0.01, keeping the last state only."""
+    return lambda: flow(Q0, M0, lam, _H, K, save_every=K)
+
+
 def _stages(kind: str) -> int:
     """The MV (or base) steps of one step of ``kind``: the composition's coefficients, 4 for
     RKMK4, 1 for the midpoint rule."""
@@ -164,7 +170,7 @@ def _stage_costs(n: int, p: dict[str, Any], mods: dict[str, Any]) -> dict[str, A
         if flow is None:
             missing.append(kind)
             continue
-        makes[kind] = lambda K, flow=flow: lambda: flow(Q0, M0, lam, _H, K, save_every=K)
+        makes[kind] = partial(_run_of, flow, Q0, M0, lam)
     got = marginal_costs(makes, p)
     out: dict[str, Any] = {"n": n, "h": _H, "unavailable": missing, "methods": {},
                            "mv_flow_method": how}  # fmt: skip
@@ -343,7 +349,7 @@ def _long_horizon(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], 
             continue
         go, steps = _lh_symrb(flow, lam, Q0, M0, T, h)
         try:
-            _probe_M, c = _timed(lambda go=go: go(100))
+            _probe_M, c = _timed(partial(go, 100))
             if 100 * c > budget:
                 runs.append({"method": kind, "h": h, "skipped": f"about {100 * c:.0f} s"})
                 continue
@@ -353,7 +359,7 @@ def _long_horizon(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], 
             continue
         eH, eC = _invariant_errors(Ms, lam, M0)
         runs.append({"method": kind, "h": T / steps, "steps": steps, "cpu": cpu, "energy": eH,
-                     "casimir": eC, "profile": profile_text(lambda go=go: go(100))})  # fmt: skip
+                     "casimir": eC, "profile": profile_text(partial(go, 100))})  # fmt: skip
     return {"n": n, "T": T, "lean_field": lean, "budget_per_run": budget, "runs": runs,
             "timer": "process CPU time of one run"}  # fmt: skip
 

@@ -217,7 +217,7 @@ def _throughput_goals(r: _Run) -> list[dict[str, Any]]:
     thr = r.thr
     rows = {x["batch"]: x for x in thr["rows"]} if thr else {}
     name = "batch 10^4, n = 3: >= 5e6 body-steps/s"
-    soa = bool(thr) and "matmul_soa" in thr.get("matmul", {})
+    soa = thr is not None and "matmul_soa" in thr.get("matmul", {})
     name2 = "batch 10^4: a step within 3x of " + (
         "one batched 3x3 product in the engine's layout (einsum on (3, 3, B))"
         if soa

@@ -9,6 +9,7 @@ import os
 import time
 import warnings
 from collections.abc import Callable, Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -123,7 +124,7 @@ def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
             np.ascontiguousarray(A1.transpose(1, 2, 0)),
             np.ascontiguousarray(A2.transpose(1, 2, 0)),
         )
-        fns[f"soa B={B}"] = lambda S1=S1, S2=S2: np.einsum("ikb,kjb->ijb", S1, S2)
+        fns[f"soa B={B}"] = partial(np.einsum, "ikb,kjb->ijb", S1, S2)
     mv = _find(mods.get("engine"), ["mv_flow"])
     backends = ("numpy", "numba") if _backend() == "numba" else ("numpy",)
     if mv is not None:
