@@ -415,6 +415,35 @@ def test_the_stage_goal_is_the_worst_method_and_leaves_out_noise() -> None:
     assert g3["measured"] == 1.9 and g3["met"] is True and "p1.9" not in g3["note"]
 
 
+def test_the_n10_compiled_step_is_set_against_its_flops_with_measured_sweeps(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A compiled n = 10 path that reports no sweeps: they are counted on the NumPy fixed point,
+    and the ratio is the marginal step over flops / flop rate."""
+    from types import SimpleNamespace
+
+    from benchmarks.harness import costs
+    from symrb import _compiled
+    from symrb.engine import mv_flow
+
+    def fake(Q, M, lam, h, K, save_every=1, method="auto"):  # type: ignore[no-untyped-def]
+        sol = mv_flow(Q, M, lam, h, K, save_every=save_every,
+                      method="auto" if method == "numba" else method)  # fmt: skip
+        return SimpleNamespace(iterations=np.array([]), y=sol.y) if method == "numba" else sol
+
+    monkeypatch.setattr(_compiled, "AVAILABLE", True)
+    p = {"rounds": 1, "min_time": 0.0005, "marginal_time": 0.002, "seed": 0}
+    out = costs._n10_compiled(p, {"engine": SimpleNamespace(mv_flow=fake)})
+    assert out["available"] and "fixed-point" in out["iterations_from"]
+    lam, Q0, M0 = problems._problem(10, 0)
+    ref = mv_flow(Q0, M0, lam, 0.01, 200, save_every=200, method="fixed-point")
+    assert out["iterations_per_step"] == pytest.approx(np.sum(ref.iterations) / 200)
+    assert out["flops"] == pytest.approx(costs.mv_step_flops(10, out["iterations_per_step"]))
+    assert out["ratio"] == pytest.approx(out["per_step"] * out["flop_rate"] / out["flops"])
+    monkeypatch.setattr(_compiled, "AVAILABLE", False)
+    assert costs._n10_compiled(p, {"engine": SimpleNamespace(mv_flow=fake)})["available"] is False
+
+
 def test_the_flop_count_of_a_step_is_counted_from_its_operations() -> None:
     from benchmarks.harness.costs import mv_step_flops
 
