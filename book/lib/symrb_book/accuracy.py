@@ -210,3 +210,27 @@ def long_runs(result: Any, flow: str = "mv_flow") -> list[dict[str, Any]]:
     run recorded before issue 23 is ``mv_flow``'s."""
     return [d for d in result.measurements.get("long-time", [])
             if d.get("flow_key", "mv_flow") == flow]  # fmt: skip
+
+
+def previous_of(result: Any, name: str) -> dict[str, Any] | None:
+    """The goal of the previous run (``result.previous_goals``) matching the goal ``name``: the
+    same name, or else the one goal whose name has the same head before ``": "`` (a goal renamed
+    since, e.g. with a new target, keeps its setting as its head).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> r = SimpleNamespace(previous_goals=[{"name": "n = 3, T = 10: faster than DOP853"},
+    ...                                     {"name": "exact accurate to 1e-13"}])
+    >>> previous_of(r, "n = 3, T = 10: >= 30x faster than DOP853 (lean field)")["name"]
+    'n = 3, T = 10: faster than DOP853'
+    >>> previous_of(r, "cold start <= 1.5 s") is None
+    True
+    """
+    prev = list(getattr(result, "previous_goals", []) or [])
+    same = [g for g in prev if g["name"] == name]
+    if same:
+        return same[0]
+    head = name.split(": ")[0]
+    heads = [g for g in prev if ": " in g["name"] and g["name"].split(": ")[0] == head]
+    return heads[0] if len(heads) == 1 and ": " in name else None
