@@ -41,6 +41,13 @@ TINY: dict[str, Any] = {
     "cold_batch": 10,
     "cold_budget": 1.0,
     "cost_n": (3, 4),
+    "marginal_time": 0.002,
+    "stage_n": (3,),
+    "lh_T": 1.0,
+    "lh_rtols": (1e-6,),
+    "lh_symrb": (("MV-fast", 0.1),),
+    "lh_budget": 5.0,
+    "cold_processes": 2,
 }
 
 GOAL_NAMES = [
@@ -49,12 +56,12 @@ GOAL_NAMES = [
     "n = 3, T = 10, error 1e-08",
     "n = 3, T = 100, error 1e-08",
     "n = 3, T = 100, error 1e-10",
-    "exact propagator >= 100x faster than DOP853 at rtol 1e-12",
+    "exact propagator >= 100x faster than DOP853 (lean field) at rtol 1e-12",
     "exact propagator accurate to 1e-13",
     "n = 10, T = 100, error 1e-08",
     "n = 50 one MV step <= 100 matmul-equivalents",
     "batch 10^4, n = 3: >= 5e6 body-steps/s",
-    "batch 10^4 within 3x of batched matmul",
+    "batch 10^4: a step within 3x of",
     "cold start within 10x of a warm step",
     "10^6 steps n = 3: invariant errors",
     "10^6 steps n = 3: slope",
@@ -62,6 +69,16 @@ GOAL_NAMES = [
     "10^6 steps n = 10: slope",
     "every method's order within 0.2 of nominal",
     "symrb.integrate <= 1.2x solve_ivp",
+    "10^6 steps n = 3 mv_algorithm2: invariant errors",
+    "10^6 steps n = 3 symmetric_flow: slope",
+    "one-step mv_flow call (n = 3, whole call) <= 30 us",
+    "n = 3: a mv_algorithm2 step <= 3x an mv_flow step",
+    "n = 3: a symmetric_flow step <= 3x an mv_flow step",
+    "n = 3: a stage of every composition, RKMK4, midpoint <= 2x an mv_flow step",
+    "n = 10: a stage of every composition, RKMK4, midpoint <= 2x an mv_flow step",
+    "n = 10: one compiled MV step <= 2x its minimal flop time",
+    "n = 10, T = 1e4, energy and Casimir errors <= 1e-12",
+    "cold start with numba (new process after the first) <= 1.5 s",
 ]
 
 
@@ -104,7 +121,10 @@ def test_json_has_the_machine_parameters_measurements_and_every_goal(
 ) -> None:
     path = tiny.write_json(tmp_path / "sub" / "bench.json")
     data = json.loads(path.read_text())  # strict JSON: no NaN (allow_nan=False on writing)
-    assert set(data) == {"machine", "parameters", "measurements", "goals", "notes", "seconds"}
+    assert set(data) == {"machine", "parameters", "measurements", "goals", "notes", "seconds",
+                         "previous_goals"}  # fmt: skip
+    assert len(data["machine"]["load_average_start"]) == 3
+    assert set(data["machine"]["section_seconds"]) == set(bench.SECTIONS)
     for key in ("platform", "cpu_count", "python", "numpy", "scipy", "blas"):
         assert key in data["machine"], key
     assert data["parameters"]["quick"] is True and data["parameters"]["rounds"] == 1
@@ -144,7 +164,9 @@ def test_every_section_measured_something(tiny: bench.BenchResult) -> None:
         cpu = point["cpu"]
         assert 0 < cpu["min"] <= cpu["median"] <= cpu["max"]
         assert point["error"] == max(point["error_Q"], point["error_M"])
-    (lt,) = ms["long-time"]
+    lt, *paper_runs = ms["long-time"]
+    assert [d["flow_key"] for d in paper_runs] == ["mv_algorithm2", "symmetric_flow"]
+    assert all(d["N"][-1] == 100 and max(d["errors"]["energy"]) < 1e-12 for d in paper_runs)
     assert lt["N"][-1] == 100 and len(lt["N"]) == len(lt["errors"]["energy"])
     assert all(np.diff(lt["errors"]["energy"]) >= 0)  # running maxima
     assert max(lt["errors"]["orthogonality"]) < 1e-12
@@ -290,15 +312,222 @@ def test_the_fit_leaves_out_errors_at_the_reference_floor() -> None:
     assert bench.fit_slope(h, err) < 3.5
 
 
-def test_cost_at_an_error_interpolates_and_extrapolates() -> None:
-    h = np.array([0.1, 0.05, 0.025])
-    err, cost = 2.0 * h**2, 1e-4 / h  # cost ~ 1/h, error ~ h^2
-    target = 2.0 * 0.07**2
-    got, how = timing._cost_at(err, cost, target, 2.0)
-    assert how == "interpolated" and got == pytest.approx(1e-4 / 0.07, rel=1e-12)
-    got, how = timing._cost_at(err, cost, 2.0 * 0.001**2, 2.0)
-    assert how.startswith("extrapolated") and got == pytest.approx(1e-4 / 0.001, rel=1e-12)
-    assert timing._cost_at(err, cost, 1e-12, None)[0] is None
+def _pt(err: float, cpu: float, **knob: float) -> dict[str, Any]:
+    return {"error": err, "cpu": {"median": cpu}, **knob}
+
+
+def test_the_cost_at_an_error_is_the_cheapest_measured_run_reaching_it() -> None:
+    pts = [_pt(1e-6, 1.0, h=0.2), _pt(1e-9, 3.0, h=0.1), _pt(2e-9, 2.0, h=0.15),
+           _pt(float("nan"), 0.1, h=0.5), _pt(1e-12, 8.0, h=0.05)]  # fmt: skip
+    assert timing.cheapest_measured(pts, 1e-8)["h"] == 0.15  # not the smallest error: cheapest
+    assert timing.cheapest_measured(pts, 1e-9)["h"] == 0.1
+    assert timing.cheapest_measured(pts, 1e-12)["h"] == 0.05
+    assert timing.cheapest_measured(pts, 1e-13) is None  # no extrapolation below the grid
+    assert timing.cheapest_measured(pts, 1.0)["h"] == 0.2  # NaN errors never count
+
+
+def _setting(methods: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
+    return {
+        "n": 3,
+        "T": 100.0,
+        "baselines": {"variant": "lean"},
+        "methods": {m: {"available": True, "points": p} for m, p in methods.items()},
+    }
+
+
+def test_speed_goals_use_measured_points_only() -> None:
+    w = _setting({
+        "DOP853": [_pt(1e-7, 0.01, rtol=1e-8), _pt(5e-9, 0.02, rtol=1e-9), _pt(1e-11, 0.05, rtol=1e-11)],
+        "DOP853-gen": [_pt(5e-9, 0.001, rtol=1e-9)],  # cheaper, but not the baseline of the goals
+        # a steep method whose grid stops above the target: an extrapolation would favour it
+        "MV-pre10": [_pt(1e-6, 1e-5, h=0.5), _pt(2e-8, 2e-5, h=0.4)],
+        "MV-pre8": [_pt(9e-9, 4e-4, h=0.2), _pt(1e-12, 5e-4, h=0.1)],
+        "exact": [_pt(1e-15, 1e-6)],  # not a step method
+    })  # fmt: skip
+    g = goals._speed_goal(None, w, 1e-8, 30.0, "n = 3, T = 100, error 1e-08")  # type: ignore[arg-type]
+    assert g["measured"] == pytest.approx(0.02 / 4e-4) and g["met"] is True
+    assert "MV-pre8 h 0.2" in g["note"] and "DOP853 rtol 1e-09" in g["note"]
+    g = goals._speed_goal(None, w, 1e-8, 200.0, "x")  # type: ignore[arg-type]
+    assert g["met"] is False and g["measured"] == pytest.approx(50.0)
+    g = goals._speed_goal(None, w, 1e-13, 2.0, "x")  # type: ignore[arg-type]
+    assert g["met"] is None and "no measured run" in g["note"]
+    # within 2x (factor 1/2): met at a ratio of 0.5, not below
+    w2 = _setting({"DOP853": [_pt(1e-9, 1.0, rtol=1e-10)], "MV-comp8": [_pt(1e-9, 2.0, h=0.2)]})
+    assert goals._speed_goal(None, w2, 1e-8, 0.5, "x")["met"] is True  # type: ignore[arg-type]
+    w2["methods"]["MV-comp8"]["points"][0]["cpu"]["median"] = 2.1
+    assert goals._speed_goal(None, w2, 1e-8, 0.5, "x")["met"] is False  # type: ignore[arg-type]
+
+
+def test_the_long_horizon_goal_takes_the_cheapest_runs_within_the_invariant_error() -> None:
+    from benchmarks.harness import goals23
+
+    def run(method: str, cpu: float, err: float, **knob: float) -> dict[str, Any]:
+        return {"method": method, "cpu": cpu, "energy": err, "casimir": err / 2, **knob}
+
+    runs = [run("DOP853", 1.0, 1e-11, rtol=1e-11), run("DOP853", 3.0, 5e-13, rtol=1e-12),
+            run("DOP853", 9.0, 1e-14, rtol=1e-14), run("MV-fast", 0.5, 3e-12, h=0.4),
+            run("MV-fast", 1.2, 2e-14, h=0.2), run("MV-comp4", 4.0, 1e-14, h=0.4),
+            {"method": "split4", "h": 0.4, "skipped": "not available"}]  # fmt: skip
+    (g,) = goals23._long_horizon_goal({"T": 1e4, "runs": runs}, False, ["long-horizon"])
+    assert g["measured"] == pytest.approx(3.0 / 1.2) and g["met"] is True
+    assert "DOP853 rtol 1e-12" in g["note"] and "MV-fast h 0.2" in g["note"]
+    (g,) = goals23._long_horizon_goal({"T": 1e4, "runs": runs[:1] + runs[3:]}, False, [])
+    assert "lower bound" in g["note"] and g["measured"] == pytest.approx(1.0 / 1.2)
+    (g,) = goals23._long_horizon_goal({"T": 100.0, "runs": runs}, True, ["long-horizon"])
+    assert g["met"] is None and "not measured in --quick" in g["note"]
+
+
+def test_a_goal_not_met_carries_its_profile_and_a_met_one_does_not() -> None:
+    from benchmarks.harness import goals23
+
+    sc = {"one_call": {"cpu": {"median": 5e-5}, "what": "one call", "profile": "f (x.py:1)"}}
+    (g,) = goals23._one_call_goal(sc, ["step-costs"])
+    assert g["met"] is False and g["measured"] == pytest.approx(50.0) and "f (x.py:1)" in g["note"]
+    sc["one_call"]["cpu"]["median"] = 2e-5
+    (g,) = goals23._one_call_goal(sc, ["step-costs"])
+    assert g["met"] is True and "x.py" not in g["note"]
+    paper = {"mv_flow": {"per_step": 1e-6, "K": [10, 60]},
+             "mv_algorithm2": {"per_step": 2.9e-6, "K": [10, 60]},
+             "symmetric_flow": {"per_step": 3.1e-6, "K": [10, 60], "profile": "g"}}  # fmt: skip
+    a2, sym = goals23._paper_goals({"paper": paper}, ["step-costs"])
+    assert (a2["met"], sym["met"]) == (True, False) and sym["note"].endswith("g")
+
+
+def test_the_stage_goal_is_the_worst_method_and_leaves_out_noise() -> None:
+    from benchmarks.harness import goals23
+
+    def m(over: float, reliable: bool = True) -> dict[str, Any]:
+        return {"over_mv_flow_step": over, "per_stage": over * 1e-6, "stages": 5,
+                "reliable": reliable, "profile": f"p{over}"}  # fmt: skip
+
+    st = {
+        "3": {
+            "mv_flow_per_step": 1e-6,
+            "mv_flow_method": "numba",
+            "methods": {"MV-comp4": m(1.5), "RKMK4": m(2.5), "midpoint": m(9.0, False)},
+        }
+    }
+    g3, g10 = goals23._stage_goals({"stages": st}, ["step-costs"])
+    assert g3["measured"] == 2.5 and g3["met"] is False and g3["note"].endswith("p2.5")
+    assert "midpoint" in g3["note"].split("not measured:")[1] and g10["met"] is None
+    st["3"]["methods"]["RKMK4"] = m(1.9)
+    (g3, _g10) = goals23._stage_goals({"stages": st}, ["step-costs"])
+    assert g3["measured"] == 1.9 and g3["met"] is True and "p1.9" not in g3["note"]
+
+
+def test_the_n10_compiled_step_is_set_against_its_flops_with_measured_sweeps(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A compiled n = 10 path that reports no sweeps: they are counted on the NumPy fixed point,
+    and the ratio is the marginal step over flops / flop rate."""
+    from types import SimpleNamespace
+
+    from benchmarks.harness import costs
+    from symrb import _compiled
+    from symrb.engine import mv_flow
+
+    def fake(Q, M, lam, h, K, save_every=1, method="auto"):  # type: ignore[no-untyped-def]
+        sol = mv_flow(Q, M, lam, h, K, save_every=save_every,
+                      method="auto" if method == "numba" else method)  # fmt: skip
+        return SimpleNamespace(iterations=np.array([]), y=sol.y) if method == "numba" else sol
+
+    monkeypatch.setattr(_compiled, "AVAILABLE", True)
+    p = {"rounds": 1, "min_time": 0.0005, "marginal_time": 0.002, "seed": 0}
+    out = costs._n10_compiled(p, {"engine": SimpleNamespace(mv_flow=fake)})
+    assert out["available"] and "fixed-point" in out["iterations_from"]
+    lam, Q0, M0 = problems._problem(10, 0)
+    ref = mv_flow(Q0, M0, lam, 0.01, 200, save_every=200, method="fixed-point")
+    assert out["iterations_per_step"] == pytest.approx(np.sum(ref.iterations) / 200)
+    assert out["flops"] == pytest.approx(costs.mv_step_flops(10, out["iterations_per_step"]))
+    assert out["ratio"] == pytest.approx(out["per_step"] * out["flop_rate"] / out["flops"])
+    monkeypatch.setattr(_compiled, "AVAILABLE", False)
+    assert costs._n10_compiled(p, {"engine": SimpleNamespace(mv_flow=fake)})["available"] is False
+
+
+def test_the_flop_count_of_a_step_is_counted_from_its_operations() -> None:
+    from benchmarks.harness.costs import mv_step_flops
+
+    n = 10
+    # k sweeps of two products and 12 n^2 entrywise, then 8 2/3 n^3 and 6 n^2
+    assert mv_step_flops(n, 0) == pytest.approx((2 / 3 + 8) * n**3 + 6 * n**2)
+    assert mv_step_flops(n, 8) - mv_step_flops(n, 7) == pytest.approx(4 * n**3 + 12 * n**2)
+
+
+# ---------------------------------------------------------------------------------------------
+# the lean baselines
+
+
+@pytest.mark.parametrize("n", [3, 4, 10])
+def test_every_lean_field_is_the_generated_field(n: int) -> None:
+    """Each lean variant gives the derivative of symrb's generated field at random states (not
+    only the initial one), to rounding, and solve_ivp follows the same trajectory on both."""
+    rng = np.random.default_rng(n)
+    lam, Q0, M0 = problems._problem(n, 0)
+    gen = problems._plain_field(lam)
+    for name in problems._lean_candidates(n):
+        f = problems.LEAN_VARIANTS[name](lam)
+        for _ in range(5):
+            Q = symrb.random_SO(n, seed=rng)
+            M = symrb.random_so(n, seed=rng) * 3
+            want = gen(0.0, np.concatenate((Q.ravel(), M.ravel())))
+            dQ, dM = problems._from_lean(f(0.0, problems._to_lean(Q, M, name)), n, name)
+            got = np.concatenate((dQ.ravel(), dM.ravel()))
+            assert np.abs(got - want).max() <= 1e-14 * max(1.0, np.abs(want).max()), name
+        a = problems._solve_ivp_end(lam, Q0, M0, 3.0, "DOP853", 1e-11, name)()
+        b = problems._solve_ivp_end(lam, Q0, M0, 3.0, "DOP853", 1e-11)()
+        assert max(np.abs(a[0] - b[0]).max(), np.abs(a[1] - b[1]).max()) < 1e-8, name
+    assert (
+        problems._lean_candidates(3)[0].startswith("n3") and len(problems._lean_candidates(4)) == 1
+    )
+
+
+def test_the_lean_field_chosen_is_recorded_with_both_sizes(tiny: bench.BenchResult) -> None:
+    w = tiny.measurements["work-precision"]["n3"][0]
+    base = w["baselines"]
+    assert base["variant"] in problems._lean_candidates(3)
+    assert (base["unknowns"], base["generated_unknowns"]) in ((12, 18), (18, 18))
+    assert all(d <= 1e-13 for d in base["max_difference_from_generated"].values())
+
+
+# ---------------------------------------------------------------------------------------------
+# the sections of issue 23
+
+
+def test_issue23_sections_record_their_fields(tiny: bench.BenchResult) -> None:
+    ms = tiny.measurements
+    sc = ms["step-costs"]
+    assert sc["one_call"]["cpu"]["median"] > 0 and sc["one_call"]["profile"]
+    assert set(sc["paper"]) == {"mv_flow", "mv_algorithm2", "symmetric_flow"}
+    same = sc["paper_same_length"]  # whole runs of one length, beside the marginal costs
+    assert set(same) == {"K", "mv_flow", "mv_algorithm2", "symmetric_flow"}
+    assert same["K"] == sc["paper"]["mv_algorithm2"]["K"][1]
+    assert all(isinstance(d["reliable"], bool) for d in sc["paper"].values())
+    st = sc["stages"]["3"]["methods"]
+    assert st["MV-comp8"]["stages"] == 17 and st["RKMK4"]["stages"] == 4
+    assert st["midpoint"]["stages"] == 1
+    assert "available" in sc["n10_compiled"]
+    lh = ms["long-horizon"]
+    assert lh["n"] == 10 and {r["method"] for r in lh["runs"]} >= {"DOP853", "MV-fast"}
+    for r in lh["runs"]:
+        assert "skipped" in r or (r["cpu"] > 0 and r["energy"] < 1e-5)
+    cs = ms["cold-start"]
+    assert not cs["available"] or (len(cs["cpu"]) == 1 and cs["median_cpu"] > 0)
+    thr = ms["throughput"]
+    assert set(thr["matmul"]) == {"matmul", "matmul_soa"}
+    assert all("matmul_soa" in r for r in thr["rows"])
+
+
+def test_previous_goals_are_kept_from_the_file_a_run_overwrites(tmp_path: Path) -> None:
+    from benchmarks.harness.result import previous_goals
+
+    old = bench.BenchResult(machine={}, parameters={}, goals=[
+        {"name": "a", "measured": 2.0, "target": "<= 1", "met": False, "note": ""}])  # fmt: skip
+    path = old.write_json(tmp_path / "bench.json")
+    assert previous_goals(path) == [{"name": "a", "measured": 2.0, "met": False}]
+    assert previous_goals(tmp_path / "none.json") == []
+    res = bench.run(quick=True, sections=["cost-vs-n"], progress=False, checkpoint=path,
+                    config={"cost_n": (3,), "rounds": 1, "min_time": 0.001})  # fmt: skip
+    assert res.previous_goals == [{"name": "a", "measured": 2.0, "met": False}]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,13 +1,17 @@
-r"""Benchmarks of symrb's rigid body integrators, with the speed and accuracy goals of issue 9.
+r"""Benchmarks of symrb's rigid body integrators, with the speed and accuracy goals of issues 9
+and 23.
 
 :func:`run` measures, in one process and one run (``symrb bench`` on the command line, from a
 source checkout: the harness is not part of the ``symrb`` wheel):
 
 1. **work-precision** (n = 3, T = 10 and 100): the largest entry of the error in :math:`M(T)` and
    :math:`Q(T)` against a reference, versus process CPU time, for SciPy's ``solve_ivp`` (RK45,
-   DOP853, LSODA, called directly on a plain NumPy field built from the generated kernel
-   :func:`symrb._generated.rigid_body.rigid_body_rhs`), :func:`symrb.integrate` (DOP853, to measure
-   its overhead on the same field), :func:`symrb.discrete_rigid_body_flow` at several steps h, and
+   DOP853, LSODA) on two fields: the lean one a user would write (``problems.LEAN_VARIANTS``: for
+   n = 3 Euler's equations by hand on 12 unknowns, for any n two matrix products; the fastest
+   variant measured is used and recorded in ``baselines``), under the method's own name, and the
+   field built from the generated kernel :func:`symrb._generated.rigid_body.rigid_body_rhs`
+   (2 n^2 unknowns) as ``RK45-gen``, ``DOP853-gen``, ``LSODA-gen``; :func:`symrb.integrate`
+   (DOP853, to measure its overhead on the generated field), :func:`symrb.discrete_rigid_body_flow` at several steps h, and
    the optional methods found by import (the fast Moser-Veselov engine ``symrb.engine.mv_flow``,
    the compositions and RKMK4/implicit midpoint of ``symrb.compose``, the exact solution
    ``symrb.exact.rigid_body_exact``).  The reference is Gragg-Bulirsch-Stoer extrapolation in
@@ -25,6 +29,16 @@ source checkout: the harness is not part of the ``symrb`` wheel):
    n x n matrix product.
 5. **evidence**: the time of each evidence level of ``symrb verify --json`` (read from a file)
    next to what that level certifies.
+6. **step-costs**, 7. **long-horizon**, 8. **cold-start** (issue 23,
+   :mod:`~benchmarks.harness.costs`): one whole ``mv_flow`` call, the paper's maps and the
+   stages of the compositions against an ``mv_flow`` step, one compiled n = 10 step against its
+   flop count; n = 10 to T = 1e4 with the invariants' errors; new processes with numba.
+
+Every goal that compares costs at an error uses measured runs only: for each method the cheapest
+run whose error is at most the target (:func:`~benchmarks.harness.timing.cheapest_measured`),
+named in the goal's note; no fitted order extends a grid.  A goal not met carries a profile of
+one call (cProfile, the top entries by cumulative time) recorded in the run.  ``--json`` keeps
+the goals of the run the file held before as ``previous_goals``.
 
 Timing discipline: every configuration is timed once per round and the rounds are interleaved
 (drifts of a shared machine hit all configurations alike); a timing repeats its call until it

@@ -29,7 +29,8 @@ def build_parser(prog: str = "symrb bench") -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description=(
             "Time symrb's rigid body integrators against SciPy (work-precision, long-time\n"
-            "invariants, throughput, cost against n, evidence) and report the goals of issue 9.\n"
+            "invariants, throughput, cost against n, evidence, step costs, long horizon, cold\n"
+            "start) and report the goals of issues 9 and 23.\n"
             "Needs only NumPy and SciPy (threadpoolctl pins BLAS to one thread; tqdm shows\n"
             "progress; matplotlib draws --plots)."
         ),

@@ -75,9 +75,14 @@ def _long_time_figure(plt: Any, ms: Mapping[str, Any], style: Style = plain_styl
     lts = ms.get("long-time", [])
     if not lts:
         return None
-    # the panels side by side, one per n, on a shared error axis
-    fig, axes = plt.subplots(1, len(lts), figsize=(5.0 * len(lts), 4.2), squeeze=False, sharey=True)
-    for ax, d in zip(axes[0], lts, strict=True):
+    # one panel per run (n, flow), two to a row, on a shared error axis
+    ncols = min(2, len(lts))
+    nrows = -(-len(lts) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(5.0 * ncols, 4.2 * nrows), squeeze=False,
+                             sharey=True)  # fmt: skip
+    for ax in list(axes.flat)[len(lts) :]:
+        ax.set_visible(False)
+    for ax, d in zip(axes.flat, lts, strict=False):
         N = np.asarray(d["N"], dtype=float)
         for key, vals in d["errors"].items():
             s = d["slope"][key]
@@ -87,7 +92,9 @@ def _long_time_figure(plt: Any, ms: Mapping[str, Any], style: Style = plain_styl
         ax.loglog(N, 10 * EPS * np.sqrt(N), "k:", label=r"$10\,\varepsilon\sqrt{N}$")
         ax.set_xlabel("step number N")
         ax.set_ylabel("largest relative error up to step N")
-        ax.set_title(f"n = {d['n']}, h = {d['h']:g} ({d['flow']})", fontsize=10)
+        ax.set_title(
+            f"n = {d['n']}, h = {d['h']:g}, {d['steps']} steps\n({d['flow']})", fontsize=10
+        )
         ax.legend(fontsize=8)
     return fig
 
@@ -109,7 +116,12 @@ def _throughput_figure(plt: Any, ms: Mapping[str, Any], style: Style = plain_sty
             ax.loglog(B, [r[key] for r in thr["rows"]], label=lab,
                       **style("mv_flow", marker=mk, ls=ls))  # fmt: skip
     products = [r["matmul_products_per_s"] for r in thr["rows"]]
-    ax.loglog(B, products, label="matmul (batched 3x3)", **style("matmul", marker="s", ls=":"))
+    ax.loglog(B, products, label="matmul (np.matmul on (B, 3, 3))",
+              **style("matmul", marker="s", ls=":"))  # fmt: skip
+    if all("matmul_soa" in r for r in thr["rows"]):
+        soa = [r["batch"] / r["matmul_soa"]["median"] for r in thr["rows"]]
+        ax.loglog(B, soa, label="matmul (einsum on (3, 3, B), the engine's layout)",
+                  **style("matmul", marker="D", ls="-."))  # fmt: skip
     ax.axhline(5e6, label="goal (5e6)", **style("goal"))
     ax.set_xlabel("batch size (bodies)")
     ax.set_ylabel("body-steps (or products) per CPU second")

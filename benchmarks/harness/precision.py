@@ -13,20 +13,23 @@ import numpy as np
 from symrb._progress import progress_bar
 from symrb._validate import Array
 from symrb.continuous import RigidBody, integrate
-from symrb.paper import mv_algorithm2
+from symrb.paper import mv_algorithm2, symmetric_flow
 from symrb.rigid_body import casimir_traces, kinetic_energy
 
-from .config import _SCIPY, _STEP_ORDERS, EPS
+from .config import _SCIPY, _SCIPY_GEN, _STEP_ORDERS, EPS
+from .costs import profile_text
 from .problems import (
+    GEN_SUFFIX,
     _backend,
     _find,
     _fixed_step_runner,
     _last,
     _NotApplicable,
+    _pick_lean,
     _problem,
     _solve_ivp_end,
 )
-from .timing import _cost_at, fit_slope, time_interleaved
+from .timing import cheapest_measured, fit_slope, time_interleaved
 
 #: What the work-precision errors are measured against (``reference`` of each setting).
 REFERENCE = (
@@ -87,14 +90,17 @@ def _configurations(
     out: dict[str, Any],
 ) -> tuple[dict[str, Callable[[], Any]], dict[str, dict[str, Any]]]:
     """(the thunks timed, by key; what each is: method, rtol or h); a method that is not
-    available is recorded in ``out["methods"]``."""
+    available is recorded in ``out["methods"]``.  SciPy's methods run on the lean field named
+    in ``out["baselines"]["variant"]``, their ``-gen`` twins on the generated field."""
     n = lam.shape[-1]
     configs: dict[str, Callable[[], Any]] = {}
     meta: dict[str, dict[str, Any]] = {}
+    lean = out["baselines"]["variant"]
     for m in methods:
-        if m in _SCIPY:
+        if m in _SCIPY or m in _SCIPY_GEN:
+            base, field = (m[: -len(GEN_SUFFIX)], None) if m in _SCIPY_GEN else (m, lean)
             for r in p["wp_rtols"]:
-                configs[f"{m} rtol={r:.0e}"] = _solve_ivp_end(lam, Q0, M0, T, m, r)
+                configs[f"{m} rtol={r:.0e}"] = _solve_ivp_end(lam, Q0, M0, T, base, r, field)
                 meta[f"{m} rtol={r:.0e}"] = {"method": m, "rtol": r}
         elif m == "integrate":
             for r in p["wp_rtols"]:
@@ -190,6 +196,7 @@ def _work_precision(
             "error"
         ],
         "backend": _backend(),
+        "baselines": _pick_lean(lam, Q0, M0),
         "methods": {},
     }
     exact_go = _exact_thunk(lam, Q0, M0, T, mods)
@@ -200,46 +207,90 @@ def _work_precision(
     for key, t in timing.items():
         meta[key]["cpu"] = t
     for m in methods:
-        rows = [meta[k] for k in configs if meta[k]["method"] == m]
-        if not rows:
+        keys = [k for k in configs if meta[k]["method"] == m]
+        if not keys:
             out["methods"].setdefault(m, {"available": False})
             continue
-        out["methods"][m] = _method_entry(m, rows, out)
+        out["methods"][m] = _method_entry(m, [meta[k] for k in keys], out)
+        # what limits its cheapest run (for the note of a goal not met)
+        cheapest = min(keys, key=lambda k: meta[k]["cpu"]["median"])
+        out["methods"][m]["profile"] = profile_text(configs[cheapest])
     return out
 
 
 def _cost_table(wp: dict[str, Any], target: float) -> dict[str, dict[str, Any]]:
-    table = {}
+    """For each method of a work-precision setting: its cheapest measured run whose error is at
+    most ``target`` (``cpu`` None and ``point`` None when no measured run reaches it)."""
+    table: dict[str, dict[str, Any]] = {}
     for m, entry in wp["methods"].items():
         if not entry.get("available") or m == "exact":
             continue
-        pts = entry["points"]
-        cost, how = _cost_at(
-            [r["error"] for r in pts], [r["cpu"]["median"] for r in pts], target, entry.get("order")
-        )
-        table[m] = {"cpu": cost, "how": how}
+        pt = cheapest_measured(entry["points"], target)
+        table[m] = {"cpu": None if pt is None else pt["cpu"]["median"], "point": pt}
     return table
 
 
-def _mv_flow_function(mods: dict[str, Any]) -> tuple[Callable[..., Any], str, bool]:
-    """(flow(Q, M, lam, h, steps, save_every), name, takes continuous momenta)."""
+#: The flows of the long-time section: mv_flow for every n, the paper's maps for n = 3.
+LONG_FLOWS = ("mv_flow", "mv_algorithm2", "symmetric_flow")
+
+
+def _long_flow(
+    which: str, mods: dict[str, Any]
+) -> tuple[str, Callable[..., Any], Callable[..., Any]]:
+    """(name, start(Q0, M0, h) -> state, run(state, lam, h, chunk, every) -> (Qs, Ms, state)):
+    ``mv_flow`` (symrb.paper.mv_algorithm2 when the engine is missing), ``mv_algorithm2``
+    (discrete momentum h M), ``symmetric_flow`` (P0 = Q0 M0 / 2; M = Q^T P - P^T Q)."""
     fast = _find(mods.get("engine"), ["mv_flow"])
-    if fast is not None:
-        return fast, "symrb.engine.mv_flow", True
+    if which == "symmetric_flow":
 
-    def slow(Q: Array, M: Array, lam: Array, _h: float, steps: int, *, save_every: int) -> Any:
-        return mv_algorithm2(Q, M, lam, steps, save_every=save_every)
+        def run_s(st: Any, lam: Array, h: float, chunk: int, every: int) -> Any:
+            sol = symmetric_flow(st[0], st[1], lam, h, chunk, save_every=every)
+            _ok(sol)
+            Qs, Ps = np.asarray(sol.y["Q"])[1:], np.asarray(sol.y["P"])[1:]
+            Ms = np.swapaxes(Qs, -1, -2) @ Ps - np.swapaxes(Ps, -1, -2) @ Qs
+            return Qs, Ms, (Qs[-1], Ps[-1])
 
-    return slow, "symrb.mv_algorithm2", False
+        return "symrb.paper.symmetric_flow", lambda Q, M, h: (Q, Q @ (M / 2)), run_s
+    if which == "mv_flow" and fast is not None:
+
+        def run_f(st: Any, lam: Array, h: float, chunk: int, every: int) -> Any:
+            sol = fast(st[0], st[1], lam, h, chunk, save_every=every)
+            _ok(sol)
+            Qs, Ms = np.asarray(sol.y["Q"])[1:], np.asarray(sol.y["M"])[1:]
+            return Qs, Ms, (Qs[-1], Ms[-1])
+
+        return "symrb.engine.mv_flow", lambda Q, M, h: (Q, M), run_f
+
+    def run_a(st: Any, lam: Array, h: float, chunk: int, every: int) -> Any:
+        sol = mv_algorithm2(st[0], st[1], lam, chunk, save_every=every)
+        _ok(sol)
+        Qs, Ms = np.asarray(sol.y["Q"])[1:], np.asarray(sol.y["M"])[1:]
+        return Qs, Ms, (Qs[-1], Ms[-1])
+
+    return "symrb.paper.mv_algorithm2", lambda Q, M, h: (Q, h * M), run_a
+
+
+def _ok(sol: Any) -> None:
+    if not sol.success:
+        raise RuntimeError(f"the long run stopped: {sol.message}")
 
 
 def _long_time(
-    n: int, p: dict[str, Any], mods: dict[str, Any], progress: bool, log: Callable[[str], None]
+    n: int,
+    p: dict[str, Any],
+    mods: dict[str, Any],
+    progress: bool,
+    log: Callable[[str], None],
+    which: str = "mv_flow",
 ) -> dict[str, Any]:
-    flow, name, continuous = _mv_flow_function(mods)
+    """Up to ``long_steps`` steps of the flow ``which`` (:data:`LONG_FLOWS`) in chunks, the
+    running maxima of the invariants' errors; stops early (``stopped``) when the next chunk
+    would pass ``long_budget`` CPU seconds."""
+    name, start, run = _long_flow(which, mods)
     lam, Q, M0 = _problem(n, p["seed"] + 1)
     h, total = float(p["long_h"]), int(p["long_steps"])
-    M = M0.copy() if continuous else h * M0
+    state = start(Q, M0.copy(), h)
+    M = h * M0 if name.endswith("mv_algorithm2") else M0  # the scale of the flow's momenta
     H0 = float(kinetic_energy(M, lam))
     C0 = float(casimir_traces(M)[0])
     marks = np.unique(np.round(np.logspace(0, math.log10(total), 8 * int(math.log10(total)) + 1)))
@@ -251,6 +302,7 @@ def _long_time(
     run_max = [0.0, 0.0, 0.0]
     done = 0
     cpu = 0.0
+    stopped = ""
     log(f"long-time n = {n}: {total} steps of {name}")
     bar = progress_bar(total, f"long run n={n}", progress)
     try:
@@ -258,14 +310,13 @@ def _long_time(
             chunk = int(mark) - done
             if chunk <= 0:
                 continue
+            if done >= 100 and cpu + chunk * cpu / done > float(p["long_budget"]):
+                stopped = f"stopped at {done} steps: the next chunk would pass the CPU budget"
+                break
             every = max(1, chunk // 16)
             t0 = time.process_time()
-            sol = flow(Q, M, lam, h, chunk, save_every=every)
+            Qs, Ms, state = run(state, lam, h, chunk, every)
             cpu += time.process_time() - t0
-            if not sol.success:
-                raise RuntimeError(f"the long run stopped at step {done}: {sol.message}")
-            Qs = np.asarray(sol.y["Q"])[1:]
-            Ms = np.asarray(sol.y["M"])[1:]
             eH = np.abs(kinetic_energy(Ms, lam) - H0) / abs(H0)
             eC = np.abs(casimir_traces(Ms)[..., 0] - C0) / abs(C0)
             eO = np.abs(np.swapaxes(Qs, -1, -2) @ Qs - np.eye(n)).max(axis=(-2, -1))
@@ -279,7 +330,6 @@ def _long_time(
             energy.append(float(run_max[0]))
             casimir.append(float(run_max[1]))
             orth.append(float(run_max[2]))
-            Q, M = Qs[-1], Ms[-1]
             if bar.bar is not None:
                 bar.bar.update(chunk)
     finally:
@@ -290,10 +340,13 @@ def _long_time(
     out: dict[str, Any] = {
         "n": n,
         "h": h,
-        "steps": total,
+        "steps": done,
+        "steps_asked": total,
+        "stopped": stopped,
         "flow": name,
+        "flow_key": which,
         "cpu_seconds": cpu,
-        "cpu_per_step": cpu / total,
+        "cpu_per_step": cpu / max(done, 1),
         "N": Ns,
         "errors": series,
         "eps_sqrt_N": (EPS * np.sqrt(Na)).tolist(),

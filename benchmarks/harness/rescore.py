@@ -54,7 +54,9 @@ def _rescore_setting(w: dict[str, Any], p: dict[str, Any], mods: dict[str, Any])
     w["reference_vs_dop853"] = _errors(dop, ref)["error"]
     methods = [m for m, e in w["methods"].items() if e.get("available")]
     pp = dict(p, wp_h={int(k): v for k, v in p["wp_h"].items()})
-    out: dict[str, Any] = {"n": n, "T": T, "methods": {}}
+    # an old run has no lean baselines: its SciPy methods ran on the generated field
+    out: dict[str, Any] = {"n": n, "T": T, "methods": {},
+                           "baselines": w.get("baselines") or {"variant": None}}  # fmt: skip
     exact_go = _exact_thunk(lam, Q0, M0, T, mods)
     configs, meta = _configurations(lam, Q0, M0, T, pp, methods, mods, exact_go, out)
     notes: list[str] = []
@@ -66,7 +68,10 @@ def _rescore_setting(w: dict[str, Any], p: dict[str, Any], mods: dict[str, Any])
         for point in rows:
             (new,) = [meta[k] for k in configs if _same_config(point, meta[k])]
             point.update({k: new[k] for k in ("error", "error_Q", "error_M")})
+        profile = w["methods"][m].get("profile")  # of the timed run: kept
         w["methods"][m] = _method_entry(m, rows, w)
+        if profile:
+            w["methods"][m]["profile"] = profile
         if m in _STEP_ORDERS and "nominal_order" not in w["methods"][m]:  # pragma: no cover
             raise RuntimeError(m)
 

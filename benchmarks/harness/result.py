@@ -35,6 +35,9 @@ class BenchResult:
         Warnings recorded during the run (missing optional methods, failures).
     seconds : float
         Wall time of the whole run.
+    previous_goals : list of dict
+        The goals (``name``, ``measured``, ``met``) of the run that the file written by
+        ``symrb bench --json`` held before, so that a page can show each goal before and after.
 
     Examples
     --------
@@ -42,7 +45,7 @@ class BenchResult:
     >>> res = run(quick=True, sections=["cost-vs-n"], progress=False,
     ...           config={"cost_n": (3,), "rounds": 1, "min_time": 0.001})
     >>> sorted(res.to_dict())
-    ['goals', 'machine', 'measurements', 'notes', 'parameters', 'seconds']
+    ['goals', 'machine', 'measurements', 'notes', 'parameters', 'previous_goals', 'seconds']
     >>> sorted(res.goals[0])
     ['measured', 'met', 'name', 'note', 'target']
     """
@@ -53,6 +56,7 @@ class BenchResult:
     goals: list[dict[str, Any]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     seconds: float = 0.0
+    previous_goals: list[dict[str, Any]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         """The result as JSON-ready data."""
@@ -64,6 +68,7 @@ class BenchResult:
                 "goals": self.goals,
                 "notes": self.notes,
                 "seconds": self.seconds,
+                "previous_goals": self.previous_goals,
             }
         )
 
@@ -153,4 +158,16 @@ def load(path: str | os.PathLike[str]) -> BenchResult:
         goals=data["goals"],
         notes=data.get("notes", []),
         seconds=float(data.get("seconds", 0.0)),
+        previous_goals=data.get("previous_goals", []),
     )
+
+
+def previous_goals(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """The goals (name, measured, met) of the bench result at ``path``; [] when there is none."""
+    try:
+        old = load(path)
+    except (OSError, ValueError, InputError, KeyError):
+        return []
+    if not old.goals:  # an interrupted run's checkpoint: keep what it kept
+        return list(old.previous_goals)
+    return [{"name": g["name"], "measured": g["measured"], "met": g["met"]} for g in old.goals]

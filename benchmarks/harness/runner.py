@@ -16,10 +16,11 @@ import scipy
 from symrb.errors import InputError
 
 from .config import _FULL, _QUICK, _STEP_ORDERS, ALL_METHODS, SECTIONS
+from .costs import _cold_start, _long_horizon, _step_costs
 from .goals import _goals
-from .precision import _long_time, _work_precision
+from .precision import LONG_FLOWS, _long_time, _work_precision
 from .problems import _modules
-from .result import BenchResult, _jsonable
+from .result import BenchResult, _jsonable, previous_goals
 from .speed import _cost_vs_n, _evidence, _throughput
 
 
@@ -34,6 +35,7 @@ def _machine() -> dict[str, Any]:
         "scipy": scipy.__version__,
         "timer": "time.process_time",
         "timer_resolution": time.get_clock_info("process_time").resolution,
+        "load_average_start": list(os.getloadavg()),
     }
     try:
         from threadpoolctl import threadpool_info
@@ -61,7 +63,7 @@ def _sections(only: Iterable[str] | None) -> list[str]:
         if key.isdigit() and 1 <= int(key) <= len(SECTIONS):
             key = SECTIONS[int(key) - 1]
         if key not in SECTIONS:
-            raise InputError(f"sections must be among {SECTIONS} (or 1-5), got {s!r}")
+            raise InputError(f"sections must be among {SECTIONS} (or 1-{len(SECTIONS)}), got {s!r}")
         chosen.append(key)
     return [s for s in SECTIONS if s in chosen]
 
@@ -99,33 +101,51 @@ def _measure(
     progress: bool,
     log: Callable[[str], None],
     verify_json: str | os.PathLike[str] | None,
-) -> None:
-    """Run the sections ``chosen``, in order, into ``res.measurements``."""
+) -> dict[str, float]:
+    """Run the sections ``chosen``, in order, into ``res.measurements``; returns the wall time
+    of each section."""
     notes = res.notes
-    if "work-precision" in chosen:
-        wp = res.measurements.setdefault("work-precision", {})
-        wp["n3"] = []
-        for T in p["wp_T"]:
-            wp["n3"].append(_work_precision(3, float(T), p, meths, mods, notes, log))
+    ms = res.measurements
+
+    def work_precision() -> None:
+        wp = ms.setdefault("work-precision", {})
+        wp["n3"] = [_work_precision(3, float(T), p, meths, mods, notes, log) for T in p["wp_T"]]
         if p["wp_n10_T"]:
-            sub = [m for m in meths if m in ("DOP853", *_STEP_ORDERS)]
+            sub = [m for m in meths if m in ("DOP853", "DOP853-gen", *_STEP_ORDERS)]
             wp["n10"] = _work_precision(10, float(p["wp_n10_T"]), p, sub, mods, notes, log)
-    if "long-time" in chosen:
-        lts = res.measurements.setdefault("long-time", [])
+
+    def long_time() -> None:
+        lts = ms.setdefault("long-time", [])
         for n in p["long_n"]:
             lts.append(_long_time(n, p, mods, progress, log))
-    if "throughput" in chosen:
-        res.measurements["throughput"] = _throughput(p, mods, log)
-    if "cost-vs-n" in chosen:
-        res.measurements["cost-vs-n"] = _cost_vs_n(p, mods, log)
-    if "evidence" in chosen:
+        for which in LONG_FLOWS[1:]:  # the paper's maps, n = 3
+            lts.append(_long_time(3, p, mods, progress, log, which))
+
+    def evidence() -> None:
         if verify_json is None:
             notes.append(
                 "evidence section skipped: pass --verify-json PATH "
                 "(written by symrb verify --json --output PATH)"
             )
         else:
-            res.measurements["evidence"] = _evidence(verify_json)
+            ms["evidence"] = _evidence(verify_json)
+
+    steps: dict[str, Callable[[], None]] = {
+        "work-precision": work_precision,
+        "long-time": long_time,
+        "throughput": lambda: ms.__setitem__("throughput", _throughput(p, mods, log)),
+        "cost-vs-n": lambda: ms.__setitem__("cost-vs-n", _cost_vs_n(p, mods, log)),
+        "evidence": evidence,
+        "step-costs": lambda: ms.__setitem__("step-costs", _step_costs(p, mods, log)),
+        "long-horizon": lambda: ms.__setitem__("long-horizon", _long_horizon(p, mods, log)),
+        "cold-start": lambda: ms.__setitem__("cold-start", _cold_start(p, log)),
+    }
+    seconds: dict[str, float] = {}
+    for sec in chosen:
+        t0 = time.perf_counter()
+        steps[sec]()
+        seconds[sec] = time.perf_counter() - t0
+    return seconds
 
 
 def run(
@@ -138,7 +158,7 @@ def run(
     config: Mapping[str, Any] | None = None,
     checkpoint: str | os.PathLike[str] | None = None,
 ) -> BenchResult:
-    """Run the benchmarks and evaluate the goals of issue 9.
+    """Run the benchmarks and evaluate the goals of issues 9 and 23.
 
     Parameters
     ----------
@@ -152,7 +172,7 @@ def run(
     progress : bool, optional
         Progress lines on stderr and a progress bar for the long run (tqdm, when installed).
     sections : iterable of str, optional
-        Some of :data:`SECTIONS` (or their numbers 1-5); default all.
+        Some of :data:`SECTIONS` (or their numbers 1-8); default all.
     verify_json : path, optional
         A ``symrb verify --json`` output for the evidence section (skipped with a note if None).
     config : mapping, optional
@@ -200,8 +220,11 @@ def run(
         ),
         notes=notes,
     )
+    if checkpoint is not None:  # the goals of the run the file holds, before it is overwritten
+        res.previous_goals = previous_goals(checkpoint)
     mods = _modules(notes)
     limiter: Any = None
+    section_seconds: dict[str, float] = {}
     try:
         from threadpoolctl import threadpool_limits
 
@@ -214,11 +237,13 @@ def run(
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            _measure(res, chosen, p, meths, mods, progress, log, verify_json)
+            section_seconds = _measure(res, chosen, p, meths, mods, progress, log, verify_json)
         notes.extend(f"warning: {w.message}" for w in caught)
     finally:
         if limiter is not None:
             limiter.restore_original_limits()
+    res.machine["load_average_end"] = list(os.getloadavg())
+    res.machine["section_seconds"] = section_seconds
     res.goals = _goals(res, bool(quick), chosen)
     res.seconds = time.perf_counter() - start
     log(f"done in {res.seconds:.1f} s")

@@ -9,6 +9,7 @@ import os
 import time
 import warnings
 from collections.abc import Callable, Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -100,6 +101,13 @@ def _matmul_thunk(A1: Array, A2: Array, out: Array | None) -> Callable[[], Any]:
     return lambda: np.matmul(A1, A2, out=out)
 
 
+#: The two batched 3x3 products of the throughput section, by their key in a row.
+MATMULS = {
+    "matmul": "np.matmul(A, B, out=C) on (batch, 3, 3) arrays",
+    "matmul_soa": "np.einsum('ikb,kjb->ijb', A, B) on (3, 3, batch) arrays (the engine's layout)",
+}
+
+
 def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], None]):
     h = 0.01
     fns: dict[str, Callable[[], Any]] = {}
@@ -111,6 +119,12 @@ def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
         A2 = np.asarray(np.random.default_rng(B + 1).standard_normal((B, 3, 3)))
         C = np.empty_like(A1)
         fns[f"matmul B={B}"] = _matmul_thunk(A1, A2, C)
+        # the same products in the layout of the engine's batch: components first, (3, 3, B)
+        S1, S2 = (
+            np.ascontiguousarray(A1.transpose(1, 2, 0)),
+            np.ascontiguousarray(A2.transpose(1, 2, 0)),
+        )
+        fns[f"soa B={B}"] = partial(np.einsum, "ikb,kjb->ijb", S1, S2)
     mv = _find(mods.get("engine"), ["mv_flow"])
     backends = ("numpy", "numba") if _backend() == "numba" else ("numpy",)
     if mv is not None:
@@ -127,11 +141,12 @@ def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
     t = time_interleaved(fns, rounds=p["rounds"], min_time=p["min_time"])
     rows = []
     for B in p["batches"]:
-        ts, tm = t[f"step B={B}"], t[f"matmul B={B}"]
+        ts, tm, tsoa = t[f"step B={B}"], t[f"matmul B={B}"], t[f"soa B={B}"]
         row: dict[str, Any] = {
             "batch": B,
             "step": ts,
             "matmul": tm,
+            "matmul_soa": tsoa,
             "step_body_steps_per_s": B / ts["median"],
             "matmul_products_per_s": B / tm["median"],
             "step_over_matmul": ts["median"] / tm["median"],
@@ -142,6 +157,7 @@ def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
                 row[f"flow_{be}_per_step"] = per
                 row[f"flow_{be}_body_steps_per_s"] = B / per
                 row[f"flow_{be}_over_matmul"] = per / tm["median"]
+                row[f"flow_{be}_over_matmul_soa"] = per / tsoa["median"]
         rows.append(row)
 
     # cold start (a fresh stepper and its first step) against a warm step, same batch; the batch
@@ -169,6 +185,7 @@ def _throughput(p: dict[str, Any], mods: dict[str, Any], log: Callable[[str], No
     return {
         "n": 3,
         "h": h,
+        "matmul": MATMULS,
         "stepper": name,
         "rows": rows,
         "cold_start": {

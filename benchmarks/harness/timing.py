@@ -116,29 +116,38 @@ def fit_slope(x: Sequence[float], y: Sequence[float], *, floor: float = 0.0) -> 
     return float(np.polyfit(np.log(xa[keep]), np.log(ya[keep]), 1)[0])
 
 
-def _cost_at(errors: Sequence[float], costs: Sequence[float], target: float, order: float | None):
-    """CPU time to reach ``target`` error: log-log interpolation between measured points, or for a
-    fixed-step method of known order an extrapolation from the nearest point (cost ~ 1/h ~
-    error^(-1/order)).  Returns (cost or None, how)."""
-    pts = sorted(
-        (e, c) for e, c in zip(errors, costs, strict=True) if np.isfinite(e) and e > 0 and c > 0
-    )
-    if not pts:
-        return None, "no finite error"
-    es = np.log([p[0] for p in pts])
-    cs = np.log([p[1] for p in pts])
-    lt = math.log(target)
-    if es[0] <= lt <= es[-1]:
-        # the cheapest measured point at or below the target bounds the cost from the right side
-        below = [i for i in range(len(es)) if es[i] <= lt]
-        above = [i for i in range(len(es)) if es[i] >= lt]
-        i = max(below, key=lambda j: es[j])
-        j = min(above, key=lambda j: es[j])
-        if es[i] == es[j]:
-            return float(math.exp(cs[i])), "measured"
-        w = (lt - es[i]) / (es[j] - es[i])
-        return float(math.exp(cs[i] + w * (cs[j] - cs[i]))), "interpolated"
-    if order and order > 0:
-        k = 0 if lt < es[0] else len(es) - 1
-        return float(math.exp(cs[k] + (es[k] - lt) / order)), "extrapolated with the fitted order"
-    return None, "target error outside the measured range"
+def cheapest_measured(points: Sequence[Mapping[str, Any]], target: float) -> dict | None:
+    """The measured point of least median CPU time whose error is at most ``target``.
+
+    No interpolation and no extrapolation: a method none of whose runs reaches ``target`` has
+    no cost at it (None).
+
+    Parameters
+    ----------
+    points : sequence of dict
+        Runs with ``error`` and ``cpu["median"]``.
+    target : float
+        The largest error accepted.
+
+    Returns
+    -------
+    dict or None
+        The point (as given), or None.
+
+    Examples
+    --------
+    >>> from benchmarks.harness.timing import cheapest_measured
+    >>> pts = [{"h": h, "error": e, "cpu": {"median": c}}
+    ...        for h, e, c in ((0.2, 1e-6, 1.0), (0.1, 1e-9, 2.0), (0.05, 1e-12, 4.0))]
+    >>> cheapest_measured(pts, 1e-8)["h"], cheapest_measured(pts, 1e-13)
+    (0.1, None)
+    """
+    ok = [
+        q
+        for q in points
+        if q.get("error") is not None
+        and math.isfinite(q["error"])
+        and q["error"] <= target
+        and q.get("cpu", {}).get("median") is not None
+    ]
+    return dict(min(ok, key=lambda q: q["cpu"]["median"])) if ok else None

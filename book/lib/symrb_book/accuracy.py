@@ -24,16 +24,47 @@ MAX_SERIES = 6
 
 #: The panels of the accuracy page: the methods the guide names, per setting.
 MAIN_PANELS = (
-    ((3, 100.0), ("DOP853", "RK45", "MV-fast", "MV-pre8", "MV-pre10", "exact")),
-    ((10, 100.0), ("DOP853", "MV-fast", "MV-comp4", "MV-comp6", "MV-comp8", "RKMK4")),
+    ((3, 100.0), ("DOP853", "DOP853-gen", "MV-fast", "MV-pre8", "MV-pre10", "exact")),
+    ((10, 100.0), ("DOP853", "DOP853-gen", "MV-comp6", "MV-comp8", "RKMK4", "split8")),
 )
 
-#: The groups of the appendix: every method of a setting, at most six to a panel.
+#: The groups of the appendix: every method of a setting, at most six to a panel (a group none
+#: of whose methods ran in a setting is left out).
 APPENDIX_GROUPS = (
-    ("SciPy, symrb.integrate", ("RK45", "DOP853", "LSODA", "integrate")),
+    ("SciPy, lean field", ("RK45", "DOP853", "LSODA")),
+    ("SciPy, generated field", ("RK45-gen", "DOP853-gen", "LSODA-gen", "integrate")),
     ("orders 2 and 4", ("MV", "MV-fast", "midpoint", "MV-comp4", "MV-pre4", "RKMK4")),
     ("orders 6 to 10, exact", ("MV-comp6", "MV-comp8", "MV-pre6", "MV-pre8", "MV-pre10", "exact")),
+    ("splitting", ("split2", "split4", "split6", "split8")),
 )
+
+#: SciPy's methods: on the lean field under their own name, on the generated one as NAME-gen.
+SCIPY = ("RK45", "DOP853", "LSODA")
+
+
+def lean_recorded(w: dict[str, Any]) -> bool:
+    """Whether the setting ``w`` ran SciPy on the lean field (a run before issue 23 did not: its
+    ``DOP853`` is the generated field's)."""
+    return bool(w.get("baselines", {}).get("variant"))
+
+
+def label_of(w: dict[str, Any], m: str) -> str:
+    """The legend's label of method ``m`` in setting ``w``: SciPy's methods name their field."""
+    if m.endswith("-gen"):
+        return f"{m[:-4]} (generated field)"
+    if m in SCIPY:
+        return f"{m} (lean field)" if lean_recorded(w) else f"{m} (generated field)"
+    return m
+
+
+def look_of(w: dict[str, Any], m: str) -> dict[str, Any]:
+    """The style of ``m`` in setting ``w``: SciPy's runs on the generated field in their
+    method's colour, dotted and hollow (so too an old run's, which had no other field)."""
+    if m.endswith("-gen"):
+        return method_style(m[:-4], ls=":", mfc="white")
+    if m in SCIPY and not lean_recorded(w):
+        return method_style(m, ls=":", mfc="white")
+    return method_style(m)
 
 
 def fit_column(fig: Any, width_px: int = COLUMN_PX) -> Any:
@@ -89,11 +120,14 @@ def _panel(ax: Any, w: dict[str, Any], methods: Sequence[str], title: str, left:
         med = [q["cpu"]["median"] for q in pts]
         bars = [[q["cpu"]["median"] - q["cpu"]["min"] for q in pts],
                 [q["cpu"]["max"] - q["cpu"]["median"] for q in pts]]  # fmt: skip
-        ax.errorbar(err, med, yerr=bars, ms=6, capsize=2, lw=1.4, label=m, **method_style(m))
+        ax.errorbar(err, med, yerr=bars, ms=6, capsize=2, lw=1.4, label=label_of(w, m),
+                    **look_of(w, m))  # fmt: skip
         low = [(e, c) for q, e, c in zip(pts, err, med, strict=True) if q["error"] < floor]
         clipped += len(low)
         if low:
-            ax.plot(*zip(*low, strict=True), ms=11, mfc="white", **method_style(m, ls="none"))
+            ax.plot(
+                *zip(*low, strict=True), ms=11, **{**look_of(w, m), "ls": "none", "mfc": "white"}
+            )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.axvspan(left, floor, color="0.85", lw=0, label="below the reference's own error")
@@ -155,3 +189,48 @@ def bench_figure(result: Any, name: str) -> Any:
     :meth:`BenchResult.figures`) in the colours of :mod:`symrb_book.style`, fitted to the
     content column."""
     return fit_column(result.figures(name, style=series_style)[name])
+
+
+def usage(name: str) -> str:
+    """How a user asks for the benchmark's method ``name`` (the cell of the guide's table)."""
+    if name.startswith("MV-pre"):
+        return f'`method="mv", order={name[len("MV-pre") :]}` (`{name}`)'
+    if name.startswith("MV-comp"):
+        return f'`method="composition", order={name[len("MV-comp") :]}` (`{name}`)'
+    if name.startswith("split"):
+        return f"`symrb.splitting.splitting_flow(..., order={name[len('split') :]})` (`{name}`)"
+    known = {"MV-fast": '`method="mv"`', "MV": "`discrete_rigid_body_flow`",
+             "RKMK4": '`method="rkmk4"`', "midpoint": '`method="midpoint"`',
+             "DOP853": '`method="DOP853"`'}  # fmt: skip
+    return known.get(name, f"`{name}`")
+
+
+def long_runs(result: Any, flow: str = "mv_flow") -> list[dict[str, Any]]:
+    """The long-time runs of ``flow`` (``mv_flow``, ``mv_algorithm2``, ``symmetric_flow``); a
+    run recorded before issue 23 is ``mv_flow``'s."""
+    return [d for d in result.measurements.get("long-time", [])
+            if d.get("flow_key", "mv_flow") == flow]  # fmt: skip
+
+
+def previous_of(result: Any, name: str) -> dict[str, Any] | None:
+    """The goal of the previous run (``result.previous_goals``) matching the goal ``name``: the
+    same name, or else the one goal whose name has the same head before ``": "`` (a goal renamed
+    since, e.g. with a new target, keeps its setting as its head).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> r = SimpleNamespace(previous_goals=[{"name": "n = 3, T = 10: faster than DOP853"},
+    ...                                     {"name": "exact accurate to 1e-13"}])
+    >>> previous_of(r, "n = 3, T = 10: >= 30x faster than DOP853 (lean field)")["name"]
+    'n = 3, T = 10: faster than DOP853'
+    >>> previous_of(r, "cold start <= 1.5 s") is None
+    True
+    """
+    prev = list(getattr(result, "previous_goals", []) or [])
+    same = [g for g in prev if g["name"] == name]
+    if same:
+        return same[0]
+    head = name.split(": ")[0]
+    heads = [g for g in prev if ": " in g["name"] and g["name"].split(": ")[0] == head]
+    return heads[0] if len(heads) == 1 and ": " in name else None

@@ -45,6 +45,7 @@ METHOD_STYLE: dict[str, dict[str, Any]] = {
     "RKMK4": {"color": "#e377c2", "marker": "8", **_SYMRB},
     "midpoint": {"color": "#f7b6d2", "marker": "P", **_SYMRB},
     "exact": {"color": "#393b79", "marker": "X", **_SYMRB},
+    # symrb.splitting.splitting_flow (planar rotations composed to high order), by order
     "split2": {"color": "#e7ba52", "marker": "1", **_SYMRB},
     "split4": {"color": "#bd9e39", "marker": "2", **_SYMRB},
     "split6": {"color": "#8c6d31", "marker": "3", **_SYMRB},
@@ -85,7 +86,11 @@ ALIASES: dict[str, str] = {
     "mv_algorithm2": "MV-Algorithm 2",
     "symmetric_flow": "symmetric algorithm",
     "symmetric_step": "symmetric algorithm",
-    "MVStepper.step": "MV-fast",  # one step of mv_flow (order 2), as the benchmark times it
+    "MVStepper.step": "MV-fast",
+    # SciPy on symrb's generated field: the same method, drawn dotted with hollow markers
+    "DOP853-gen": "DOP853",
+    "RK45-gen": "RK45",
+    "LSODA-gen": "LSODA",
     "train": "gradient descent",
     "train_so_gradient": "gradient descent",
     "train_msa": "extended MSA",
