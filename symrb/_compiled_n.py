@@ -2,9 +2,9 @@ r"""Optional compiled loops at any n: the general-n Moser-Veselov step, and the 
 (products, LU, the matrix exponential) of :mod:`symrb._compiled_stages`.
 
 ``numba`` is not a run-time dependency: :data:`AVAILABLE` is False without it, and the callers
-(:func:`symrb.engine.mv_flow`, :func:`symrb.compose.rkmk4_rigid_body_flow`,
-:func:`symrb.compose.midpoint_rigid_body_flow`) then run their NumPy paths, which stay the
-reference.  With it, each function here is a module-level ``numba.njit(cache=True)`` function
+(:func:`symrb.engine.mv_flow`, :func:`symrb.compose.composed_rigid_body_flow`,
+:func:`symrb.compose.rkmk4_rigid_body_flow`, :func:`symrb.compose.midpoint_rigid_body_flow`)
+then run their NumPy paths, which stay the reference.  With it, each function here is a module-level ``numba.njit(cache=True)`` function
 (compiled on its first call, then loaded from numba's cache in a new process; no fast-math), and
 each loop reproduces its NumPy path operation for operation in plain loops (matrix products,
 LU with partial pivoting), so the results agree with it to rounding:
@@ -15,6 +15,9 @@ LU with partial pivoting), so the results agree with it to rounding:
   :math:`Q + QD`, :math:`M + (MD - (MD)^T) + (D^TMD - (D^TMD)^T)/2`, :math:`D = 2(I - X)^{-1}X`).
   A body whose iteration fails is reported; the caller redoes the run on the NumPy path (the
   Riccati fallback and the fold diagnosis).
+* :func:`run_composed_n` is the same step in a composition of sub-steps
+  :math:`\gamma_1 h, \dots, \gamma_s h` (:func:`symrb.compose.composed_rigid_body_flow` at
+  n != 3), each sub-step warm started from the same sub-step of the step before.
 * :func:`expm` is a scaling and squaring Pade exponential (Higham 2005: the orders 3 to 13 and
   the thresholds :math:`\theta_m` of his Table 2.3 on the 1-norm of the argument), the one
   RKMK4's compiled stages use.

@@ -294,9 +294,13 @@ def composed_rigid_body_flow(
         order 4 and Kahan-Li at orders 6 and 8).
     step : {"mv", "midpoint"} or object, optional
         The base step: ``"mv"`` (:class:`symrb.engine.MVStepper`, the fast Moser-Veselov step;
-        :class:`MVStep` is the same map through :func:`symrb.solve_moser_veselov`; at n = 3
-        without ``progress`` every stage runs in one loop on the generated kernels, compiled
-        by numba, when installed, for runs of at least 2 * 10^4 body-stages),
+        :class:`MVStep` is the same map through :func:`symrb.solve_moser_veselov`; without
+        ``progress`` every stage runs in one loop: at n = 3 on the generated kernels, compiled
+        by numba, when installed, for runs of at least 2 * 10^4 body-stages; at other n, when
+        numba is installed and the run has at least 2 * 10^6 body-stages times n^3, the first
+        step on :class:`symrb.engine.MVStepper` and the rest compiled
+        (:func:`symrb._compiled_n.run_composed_n`, results equal to rounding; a run that fails
+        there is redone by the stepper, which reports the failure)),
         ``"midpoint"`` (:class:`MidpointStep`), or any
         object with a method ``step(Q, M, h) -> (Q, M)`` that is symmetric and of order 2 (e.g.
         a faster engine); its ``last_iterations`` attribute, if any, is recorded.
