@@ -599,7 +599,9 @@ def _mv_comp_loop(Q0: Array, M0: Array, w0: Array, h: float, gammas: Array, lam:
                 for i in range(n):
                     for j in range(n):
                         B[i, j] = hs * M[i, j]
-                        X0[i, j] = hs * (2.0 * w[g, i, j] - wp[g, i, j]) if prev else hs * w[g, i, j]
+                        X0[i, j] = (
+                            hs * (2.0 * w[g, i, j] - wp[g, i, j]) if prev else hs * w[g, i, j]
+                        )
                 it = _mv_solve(X, X0, B, lam[b], Wh, W, iu, ju, K, LUk, y, dy)
                 if it < 0 or not _mv_update(Q, M, X, W):
                     fail[b] = k0 + k

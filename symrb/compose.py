@@ -233,9 +233,10 @@ def _composed_n(Q: Array, M: Array, L: Array, batch: tuple[int, ...], h: float, 
     if fail.any() or not (np.isfinite(Qs).all() and np.isfinite(Ms).all()):
         return None
     first = [(Q1, M1)] if save_every == 1 else []  # the first step, saved by neither loop
-    states = [(Qf, Mf), *first, *zip(Qs, Ms)]
-    return _solution(list(range(0, steps + 1, save_every)), [q.reshape(Q.shape) for q, _ in states],
-                     [m.reshape(M.shape) for _, m in states], [], "", h, steps, method)  # fmt: skip
+    states = [(Qf, Mf), *first, *zip(Qs, Ms, strict=True)]
+    ks = list(range(0, steps + 1, save_every))
+    Qk, Mk = [q.reshape(Q.shape) for q, _ in states], [m.reshape(M.shape) for _, m in states]
+    return _solution(ks, Qk, Mk, [], "", h, steps, method)
 
 
 class _Counter:

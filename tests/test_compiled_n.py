@@ -14,8 +14,7 @@ import pytest
 import scipy.linalg as sla
 
 import symrb
-from symrb import _compiled_n, _compiled_stages
-from symrb import compose
+from symrb import _compiled_n, _compiled_stages, compose
 from symrb.base_steps import MVStep
 from symrb.compose import (
     composed_rigid_body_flow,
@@ -237,7 +236,7 @@ def _spy_composed(monkeypatch, calls, after=None):
 
 @needs_numba
 @pytest.mark.parametrize("order", [4, 6, 8])
-@pytest.mark.parametrize(("n", "batch"), [(4, None), (10, None), (5, 3)])
+@pytest.mark.parametrize(("n", "batch"), [(2, None), (4, None), (10, None), (5, 3)])
 def test_composed_n_agrees_with_numpy_path(order, n, batch, monkeypatch):
     """The compiled composition against the NumPy one (MVStepper per stage) and against the
     composition of MVStep (symrb.solve_moser_veselov); 23 steps saved every 5 (not a divisor),
