@@ -2,9 +2,9 @@ r"""Optional compiled loops at any n: the general-n Moser-Veselov step, and the 
 (products, LU, the matrix exponential) of :mod:`symrb._compiled_stages`.
 
 ``numba`` is not a run-time dependency: :data:`AVAILABLE` is False without it, and the callers
-(:func:`symrb.engine.mv_flow`, :func:`symrb.compose.rkmk4_rigid_body_flow`,
-:func:`symrb.compose.midpoint_rigid_body_flow`) then run their NumPy paths, which stay the
-reference.  With it, each function here is a module-level ``numba.njit(cache=True)`` function
+(:func:`symrb.engine.mv_flow`, :func:`symrb.compose.composed_rigid_body_flow`,
+:func:`symrb.compose.rkmk4_rigid_body_flow`, :func:`symrb.compose.midpoint_rigid_body_flow`)
+then run their NumPy paths, which stay the reference.  With it, each function here is a module-level ``numba.njit(cache=True)`` function
 (compiled on its first call, then loaded from numba's cache in a new process; no fast-math), and
 each loop reproduces its NumPy path operation for operation in plain loops (matrix products,
 LU with partial pivoting), so the results agree with it to rounding:
@@ -15,6 +15,9 @@ LU with partial pivoting), so the results agree with it to rounding:
   :math:`Q + QD`, :math:`M + (MD - (MD)^T) + (D^TMD - (D^TMD)^T)/2`, :math:`D = 2(I - X)^{-1}X`).
   A body whose iteration fails is reported; the caller redoes the run on the NumPy path (the
   Riccati fallback and the fold diagnosis).
+* :func:`run_composed_n` is the same step in a composition of sub-steps
+  :math:`\gamma_1 h, \dots, \gamma_s h` (:func:`symrb.compose.composed_rigid_body_flow` at
+  n != 3), each sub-step warm started from the same sub-step of the step before.
 * :func:`expm` is a scaling and squaring Pade exponential (Higham 2005: the orders 3 to 13 and
   the thresholds :math:`\theta_m` of his Table 2.3 on the 1-norm of the argument), the one
   RKMK4's compiled stages use.
@@ -45,7 +48,7 @@ except ImportError:  # pragma: no cover
     numba = None  # type: ignore[assignment]
     AVAILABLE = False
 
-__all__ = ["AVAILABLE", "expm", "run_mv_n", "continue_mv_n"]
+__all__ = ["AVAILABLE", "expm", "run_mv_n", "continue_mv_n", "run_composed_n"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -563,3 +566,117 @@ def continue_mv_n(run: Any, h: float) -> bool:
     run.iters[1:] = iters * run.size
     run.k = run.steps
     return True
+
+
+# ---------------------------------------------------------------------------------------------
+# compositions of Moser-Veselov sub-steps (symrb.compose.composed_rigid_body_flow, n != 3)
+
+
+@_jit
+def _mv_comp_loop(Q0: Array, M0: Array, w0: Array, h: float, gammas: Array, lam: Array,
+                  steps: int, k0: int, save_every: int, Qs: Array, Ms: Array,
+                  fail: Any) -> None:  # fmt: skip  # pragma: no cover - compiled
+    nb, n, ng = M0.shape[0], M0.shape[1], gammas.shape[0]
+    iu, ju = np.triu_indices(n, 1)
+    m = iu.shape[0]
+    K, LUk, y, dy = np.empty((m, m)), np.empty((m, m)), np.empty((m, 1)), np.empty((m, 1))
+    W = np.empty((5, n, n))
+    Q, M, B, X = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    X0, Wh = np.empty((n, n)), np.empty((n, n))
+    w, wp = np.empty((ng, n, n)), np.empty((ng, n, n))
+    for b in range(nb):
+        Q[:, :], M[:, :] = Q0[b], M0[b]
+        for g in range(ng):
+            w[g] = w0[g, b]
+        prev = False  # w_prev holds the sub-step of the step before the last one
+        for i in range(n):
+            for j in range(n):
+                Wh[i, j] = 0.5 / (lam[b, i] + lam[b, j])
+        jsave = 0
+        for k in range(1, steps + 1):
+            for g in range(ng):
+                hs = h * gammas[g]
+                for i in range(n):
+                    for j in range(n):
+                        B[i, j] = hs * M[i, j]
+                        X0[i, j] = (
+                            hs * (2.0 * w[g, i, j] - wp[g, i, j]) if prev else hs * w[g, i, j]
+                        )
+                it = _mv_solve(X, X0, B, lam[b], Wh, W, iu, ju, K, LUk, y, dy)
+                if it < 0 or not _mv_update(Q, M, X, W):
+                    fail[b] = k0 + k
+                    break
+                wp[g] = w[g]
+                for i in range(n):
+                    for j in range(n):
+                        w[g, i, j] = X[i, j] / hs
+            if fail[b]:
+                break
+            prev = True
+            if (k0 + k) % save_every == 0:
+                Qs[jsave, b], Ms[jsave, b] = Q, M
+                jsave += 1
+
+
+def run_composed_n(Q: Array, M: Array, w: Array, h: float, gammas: Array, lam: Array, steps: int,
+                   save_every: int, k0: int = 0) -> tuple[Array, Array, NDArray[np.int64]]:  # fmt: skip
+    r"""Continue ``steps`` steps of a composition of general-n Moser-Veselov sub-steps (compiled).
+
+    A step is the sub-steps :math:`\gamma_1 h, \dots, \gamma_s h` in turn, each one
+    :class:`symrb.engine.MVStepper` step (the solver and the update of :func:`run_mv_n`, the same
+    arithmetic).  The sub-step :math:`\gamma_i h` is warm started from the same sub-step of the
+    previous step, :math:`X_0 = \gamma_i h\,w_i` with :math:`w_i = X/(\gamma_i h)`, and from
+    the third step on extrapolated from the last two, :math:`X_0 = \gamma_i h(2w_i - w_i')`.
+
+    Parameters
+    ----------
+    Q, M : ndarray, shape (B, n, n)
+        The attitudes and (skew) body momenta after step ``k0``.
+    w : ndarray, shape (S, B, n, n)
+        The warm starts :math:`X/(\gamma_i h)` of the sub-steps of step ``k0``.
+    h : float
+        The step.
+    gammas : ndarray, shape (S,)
+        The sub-step factors.
+    lam : ndarray, shape (B, n)
+        The diagonals of :math:`\Lambda`.
+    steps, save_every, k0 : int
+        Steps to take, numbered k0 + 1, ..., k0 + steps; the states after the steps whose number
+        is a multiple of ``save_every`` are saved.
+
+    Returns
+    -------
+    Qs, Ms : ndarray, shape (K, B, n, n)
+        The saved states (NaN after a failure).
+    fail : ndarray of int, shape (B,)
+        0, or the step in which a sub-step's iteration failed (that body's saves stop before it).
+
+    Raises
+    ------
+    RuntimeError
+        Without numba.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symrb import _compiled_n
+    >>> z = np.zeros((1, 4, 4))
+    >>> if _compiled_n.AVAILABLE:
+    ...     Qs, Ms, fail = _compiled_n.run_composed_n(np.eye(4)[None], z, np.zeros((3, 1, 4, 4)),
+    ...                                               0.1, np.array([1.35, -1.7, 1.35]),
+    ...                                               np.ones((1, 4)), 4, 2)
+    ...     print(Qs.shape, int(fail[0]))
+    ... else:
+    ...     print((2, 1, 4, 4), 0)
+    (2, 1, 4, 4) 0
+    """
+    _need()
+    f = np.ascontiguousarray
+    B, n = M.shape[0], M.shape[-1]
+    K = (k0 + steps) // save_every - k0 // save_every
+    Qs, Ms = np.full((K, B, n, n), np.nan), np.full((K, B, n, n), np.nan)
+    fail = np.zeros(B, dtype=np.int64)
+    _mv_comp_loop(f(Q, dtype=float), f(M, dtype=float), f(w, dtype=float), float(h),
+                  f(gammas, dtype=float), f(lam, dtype=float), int(steps), int(k0),
+                  int(save_every), Qs, Ms, fail)  # fmt: skip
+    return Qs, Ms, fail

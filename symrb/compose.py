@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _compiled_stages
+from . import _compiled_n, _compiled_stages
 from . import _validate as v
 from ._docs import fill
 from ._progress import progress_bar
@@ -66,6 +66,8 @@ __all__ = [
 _BACKENDS = ("auto", "numpy", "numba")
 #: method="auto" runs RKMK4 and the midpoint rule compiled from this many body-steps
 _NUMBA_MIN_STEPS = 500
+#: compositions at n != 3 run compiled from this many sub-steps * bodies * n^3 (mv_flow's)
+_NUMBA_MIN_WORK_N = 2_000_000
 
 # ---------------------------------------------------------------------------------------------
 # flows
@@ -190,6 +192,53 @@ def _compiled_run(kind: str, L: Array, h: float, steps: int, save_every: int) ->
     return run
 
 
+def _mv_loops(Q: Array, M: Array, L: Array, batch: tuple[int, ...], h: float, steps: int,
+              save_every: int, gammas: Array, method: str) -> DiscreteFlowSolution | None:  # fmt: skip
+    """The MV composition without a Python object per stage, or None (the NumPy loop then runs).
+    n = 3: :func:`symrb._mv3._composed3` (compiled with numba for runs worth it).  n != 3:
+    :func:`_composed_n` when numba is importable and the run has at least
+    ``_NUMBA_MIN_WORK_N`` stage-body-n^3 (mv_flow's threshold), else None."""
+    n = Q.shape[-1]
+    if n == 3:
+        from ._mv3 import _composed3
+
+        return _composed3(Q, M, MVStepper(L, batch), h, steps, save_every, gammas, method)
+    work = steps * gammas.size * Q[..., 0, 0].size * n**3
+    if steps == 0 or not _compiled_n.AVAILABLE or work < _NUMBA_MIN_WORK_N:
+        return None
+    return _composed_n(Q, M, L, batch, h, steps, save_every, gammas, method)
+
+
+def _composed_n(Q: Array, M: Array, L: Array, batch: tuple[int, ...], h: float, steps: int,
+                save_every: int, gammas: Array, method: str) -> DiscreteFlowSolution | None:  # fmt: skip
+    """:func:`composed_rigid_body_flow` with the MV base step at n != 3, compiled: the first step
+    on the NumPy path (:class:`symrb.engine.MVStepper`, the cold start with its branch check and
+    Riccati fallback), the rest by :func:`symrb._compiled_n.run_composed_n`, each sub-step warm
+    started from the same sub-step of the step before.  None when a stage fails (on either path,
+    or non-finite): the caller runs its NumPy loop, which reports the failure."""
+    n = Q.shape[-1]
+    stepper = MVStepper(L, batch)
+    g = np.asarray(gammas, dtype=float).ravel()
+    Qf, Mf = Q.reshape(-1, n, n), M.reshape(-1, n, n)
+    ws = []
+    try:
+        Q1, M1 = Qf, Mf
+        for c in g:
+            Q1, M1 = stepper.step(Q1, M1, c * h)
+            ws.append(stepper._w)
+    except STEP_FAILURES:
+        return None
+    Qs, Ms, fail = _compiled_n.run_composed_n(Q1, M1, np.stack(ws), h, g, stepper.lam, steps - 1,
+                                              save_every, k0=1)  # fmt: skip
+    if fail.any() or not (np.isfinite(Qs).all() and np.isfinite(Ms).all()):
+        return None
+    first = [(Q1, M1)] if save_every == 1 else []  # the first step, saved by neither loop
+    states = [(Qf, Mf), *first, *zip(Qs, Ms, strict=True)]
+    ks = list(range(0, steps + 1, save_every))
+    Qk, Mk = [q.reshape(Q.shape) for q, _ in states], [m.reshape(M.shape) for _, m in states]
+    return _solution(ks, Qk, Mk, [], "", h, steps, method)
+
+
 class _Counter:
     """Collects ``last_iterations`` of a base step after each call (when it has one)."""
 
@@ -246,9 +295,13 @@ def composed_rigid_body_flow(
         order 4 and Kahan-Li at orders 6 and 8).
     step : {"mv", "midpoint"} or object, optional
         The base step: ``"mv"`` (:class:`symrb.engine.MVStepper`, the fast Moser-Veselov step;
-        :class:`MVStep` is the same map through :func:`symrb.solve_moser_veselov`; at n = 3
-        without ``progress`` every stage runs in one loop on the generated kernels, compiled
-        by numba, when installed, for runs of at least 2 * 10^4 body-stages),
+        :class:`MVStep` is the same map through :func:`symrb.solve_moser_veselov`; without
+        ``progress`` every stage runs in one loop: at n = 3 on the generated kernels, compiled
+        by numba, when installed, for runs of at least 2 * 10^4 body-stages; at other n, when
+        numba is installed and the run has at least 2 * 10^6 body-stages times n^3, the first
+        step on :class:`symrb.engine.MVStepper` and the rest compiled
+        (:func:`symrb._compiled_n.run_composed_n`, results equal to rounding; a run that fails
+        there is redone by the stepper, which reports the failure)),
         ``"midpoint"`` (:class:`MidpointStep`), or any
         object with a method ``step(Q, M, h) -> (Q, M)`` that is symmetric and of order 2 (e.g.
         a faster engine); its ``last_iterations`` attribute, if any, is recorded.
@@ -283,14 +336,12 @@ def composed_rigid_body_flow(
     gammas = composition_coefficients(order, kind)
     kind_name = kind or _DEFAULT_KIND[int(order)]
     batch = np.broadcast_shapes(Q.shape[:-2], M.shape[:-2])
-    if isinstance(step, str) and step == "mv" and L.shape[-1] == 3 and not progress:
-        # n = 3: every stage in one loop (compiled with numba for runs worth it), no Python
-        # object per stage; a failed stage leaves the run to the general loop below
-        from ._mv3 import _composed3
-
-        sol = _composed3(Q, M, MVStepper(L, batch), hv, steps, save_every, gammas,
-                         f"MV-Algorithm 2 composed to order {int(order)} ({kind_name}, "
-                         f"{gammas.size} stages)")  # fmt: skip
+    if isinstance(step, str) and step == "mv" and not progress:
+        # every stage in one loop, no Python object per stage; a failed stage leaves the run to
+        # the general loop below
+        sol = _mv_loops(Q, M, L, batch, hv, steps, save_every, gammas,
+                        f"MV-Algorithm 2 composed to order {int(order)} ({kind_name}, "
+                        f"{gammas.size} stages)")  # fmt: skip
         if sol is not None:
             return sol
     if isinstance(step, str):

@@ -14,8 +14,13 @@ import pytest
 import scipy.linalg as sla
 
 import symrb
-from symrb import _compiled_n, _compiled_stages
-from symrb.compose import midpoint_rigid_body_flow, rkmk4_rigid_body_flow
+from symrb import _compiled_n, _compiled_stages, compose
+from symrb.base_steps import MVStep
+from symrb.compose import (
+    composed_rigid_body_flow,
+    midpoint_rigid_body_flow,
+    rkmk4_rigid_body_flow,
+)
 from symrb.engine import mv_flow
 from symrb.errors import InputError
 
@@ -211,3 +216,110 @@ def test_mv_n_auto_compiles_long_runs_only(monkeypatch):
     assert not calls
     mv_flow(Q0, M0, lam, 0.05, 2000, save_every=2000)
     assert calls
+
+
+# ---------------------------------------------------------------------------------------------
+# compositions of the general-n Moser-Veselov step
+
+
+def _spy_composed(monkeypatch, calls, after=None):
+    """Count the calls of run_composed_n; ``after`` may alter what it returns."""
+    real = _compiled_n.run_composed_n
+
+    def spy(*a, **k):
+        calls.append(1)
+        out = real(*a, **k)
+        return out if after is None else after(*out)
+
+    monkeypatch.setattr(_compiled_n, "run_composed_n", spy)
+
+
+@needs_numba
+@pytest.mark.parametrize("order", [4, 6, 8])
+@pytest.mark.parametrize(("n", "batch"), [(2, None), (4, None), (10, None), (5, 3)])
+def test_composed_n_agrees_with_numpy_path(order, n, batch, monkeypatch):
+    """The compiled composition against the NumPy one (MVStepper per stage) and against the
+    composition of MVStep (symrb.solve_moser_veselov); 23 steps saved every 5 (not a divisor),
+    and every step (the first one comes from the NumPy stepper)."""
+    Q0, M0, lam = _case(n, 40 + n + order, batch)
+    args = (Q0, M0, lam, 0.05, 23)
+    for every in (5, 1):
+        monkeypatch.setattr(compose, "_NUMBA_MIN_WORK_N", 10**18)
+        slow = composed_rigid_body_flow(*args, order=order, save_every=every)
+        ref = composed_rigid_body_flow(*args, order=order, save_every=every, step=MVStep(lam))
+        calls: list[int] = []
+        _spy_composed(monkeypatch, calls)
+        monkeypatch.setattr(compose, "_NUMBA_MIN_WORK_N", 0)
+        fast = composed_rigid_body_flow(*args, order=order, save_every=every)
+        assert calls and fast.method == slow.method
+        _agree(fast, slow, 1e-13)
+        _agree(fast, ref, 1e-12)
+        np.testing.assert_array_equal(fast.t, slow.t)
+        assert fast.y.Q.shape == slow.y.Q.shape and fast.iterations.shape == (0,)
+
+
+@needs_numba
+@pytest.mark.parametrize("fake", ["fail", "nan"])
+def test_composed_n_failure_in_the_compiled_loop_redone_on_numpy(fake, monkeypatch):
+    """An item that fails in the compiled loop (or a non-finite state) sends the run to the
+    NumPy loop: the result is the NumPy path's, bit for bit."""
+    Q0, M0, lam = _case(6, 8, 2)
+    monkeypatch.setattr(compose, "_NUMBA_MIN_WORK_N", 10**18)
+    slow = composed_rigid_body_flow(Q0, M0, lam, 0.05, 12, order=6, save_every=4)
+
+    def broken(Qs, Ms, fail):
+        if fake == "fail":
+            fail[1] = 3
+        else:
+            Ms[-1, 0, 0, 1] = np.nan
+        return Qs, Ms, fail
+
+    calls: list[int] = []
+    _spy_composed(monkeypatch, calls, broken)
+    monkeypatch.setattr(compose, "_NUMBA_MIN_WORK_N", 0)
+    fast = composed_rigid_body_flow(Q0, M0, lam, 0.05, 12, order=6, save_every=4)
+    assert calls
+    np.testing.assert_array_equal(fast.y.M, slow.y.M)
+    np.testing.assert_array_equal(fast.y.Q, slow.y.Q)
+    assert fast.success and fast.message == slow.message
+
+
+@needs_numba
+def test_composed_n_past_the_fold_reported_as_numpy(monkeypatch):
+    """A sub-step past the fold (the triple jump's -1.70 h at h = 0.8 of the fold scale): the
+    NumPy loop reports it, whichever backend was chosen."""
+    Q0, M0, lam = _case(4, 9)
+    h = 0.8 * float(np.min(symrb.fold_scale(M0, lam)))
+    monkeypatch.setattr(compose, "_NUMBA_MIN_WORK_N", 0)
+    fast = composed_rigid_body_flow(Q0, M0, lam, h, 3, order=4, kind="triple_jump")
+    monkeypatch.setattr(compose, "_NUMBA_MIN_WORK_N", 10**18)
+    slow = composed_rigid_body_flow(Q0, M0, lam, h, 3, order=4, kind="triple_jump")
+    assert not fast.success and fast.message == slow.message
+    assert "past the fold" in fast.message
+    np.testing.assert_array_equal(fast.k, slow.k)
+
+
+@needs_numba
+def test_composed_n_auto_compiles_long_runs_only(monkeypatch):
+    calls: list[int] = []
+    _spy_composed(monkeypatch, calls)
+    Q0, M0, lam = _case(10, 1)
+    composed_rigid_body_flow(Q0, M0, lam, 0.05, 20, order=4)  # 10^5 stage-n^3: NumPy
+    assert not calls
+    composed_rigid_body_flow(Q0, M0, lam, 0.05, 20, order=4, progress=True)
+    assert not calls
+    composed_rigid_body_flow(Q0, M0, lam, 0.02, 400, order=4, save_every=400)
+    assert calls
+
+
+def test_composed_n_without_numba_runs_numpy(monkeypatch):
+    """numba unavailable: the NumPy loop, whatever the size of the run."""
+    Q0, M0, lam = _case(5, 4)
+    calls: list[int] = []
+    _spy_composed(monkeypatch, calls)
+    monkeypatch.setattr(compose, "_NUMBA_MIN_WORK_N", 0)
+    monkeypatch.setattr(_compiled_n, "AVAILABLE", False)
+    sol = composed_rigid_body_flow(Q0, M0, lam, 0.05, 7, order=4, save_every=3)
+    assert sol.success and not calls
+    ref = composed_rigid_body_flow(Q0, M0, lam, 0.05, 7, order=4, save_every=3, step=MVStep(lam))
+    _agree(sol, ref, 1e-12)
