@@ -10,6 +10,7 @@ are in the module docstring of :mod:`symrb.engine`.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -200,9 +201,24 @@ def _hat_cols(m: list[Array]) -> Array:
 
 
 def _preprocessing(order: int, lam_c: Any) -> tuple[Any, ...] | None:
-    """The 28 constants of mv3_preprocessed_lam for ``order`` (zeros above it), or None."""
+    """The 28 constants of mv3_preprocessed_lam for ``order`` (zeros above it), or None; for
+    one body (``lam_c`` floats) kept from call to call (:func:`_preprocessing_one`)."""
     if order == 2:
         return None
+    if all(type(x) is float for x in lam_c):
+        return _preprocessing_one(order, tuple(lam_c))
+    return _preprocessing_of(order, lam_c)
+
+
+@functools.lru_cache(maxsize=64)
+def _preprocessing_one(order: int, lam_c: tuple[float, ...]) -> tuple[Any, ...]:
+    """:func:`_preprocessing_of` for one body, cached on (order, lam): the constants depend on
+    nothing else, and a run of a few hundred compiled steps would spend a tenth of its time
+    recomputing them."""
+    return _preprocessing_of(order, lam_c)
+
+
+def _preprocessing_of(order: int, lam_c: Any) -> tuple[Any, ...]:
     c = _gen.mv3_preprocessing_coefficients(*lam_c)
     keep = order // 2 - 1  # the h^2k terms kept, k = 1..keep
     # the constants come as c_kj (k = 1..4, j = 0..k), then d_kj in the same order
@@ -218,6 +234,10 @@ def _preprocessing(order: int, lam_c: Any) -> tuple[Any, ...] | None:
 
 def _columns(parts: Any, size: int) -> Array:
     """Floats or arrays (each broadcasting to (size,)) as the columns of a (size, k) array."""
+    if size == 1:  # floats: one row at once
+        row = np.array(parts, dtype=float)
+        if row.shape == (len(parts),):
+            return row.reshape(1, len(parts))
     out = np.empty((size, len(parts)))
     for i, x in enumerate(parts):
         out[:, i] = x
@@ -226,7 +246,11 @@ def _columns(parts: Any, size: int) -> Array:
 
 def _check_modified(lam_k: Any, h: float, order: int) -> None:
     """The modified Lambda must be finite and positive (h small enough for the series)."""
-    low = min(float(np.min(x)) for x in lam_k)
+    if all(type(x) is float for x in lam_k):
+        low = min(lam_k)  # (a NaN among them makes min NaN or skips it: checked again below)
+        low = low if all(x == x for x in lam_k) else math.nan
+    else:
+        low = min(float(np.min(x)) for x in lam_k)
     if not np.isfinite(low) or low <= 0:
         raise OutOfDomainError(
             f"h = {h:g}: the preprocessed method of order {order} gives a modified Lambda with "

@@ -668,9 +668,10 @@ class _FlowRun:
         Qshape, Mshape = self.shapes
         self.k = 1
         coef = self.coef
-        st = np.broadcast_to(np.asarray(self.s, dtype=float), (size,))
+        st, tv = (
+            np.broadcast_to(np.asarray(x, dtype=float), (size,)) for x in (self.s, stepper._tol)
+        )
         mv, qv = _columns(self.m, size), _columns(self.q, size)
-        tv = np.broadcast_to(np.asarray(stepper._tol, dtype=float), (size,))
         cv = None if coef is None else _columns(coef, size)
         ms, qs, fail, extra = _compiled.run_mv3(
             st, h, mv, stepper.lam, qv, tv, steps - 1, save_every, k0=1, coef=cv

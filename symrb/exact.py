@@ -362,26 +362,29 @@ def rigid_body_exact(
     True
     """
     L, Qa, Ma, tt, batch = _exact_input(Q0, M0, lam, t, check)
-    what = f"M0 up to {float(np.abs(Ma).max(initial=0.0)):.4g}, lam {L.ravel()[:3]}, t up to"
-    what += f" {float(np.abs(tt).max(initial=0.0)):.4g}"
+
+    def what() -> str:  # for the messages only: formatting arrays costs a third of a call
+        big, last = float(np.abs(Ma).max(initial=0.0)), float(np.abs(tt).max(initial=0.0))
+        return f"M0 up to {big:.4g}, lam {L.ravel()[:3]}, t up to {last:.4g}"
+
     try:
         with np.errstate(all="ignore"):
             sol = _exact(L, Qa, Ma, tt, batch)
     except (ArithmeticError, ValueError) as exc:
         raise OutOfDomainError(
             f"rigid_body_exact: the formulas overflow float64 ({type(exc).__name__}: {exc}) for "
-            f"{what}; rescale M0 and t (M0/c at time c t is the same motion)"
+            f"{what()}; rescale M0 and t (M0/c at time c t is the same motion)"
         ) from None
     phase = float(np.max(np.abs(sol.nu), initial=0.0)) * float(np.abs(tt).max(initial=0.0))
     if not phase <= MAX_PHASE:
         raise OutOfDomainError(
             f"rigid_body_exact: the phase nu t = {phase:.4g} of the elliptic functions exceeds "
-            f"{MAX_PHASE:g} (its rounding alone is about {phase * 1.1e-16:.2g}) for {what}; "
+            f"{MAX_PHASE:g} (its rounding alone is about {phase * 1.1e-16:.2g}) for {what()}; "
             "take shorter times"
         )
     if not all(np.isfinite(x).all() for x in sol.y.values()):
         raise OutOfDomainError(
-            f"rigid_body_exact: the solution is not finite in float64 for {what} (an overflow); "
+            f"rigid_body_exact: the solution is not finite in float64 for {what()} (an overflow); "
             "rescale M0 and t (M0/c at time c t is the same motion)"
         )
     return sol
