@@ -3,9 +3,6 @@ step arguments, the warm-started solver of :math:`J_D(U) = M` and the bookkeepin
 
 from __future__ import annotations
 
-import re
-from collections.abc import Callable
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -144,9 +141,6 @@ def _failure(
     return f"step {k} of {steps} failed: {reason}{note}", h_max
 
 
-_ENGINE_FAILURE = re.compile(r"step (\d+) of \d+ failed: (.*)", re.S)
-
-
 def _engine_result(
     sol: DiscreteFlowSolution,
     y: dict[str, Array],
@@ -155,23 +149,12 @@ def _engine_result(
     method: str,
     h: float | None,
     steps: int,
-    shift: int,
-    fold: Callable[[], float | None],
     iterations: NDArray[np.int64] | None = None,
 ) -> DiscreteFlowSolution:
-    """A paper map's result from the :func:`symrb.engine.mv_flow` run ``sol`` that computed it:
-    the states ``y`` at the steps ``k``, the engine's failure (its step minus ``shift``) with the
-    fold diagnosis ``fold()`` of that step's momentum, as the reference loop reports it.  The
-    engine checks each solve against its own tolerance but reports no residual: ``residual``,
-    ``tol`` and ``condition`` are empty."""
-    message, failed, fold_t, h_max = f"all {steps} steps taken", None, None, None
-    if not sol.success:
-        got = _ENGINE_FAILURE.fullmatch(sol.message)
-        if got is None:  # not a failed solve (an overflow): the engine's words
-            message, failed = sol.message, sol.failed_step
-        else:
-            failed, fold_t = int(got.group(1)) - shift, fold()
-            message, h_max = _failure(failed, steps, got.group(2), fold_t, h)
+    """A paper map's result from the successful :func:`symrb.engine.mv_flow` run ``sol`` that
+    computed it (``steps`` of the paper's map): the states ``y`` at the steps ``k`` (a run that fails on the engine is redone by
+    the reference loop, which reports the failure).  The engine checks each solve against its
+    own tolerance but reports no residual: ``residual``, ``tol`` and ``condition`` are empty."""
     return DiscreteFlowSolution(
         t=k.astype(np.float64) * (1.0 if h is None else h),
         k=k,
@@ -179,12 +162,9 @@ def _engine_result(
         iterations=sol.iterations if iterations is None else iterations,
         success=sol.success,
         status=sol.status,
-        message=message,
+        message=f"all {steps} steps taken",
         method=method,
         h=h,
-        failed_step=failed,
-        fold=fold_t,
-        h_max=h_max,
     )
 
 

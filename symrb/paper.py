@@ -54,7 +54,8 @@ What differs: ``iterations`` counts the engine's Newton iterations of each step 
 batch), and ``residual``, ``tol`` and ``condition`` are empty (the engine checks each solve
 against its own tolerance and reports no residual).  With ``progress``, ``halve`` or
 ``diagnostics`` (and for MV-Algorithm 1 from a :math:`Q_0^TQ_1` off the branch through the
-identity, or a solve outside the engine run that fails) the reference loop runs instead: one
+identity, and for any run that fails on the engine, which the reference loop then redoes and
+reports as it always did) the reference loop runs instead: one
 :func:`symrb.solve_moser_veselov`-type Newton solve a step, started from the previous :math:`U`,
 with a progress bar (tqdm), the residual, tolerance and condition number of every solve and, with
 ``halve``, steps past the fold taken as :math:`2^j` substeps.
@@ -63,7 +64,7 @@ Arrays are batched: ``(..., n, n)``.  The flows return a :class:`DiscreteFlowSol
 the states by name in ``y`` with the time axis first, the Newton iteration counts, ``success``
 and ``message``); a step that has no solution on the branch through the identity (past the fold
 of :math:`J_D`) ends the run early with ``success`` False rather than raising, with the fold
-diagnosis of that step's momentum (``fold``, ``h_max``) in either path.
+diagnosis of that step's momentum (``fold``, ``h_max``), from the reference loop.
 """
 
 from __future__ import annotations
@@ -256,12 +257,13 @@ def _symmetric_engine(
     :math:`M_k = Q_k^TP_k - P_k^TQ_k` is its state at step ``h``, and
     :math:`P_k = P_0U_0\cdots U_{k-1} = P_0Q_0^{-1}Q_k` is recovered at the saved states."""
     sol = mv_flow(Q, _srb.symmetric_momentum(Q, P), L, h, steps, save_every=save_every)
+    if not sol.success:  # the reference loop redoes the run and reports the failure
+        return _symmetric_run(Q, P, L, batch, h, steps, save_every, False, method)
     Qs, Ms = sol.y["Q"], sol.y["M"]
     with np.errstate(over="ignore", invalid="ignore"):
         Ps = P @ np.linalg.solve(Q, Qs)
     y = {"Q": Qs, "P": Ps, "M": Ms}
-    fold = lambda: _Stepper(L, batch).fold(h * Ms[-1])  # noqa: E731  (the state before)
-    return _engine_result(sol, y, sol.k, method=method, h=h, steps=steps, shift=0, fold=fold)
+    return _engine_result(sol, y, sol.k, method=method, h=h, steps=steps)
 
 
 #: The most halvings of one step: 2^12 substeps at most (the work doubles with each halving;
@@ -413,15 +415,12 @@ def _mv1_engine(
     if not np.all(eig.real > 0):  # the branch through the identity (solve_moser_veselov)
         return None
     sol = mv_flow(Qa, M1, L, 1.0, steps + 1, save_every=save_every)
-    if not sol.success and sol.k[-1] == 0:
-        return None  # the recomputation of Q_1 failed: not a step of the paper's map
+    if not sol.success:
+        return None  # the reference loop redoes the run and reports the failure
     Qs = sol.y["Q"].copy()
     if save_every == 1 and Qs.shape[0] > 1:
         Qs[1] = Qb  # the given Q_1 (the engine's equals it to rounding)
-    fold = lambda: _Stepper(L, batch).fold(sol.y["M"][-1])  # noqa: E731  (M_k of failed step k-1)
-    return _engine_result(
-        sol, {"Q": Qs}, sol.k, method="MV-Algorithm 1", h=None, steps=steps, shift=1, fold=fold
-    )
+    return _engine_result(sol, {"Q": Qs}, sol.k, method="MV-Algorithm 1", h=None, steps=steps)
 
 
 def _mv1_reference(
@@ -542,6 +541,8 @@ def _mv2_engine(
     if not first.success:
         return None
     sol = mv_flow(Q0, first.y["M"][-1], L, 1.0, steps, save_every=save_every)
+    if not sol.success:
+        return None  # the reference loop redoes the run and reports the failure
     Ms = sol.y["M"].copy()
     Ms[0] = M0
     if Ms.shape[0] > 1:
@@ -550,11 +551,15 @@ def _mv2_engine(
             return None
         Ms[1:] = -back.y["M"][-1]
     its = np.concatenate([first.iterations, sol.iterations], dtype=np.int64)
-    fold = lambda: _Stepper(L, batch).fold(sol.y["M"][-1])  # noqa: E731  (M_k of failed step k)
     return _engine_result(
-        sol, {"Q": sol.y["Q"], "M": Ms}, sol.k, method="MV-Algorithm 2", h=None, steps=steps,
-        shift=0, fold=fold, iterations=its,
-    )  # fmt: skip
+        sol,
+        {"Q": sol.y["Q"], "M": Ms},
+        sol.k,
+        method="MV-Algorithm 2",
+        h=None,
+        steps=steps,
+        iterations=its,
+    )
 
 
 def _mv2_reference(

@@ -203,3 +203,18 @@ def _reference_one_mv1_from(Q0: np.ndarray, Q1: np.ndarray, lam: np.ndarray, ste
         Qa, Qb = Qb, Qb @ _solve_jd(M2, lam)
         Qs.append(Qb)
     return np.array(Qs)
+
+
+def test_a_run_the_engine_cannot_take_is_the_reference_loops():
+    """The engine's scalar n = 3 arithmetic overflows for h = 1e-160 and lam up to 1e77 (found by
+    tests/test_fuzz_flows.py), where the step-by-step loop's matrix solve succeeds: the engine's
+    failure must not be the answer, the reference loop redoes the run."""
+    Q0 = symrb.random_SO(3, seed=0)
+    M = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1e-160], [0.0, -1e-160, 0.0]])
+    lam = np.array([1.0, 1.0, 1e77])
+    assert not symrb.engine.mv_flow(Q0, M, lam, 1e-160, 1).success  # the engine alone fails
+    got = symrb.discrete_rigid_body_flow(Q0, M, lam, 1e-160, 1)
+    ref = symrb.discrete_rigid_body_flow(Q0, M, lam, 1e-160, 1, diagnostics=True)
+    assert got.success and ref.success
+    for name in ref.y:
+        assert np.array_equal(got.y[name], ref.y[name])

@@ -81,7 +81,10 @@ _FULL: dict[str, Any] = {
         ("MV-comp4", 0.4),
         ("split2", 0.2),
         ("split4", 0.4),
+        ("MV-comp8", 0.5),
         ("split6", 0.5),
+        ("split8", 0.35),
+        ("split8", 0.5),
     ),
     "lh_budget": 120.0,
     # long-time: a budget in CPU seconds for each flow's run

@@ -374,8 +374,8 @@ _COLD = (
     "import numpy as np\n"
     "import symrb\n"
     "from symrb.engine import mv_flow\n"
-    "mv_flow(np.eye(3), symrb.hat([0.5, 1.0, 1.5]), np.array([0.7, 1.1, 1.6]), 0.01, 1,"
-    " method='numba')\n"
+    "mv_flow(np.eye(3), symrb.hat([0.5, 1.0, 1.5]), np.array([0.7, 1.1, 1.6]), 0.01, 100,"
+    " method='numba')\n"  # (steps 2.. are the compiled loop's: one step would not load it)
 )
 
 
