@@ -301,6 +301,15 @@ def _need() -> None:
         raise RuntimeError("numba is not installed (pip install numba)")
 
 
+def _saves(M: Array, steps: int, save_every: int, k0: int = 0) -> tuple[Array, Array]:
+    """The arrays ``Qs, Ms`` (K, B, n, n), NaN, that a compiled loop of the batch ``M``
+    (B, n, n) fills: K the steps among k0 + 1, ..., k0 + steps whose number is a multiple of
+    ``save_every``."""
+    B, n = M.shape[0], M.shape[-1]
+    K = (k0 + steps) // save_every - k0 // save_every
+    return np.full((K, B, n, n), np.nan), np.full((K, B, n, n), np.nan)
+
+
 # ---------------------------------------------------------------------------------------------
 # the general-n Moser-Veselov step (symrb.engine: _G, _fixed_point_n, _newton_n, the update)
 
@@ -429,37 +438,67 @@ def _mv_update(Q: Array, M: Array, X: Array, W: Array) -> bool:  # pragma: no co
 
 
 @_jit
+def _mv_work(n: int) -> Any:  # pragma: no cover - compiled
+    """The work arrays of a general-n Moser-Veselov loop: the skew index pairs ``iu, ju``,
+    Newton's ``K, LU, y, dy``, ``W`` (5, n, n), the state ``Q, M``, ``Wh`` and ``V`` (3, n, n)
+    (:func:`_mv_step`'s ``B, X0, X``)."""
+    iu, ju = np.triu_indices(n, 1)
+    m = iu.shape[0]
+    K, LUk, y, dy = np.empty((m, m)), np.empty((m, m)), np.empty((m, 1)), np.empty((m, 1))
+    W, V = np.empty((5, n, n)), np.empty((3, n, n))
+    Q, M, Wh = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    return iu, ju, K, LUk, y, dy, W, Q, M, Wh, V
+
+
+@_jit
+def _wh_into(lam: Array, Wh: Array) -> None:  # pragma: no cover - compiled
+    """Wh = 1 / (2 (lam_i + lam_j)), the fixed point's weights of one body."""
+    n = lam.shape[0]
+    for i in range(n):
+        for j in range(n):
+            Wh[i, j] = 0.5 / (lam[i] + lam[j])
+
+
+@_jit
+def _mv_step(Q: Array, M: Array, w: Array, wp: Array, prev: bool, h: float, lam: Array,
+             Wh: Array, W: Array, V: Array, iu: Any, ju: Any, K: Array, LU: Array, y: Array,
+             dy: Array) -> int:  # fmt: skip  # pragma: no cover - compiled
+    """One step h of (Q, M) in place, warm started from w = X/h (extrapolated with the one
+    before, wp, when ``prev``); w, wp move on.  The sweeps, negative if the step failed."""
+    n = Q.shape[0]
+    B, X0, X = V[0], V[1], V[2]
+    for i in range(n):
+        for j in range(n):
+            B[i, j] = h * M[i, j]
+            X0[i, j] = h * (2.0 * w[i, j] - wp[i, j]) if prev else h * w[i, j]
+    it = _mv_solve(X, X0, B, lam, Wh, W, iu, ju, K, LU, y, dy)
+    if it < 0 or not _mv_update(Q, M, X, W):
+        return min(it, -1)
+    wp[:, :] = w
+    for i in range(n):
+        for j in range(n):
+            w[i, j] = X[i, j] / h
+    return it
+
+
+@_jit
 def _mv_loop(Q0: Array, M0: Array, w0: Array, wp0: Array, has_prev: bool, h: float, lam: Array,
              steps: int, k0: int, save_every: int, Qs: Array, Ms: Array, fail: Any,
              iters: Any) -> None:  # fmt: skip  # pragma: no cover - compiled
     nb, n = M0.shape[0], M0.shape[1]
-    iu, ju = np.triu_indices(n, 1)
-    m = iu.shape[0]
-    K, LUk, y, dy = np.empty((m, m)), np.empty((m, m)), np.empty((m, 1)), np.empty((m, 1))
-    W = np.empty((5, n, n))
-    Q, M, B, X = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
-    X0, Wh, w, wp = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    iu, ju, K, LUk, y, dy, W, Q, M, Wh, V = _mv_work(n)
+    w, wp = np.empty((n, n)), np.empty((n, n))
     for b in range(nb):
         Q[:, :], M[:, :], w[:, :], wp[:, :] = Q0[b], M0[b], w0[b], wp0[b]
         prev = has_prev
-        for i in range(n):
-            for j in range(n):
-                Wh[i, j] = 0.5 / (lam[b, i] + lam[b, j])
+        _wh_into(lam[b], Wh)
         jsave = 0
         for k in range(1, steps + 1):
-            for i in range(n):
-                for j in range(n):
-                    B[i, j] = h * M[i, j]
-                    X0[i, j] = h * (2.0 * w[i, j] - wp[i, j]) if prev else h * w[i, j]
-            it = _mv_solve(X, X0, B, lam[b], Wh, W, iu, ju, K, LUk, y, dy)
-            if it < 0 or not _mv_update(Q, M, X, W):
+            it = _mv_step(Q, M, w, wp, prev, h, lam[b], Wh, W, V, iu, ju, K, LUk, y, dy)
+            if it < 0:
                 fail[b] = k0 + k
                 break
             iters[k - 1] = max(iters[k - 1], it)
-            wp[:, :] = w
-            for i in range(n):
-                for j in range(n):
-                    w[i, j] = X[i, j] / h
             prev = True
             if (k0 + k) % save_every == 0:
                 Qs[jsave, b], Ms[jsave, b] = Q, M
@@ -524,10 +563,8 @@ def run_mv_n(
     """
     _need()
     f = np.ascontiguousarray
-    B, n = M.shape[0], M.shape[-1]
-    K = (k0 + steps) // save_every - k0 // save_every
-    Qs, Ms = np.full((K, B, n, n), np.nan), np.full((K, B, n, n), np.nan)
-    fail = np.zeros(B, dtype=np.int64)
+    Qs, Ms = _saves(M, steps, save_every, k0)
+    fail = np.zeros(M.shape[0], dtype=np.int64)
     iters = np.zeros(steps, dtype=np.int64)
     wp = w if w_prev is None else w_prev
     _mv_loop(f(Q, dtype=float), f(M, dtype=float), f(w, dtype=float), f(wp, dtype=float),
@@ -577,39 +614,22 @@ def _mv_comp_loop(Q0: Array, M0: Array, w0: Array, h: float, gammas: Array, lam:
                   steps: int, k0: int, save_every: int, Qs: Array, Ms: Array,
                   fail: Any) -> None:  # fmt: skip  # pragma: no cover - compiled
     nb, n, ng = M0.shape[0], M0.shape[1], gammas.shape[0]
-    iu, ju = np.triu_indices(n, 1)
-    m = iu.shape[0]
-    K, LUk, y, dy = np.empty((m, m)), np.empty((m, m)), np.empty((m, 1)), np.empty((m, 1))
-    W = np.empty((5, n, n))
-    Q, M, B, X = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
-    X0, Wh = np.empty((n, n)), np.empty((n, n))
+    iu, ju, K, LUk, y, dy, W, Q, M, Wh, V = _mv_work(n)
     w, wp = np.empty((ng, n, n)), np.empty((ng, n, n))
     for b in range(nb):
         Q[:, :], M[:, :] = Q0[b], M0[b]
         for g in range(ng):
             w[g] = w0[g, b]
         prev = False  # w_prev holds the sub-step of the step before the last one
-        for i in range(n):
-            for j in range(n):
-                Wh[i, j] = 0.5 / (lam[b, i] + lam[b, j])
+        _wh_into(lam[b], Wh)
         jsave = 0
         for k in range(1, steps + 1):
             for g in range(ng):
-                hs = h * gammas[g]
-                for i in range(n):
-                    for j in range(n):
-                        B[i, j] = hs * M[i, j]
-                        X0[i, j] = (
-                            hs * (2.0 * w[g, i, j] - wp[g, i, j]) if prev else hs * w[g, i, j]
-                        )
-                it = _mv_solve(X, X0, B, lam[b], Wh, W, iu, ju, K, LUk, y, dy)
-                if it < 0 or not _mv_update(Q, M, X, W):
+                it = _mv_step(Q, M, w[g], wp[g], prev, h * gammas[g], lam[b], Wh, W, V, iu, ju,
+                              K, LUk, y, dy)  # fmt: skip
+                if it < 0:
                     fail[b] = k0 + k
                     break
-                wp[g] = w[g]
-                for i in range(n):
-                    for j in range(n):
-                        w[g, i, j] = X[i, j] / hs
             if fail[b]:
                 break
             prev = True
@@ -672,10 +692,8 @@ def run_composed_n(Q: Array, M: Array, w: Array, h: float, gammas: Array, lam: A
     """
     _need()
     f = np.ascontiguousarray
-    B, n = M.shape[0], M.shape[-1]
-    K = (k0 + steps) // save_every - k0 // save_every
-    Qs, Ms = np.full((K, B, n, n), np.nan), np.full((K, B, n, n), np.nan)
-    fail = np.zeros(B, dtype=np.int64)
+    Qs, Ms = _saves(M, steps, save_every, k0)
+    fail = np.zeros(M.shape[0], dtype=np.int64)
     _mv_comp_loop(f(Q, dtype=float), f(M, dtype=float), f(w, dtype=float), float(h),
                   f(gammas, dtype=float), f(lam, dtype=float), int(steps), int(k0),
                   int(save_every), Qs, Ms, fail)  # fmt: skip

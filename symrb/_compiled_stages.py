@@ -30,7 +30,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._compiled_n import _EPS, AVAILABLE, _expm_into, _jit, _mm, _mtm, _need, _skew_into, _solve
+from ._compiled_n import (
+    _EPS,
+    AVAILABLE,
+    _expm_into,
+    _jit,
+    _mm,
+    _mtm,
+    _need,
+    _saves,
+    _skew_into,
+    _solve,
+)
 from ._validate import Array
 
 __all__ = ["AVAILABLE", "run_rkmk4", "run_midpoint"]
@@ -41,6 +52,12 @@ def _vee(A: Array) -> Array:
     return np.ascontiguousarray(
         np.stack([A[:, 2, 1], A[:, 0, 2], A[:, 1, 0]], axis=-1), dtype=float
     )
+
+
+def _inertia_weights(lam: Array) -> Array:
+    """(B, n) diagonals of Lambda -> the (B, n, n) weights 1 / (lam_i + lam_j) of J^{-1}."""
+    lam = np.ascontiguousarray(lam, dtype=float)
+    return 1.0 / (lam[:, :, None] + lam[:, None, :])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -169,10 +186,7 @@ def run_rkmk4(
     _need()
     f = np.ascontiguousarray
     B, n = M.shape[0], M.shape[-1]
-    lam = f(lam, dtype=float)
-    Wl = 1.0 / (lam[:, :, None] + lam[:, None, :])
-    K = steps // save_every
-    Qs, Ms = np.full((K, B, n, n), np.nan), np.full((K, B, n, n), np.nan)
+    Wl, (Qs, Ms) = _inertia_weights(lam), _saves(M, steps, save_every)
     if n == 3:
         fail = _rkmk4_loop3(f(Q.reshape(B, 9), dtype=float), _vee(M), _vee(Wl), float(h),
                             int(steps), int(save_every), Qs, Ms)  # fmt: skip
@@ -470,12 +484,8 @@ def run_midpoint(
     (2, 1, 3, 3) 0 True
     """
     _need()
-    f = np.ascontiguousarray
     B, n = M.shape[0], M.shape[-1]
-    lam = f(lam, dtype=float)
-    Wl = 1.0 / (lam[:, :, None] + lam[:, None, :])
-    K = steps // save_every
-    Qs, Ms = np.full((K, B, n, n), np.nan), np.full((K, B, n, n), np.nan)
+    Wl, (Qs, Ms) = _inertia_weights(lam), _saves(M, steps, save_every)
     iters = np.zeros(steps, dtype=np.int64)
     if n == 3:
         fail = _midpoint_loop3(np.array(Q.reshape(B, 9), dtype=float), _vee(M), _vee(Wl),
