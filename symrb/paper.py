@@ -69,6 +69,9 @@ diagnosis of that step's momentum (``fold``, ``h_max``), from the reference loop
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -335,6 +338,23 @@ def _symmetric_run(
     return out
 
 
+def _engine_or_loop(
+    engine: Callable[..., DiscreteFlowSolution | None],
+    loop: Callable[..., DiscreteFlowSolution],
+    args: tuple[Any, ...],
+    progress: bool,
+    diagnostics: bool,
+) -> DiscreteFlowSolution:
+    """An MV-Algorithm run of ``args`` (the two states, ``L``, ``batch``, ``steps``,
+    ``save_every``): by ``engine`` unless ``progress`` or ``diagnostics`` is asked, and by the
+    reference ``loop`` then or when the engine gives None."""
+    if not (progress or diagnostics):
+        got = engine(*args)
+        if got is not None:
+            return got
+    return loop(*args, progress, bool(diagnostics))
+
+
 @fill
 def mv_algorithm1(
     Q0: ArrayLike,
@@ -393,11 +413,8 @@ def mv_algorithm1(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qa, Qb), batch = _prepare(lam, (Q0, "Q0", "SO"), (Q1, "Q1", "SO"))
-    if not (progress or diagnostics):
-        got = _mv1_engine(Qa, Qb, L, batch, steps, save_every)
-        if got is not None:
-            return got
-    return _mv1_reference(Qa, Qb, L, batch, steps, save_every, progress, bool(diagnostics))
+    args = (Qa, Qb, L, batch, steps, save_every)
+    return _engine_or_loop(_mv1_engine, _mv1_reference, args, progress, diagnostics)
 
 
 def _mv1_engine(
@@ -520,11 +537,8 @@ def mv_algorithm2(
     """
     steps, save_every = _check_steps(steps, save_every)
     L, (Qk, Mk), batch = _prepare(lam, (Q, "Q", "SO"), (M, "M", "skew"))
-    if not (progress or diagnostics):
-        got = _mv2_engine(Qk, Mk, L, batch, steps, save_every)
-        if got is not None:
-            return got
-    return _mv2_reference(Qk, Mk, L, batch, steps, save_every, progress, bool(diagnostics))
+    args = (Qk, Mk, L, batch, steps, save_every)
+    return _engine_or_loop(_mv2_engine, _mv2_reference, args, progress, diagnostics)
 
 
 def _mv2_engine(

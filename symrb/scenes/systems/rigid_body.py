@@ -322,16 +322,24 @@ def _plan_exact(sc: RigidBodyScene, notes: list[str]) -> SystemPlan:
     )
 
 
+def _attitude_unrecorded(
+    sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], verb: str
+) -> None:
+    """A ``simulate`` plan without the "attitude" effect: its Q is still propagated with M (the
+    last entry of ``skipped``, Q's, is dropped; a note says so)."""
+    if "attitude" not in sc.effects:
+        skipped.pop()
+        notes.append(f"simulate(method={sc.integrator.method!r}) {verb} Q with M: Q is "
+                     "propagated, though not recorded")  # fmt: skip
+
+
 def _plan_composed(
     sc: RigidBodyScene, skipped: list[tuple[str, str]], notes: list[str], fixed: _Fixed
 ) -> SystemPlan:
     """A composition, RKMK4 or the midpoint rule: ``simulate`` at the step ``h``."""
     integ: Any = sc.integrator
     n = sc.parameters.n
-    if "attitude" not in sc.effects:
-        skipped.pop()
-        notes.append(f"simulate(method={integ.method!r}) steps Q with M: Q is propagated, "
-                     "though not recorded")  # fmt: skip
+    _attitude_unrecorded(sc, skipped, notes, "steps")
     if isinstance(integ, rbm.Composition):
         try:
             stages = len(composition_coefficients(integ.order, integ.kind))
@@ -355,10 +363,7 @@ def _plan_splitting(
     """The splitting into planar rotations: ``simulate`` at the step ``h``."""
     integ: Any = sc.integrator
     n = sc.parameters.n
-    if "attitude" not in sc.effects:
-        skipped.pop()
-        notes.append("simulate(method='splitting') rotates Q with M: Q is propagated, "
-                     "though not recorded")  # fmt: skip
+    _attitude_unrecorded(sc, skipped, notes, "rotates")
     stages = len(composition_coefficients(integ.order))
     rotations = stages * (n * n - n + 1)  # about 2 n(n - 1)/2 planar rotations a stage
     how = f" ({stages} stages of {n * (n - 1) // 2} planes, each rotated about twice)"
