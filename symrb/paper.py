@@ -239,6 +239,15 @@ def symmetric_flow(
     steps, save_every = _check_steps(steps, save_every)
     L, (Q, P), batch = _prepare(lam, (Q0, "Q0", "SO"), (P0, "P0", "square"))
     method = "symmetric representation"
+    return _symmetric_engine_or_loop(Q, P, L, batch, h, steps, save_every, method, progress,
+                                     halve, diagnostics)  # fmt: skip
+
+
+def _symmetric_engine_or_loop(Q: Array, P: Array, L: Array, batch: tuple[int, ...], h: float,
+                              steps: int, save_every: int, method: str, progress: bool,
+                              halve: bool, diagnostics: bool) -> DiscreteFlowSolution:  # fmt: skip
+    """A run of the symmetric algorithm from validated (Q, P): by :func:`_symmetric_engine`
+    unless ``progress``, ``halve`` or ``diagnostics`` asks for the reference loop."""
     if progress or halve or diagnostics:
         return _symmetric_run(
             Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
@@ -680,8 +689,5 @@ def discrete_rigid_body_flow(
     L, (Q, M), batch = _prepare(lam, (Q0, "Q0", "SO"), (M0, "M0", "skew"))
     method = "discrete rigid body"
     P = Q @ (0.5 * M)
-    if progress or halve or diagnostics:
-        return _symmetric_run(
-            Q, P, L, batch, h, steps, save_every, progress, method, bool(halve), bool(diagnostics)
-        )
-    return _symmetric_engine(Q, P, L, batch, h, steps, save_every, method)
+    return _symmetric_engine_or_loop(Q, P, L, batch, h, steps, save_every, method, progress,
+                                     halve, diagnostics)  # fmt: skip
