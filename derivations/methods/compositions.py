@@ -28,7 +28,8 @@ M4 = claim(
     "order on the local error of a splitting, independently of the rigid body; the compiled "
     "loops of the composed flow (batches large enough to take them) keep these orders, and one "
     "composed step of theirs is the composition of its exactly solved Moser-Veselov sub-steps; the matrix exponential of the "
-    "compiled RKMK4 is exact to rounding over the range of each of its Pade approximants.",
+    "compiled RKMK4 is exact to rounding over the range of each of its Pade approximants, and "
+    "both of its backends take the textbook method's steps.",
     expected="holds",
     section="symrb",
     where="symrb.compose.composed_rigid_body_flow, symrb.compose.rkmk4_rigid_body_flow and "
