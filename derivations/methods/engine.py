@@ -23,7 +23,8 @@ M2 = claim(
     "with a 50-digit run of the symmetric representation, satisfy the defining equations for "
     "$n=5$ and $n=8$, keep the momentum skew, and keep the energy, the Casimir and orthogonality "
     "within rounding over long runs; the scalar $s$ that the engine carries from step to step is "
-    "conserved by the map.",
+    "conserved by the map; it refuses an attitude that is not a rotation (to $10^{-8}$) and a "
+    "momentum that is not skew, for one body as for a batch.",
     expected="holds",
     section="symrb",
     where="symrb.engine.mv_flow (the fused n = 3 step of M1 and the general-n solver)",
@@ -138,3 +139,35 @@ def m2_engine_n3_long_run_rounding() -> float:
         k = np.maximum(sol.k, 100)
         worst = max(worst, float((err / (10 * np.finfo(float).eps * np.sqrt(k))).max()))
     return worst
+
+
+@M2.check(Level.FLOAT64, tol=0.0)
+def m2_engine_accepts_only_states() -> float:
+    r"""symrb.engine.mv_flow, $n = 3$, one body given as float64 arrays (its fast path of the
+    input checks) and the same bodies as a batch of two: an attitude $Q_0 = R(I + \epsilon S)$
+    ($R$ a rotation, $S$ symmetric, $\epsilon = 10^{-12}, 10^{-7}, 10^{-5}, 10^{-3}$), a reflection,
+    and a momentum with a symmetric part $10^{-4}$; the number of runs accepted or refused
+    (InputError) against the documented rule computed with plain NumPy ($\max|Q_0^TQ_0 - I| \le
+    10^{-8}$ and $\det Q_0 > 0$; $M_0$ skew to rounding)."""
+    from symrb import engine
+    from symrb.errors import InputError
+
+    rng = np.random.default_rng(23)
+    R = ref.random_rotation(3, rng)
+    S = rng.standard_normal((3, 3))
+    S = S + S.T
+    M = ref.random_skew(3, rng, 1.0)
+    cases = [(R @ (np.eye(3) + e * S), M) for e in (1e-12, 1e-7, 1e-5, 1e-3)]
+    cases += [(R @ np.diag([1.0, 1.0, -1.0]), M), (R, M + 1e-4 * S)]
+    wrong = 0
+    for Q0, M0 in cases:
+        want = bool(np.abs(Q0.T @ Q0 - np.eye(3)).max() <= 1e-8 and np.linalg.det(Q0) > 0)
+        want = want and bool(np.abs(M0 + M0.T).max() <= 1e-12)
+        for q, m in ((Q0, M0), (np.stack([Q0, R]), np.stack([M0, M]))):
+            try:
+                engine.mv_flow(q, m, _LAM3, 0.1, 2)
+                got = True
+            except InputError:
+                got = False
+            wrong += int(got != want)
+    return float(wrong)
