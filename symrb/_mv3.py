@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from . import _compiled
 from ._generated import discrete_rigid_body as _gen
 from ._results import STEP_FAILURES, DiscreteFlowSolution, Trajectory
 from ._validate import MAGNITUDE, Array
@@ -325,8 +326,6 @@ def _composed3(Q: Array, M: Array, stepper: Any, h: float, steps: int, save_ever
     Riccati fallback) here, then every stage in :func:`symrb._compiled.run_mv3`; when numba is
     installed and the run has at least ``_compiled.MIN_WORK`` body-stages, as in ``mv_flow``.
     """
-    from . import _compiled
-
     use_numba = _compiled.AVAILABLE and steps * len(gammas) * stepper.size >= _compiled.MIN_WORK
     got = _composed3_run(Q, M, stepper, h, steps, save_every, gammas, use_numba)
     if got is None:

@@ -49,6 +49,7 @@ from numpy.typing import ArrayLike
 from . import _compiled_n, _compiled_stages
 from . import _validate as v
 from ._docs import fill
+from ._mv3 import _composed3
 from ._progress import progress_bar
 from ._results import STEP_FAILURES, DiscreteFlowSolution, Trajectory, step_failure
 from ._validate import Array
@@ -200,8 +201,6 @@ def _mv_loops(Q: Array, M: Array, L: Array, batch: tuple[int, ...], h: float, st
     ``_NUMBA_MIN_WORK_N`` stage-body-n^3 (mv_flow's threshold), else None."""
     n = Q.shape[-1]
     if n == 3:
-        from ._mv3 import _composed3
-
         return _composed3(Q, M, MVStepper(L, batch), h, steps, save_every, gammas, method)
     work = steps * gammas.size * Q[..., 0, 0].size * n**3
     if steps == 0 or not _compiled_n.AVAILABLE or work < _NUMBA_MIN_WORK_N:

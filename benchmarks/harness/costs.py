@@ -28,7 +28,7 @@ import resource
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from symrb import _compiled, paper
+from symrb import _compiled, _compiled_n, compose, paper
 from symrb._validate import Array
 from symrb.rigid_body import casimir_traces, kinetic_energy
 
@@ -65,11 +65,12 @@ def profile_text(fn: Callable[[], Any], top: int = 4) -> str:
     return "; ".join(r[1] for r in rows[:top])
 
 
-def _probe(make: Callable[[int], Callable[[], Any]], target: float) -> float:
-    """A rough CPU time per step, only used to pick run lengths: runs of 16, 128, ... steps
-    (each once, after a warm-up) until one lasts a quarter of ``target``; the difference of the
-    last two over their difference in steps."""
-    k, prev = 16, None
+def _probe(make: Callable[[int], Callable[[], Any]], target: float, k_min: int = 1) -> float:
+    """A rough CPU time per step, only used to pick run lengths: runs of 16, 128, ... steps (at
+    least ``k_min``; each once, after a warm-up) until one lasts a quarter of ``target``; the
+    difference of the last two over their difference in steps, or the last one's mean cost per
+    step when that difference is lost in the noise (not positive)."""
+    k, prev = max(16, int(k_min)), None
     while True:
         fn = make(k)
         fn()
@@ -77,28 +78,37 @@ def _probe(make: Callable[[int], Callable[[], Any]], target: float) -> float:
         fn()
         t = time.process_time() - t0
         if prev is not None and (t >= target / 4 or k >= 10**6):
-            return max((t - prev[1]) / (k - prev[0]), 1e-10)
+            diff = (t - prev[1]) / (k - prev[0])
+            return diff if diff > 0 else max(t / k, 1e-10)
         prev = (k, t)
         k *= 8
 
 
 def marginal_costs(
-    makes: dict[str, Callable[[int], Callable[[], Any]]], p: dict[str, Any]
+    makes: dict[str, Callable[[int], Callable[[], Any]]],
+    p: dict[str, Any],
+    k_min: dict[str, int] | None = None,
 ) -> dict[str, dict[str, Any]]:
     """The marginal CPU cost of a step of each run ``makes[name](K)``: ``per_step``, ``K``
     (K1, K2; K2 from a probe so that a run lasts about ``marginal_time``), ``reliable`` (the
-    difference of the two runs exceeds the spread of either over the rounds)."""
+    difference of the two runs exceeds the spread of either over the rounds).  ``k_min[name]``:
+    the fewest steps of a run of that name (a flow that changes its backend with the run's
+    length, e.g. compiled from a threshold on, is timed above the threshold only)."""
     target = float(p["marginal_time"])
-    per = {name: _probe(make, target) for name, make in makes.items()}
-    k2 = {name: int(min(max(24, math.ceil(target / c)), 10**7)) for name, c in per.items()}
+    lo = {name: max(1, int((k_min or {}).get(name, 1))) for name in makes}
+    per = {name: _probe(make, target, lo[name]) for name, make in makes.items()}
+    k2 = {
+        name: int(min(max(24, 6 * lo[name], math.ceil(target / c)), 10**7))
+        for name, c in per.items()
+    }
     fns = {}
     for name, make in makes.items():
-        fns[f"{name} K1"] = make(max(1, k2[name] // 6))
+        fns[f"{name} K1"] = make(max(lo[name], k2[name] // 6))
         fns[f"{name} K2"] = make(k2[name])
     t = time_interleaved(fns, rounds=p["rounds"], min_time=p["min_time"])
     out = {}
     for name in makes:
-        k1 = max(1, k2[name] // 6)
+        k1 = max(lo[name], k2[name] // 6)
         a, b = t[f"{name} K1"], t[f"{name} K2"]
         # reliable: the difference of the two runs exceeds the spread of either over the rounds
         spread = max(a["max"] - a["min"], b["max"] - b["min"])
@@ -155,6 +165,22 @@ def _stages(kind: str) -> int:
     return 4 if kind == "RKMK4" else 1
 
 
+def _compiled_from(n: int, kinds: Iterable[str]) -> dict[str, int]:
+    """The fewest steps (one body) from which each flow of ``kinds`` runs its compiled loop with
+    method "auto" (numba installed): the thresholds of symrb.compose and symrb._compiled, so a
+    marginal cost never mixes the NumPy and the compiled path."""
+    if not (_compiled.AVAILABLE and _compiled_n.AVAILABLE):
+        return {}
+    out = {}
+    for kind in kinds:
+        if kind.startswith("MV-comp"):
+            work = _compiled.MIN_WORK if n == 3 else compose._NUMBA_MIN_WORK_N / n**3
+            out[kind] = math.ceil(work / _stages(kind))
+        elif kind in ("RKMK4", "midpoint"):
+            out[kind] = compose._NUMBA_MIN_STEPS
+    return out
+
+
 def _stage_costs(n: int, p: dict[str, Any], mods: dict[str, Any]) -> dict[str, Any]:
     """The cost per stage of the compositions, RKMK4 and midpoint against an mv_flow step."""
     lam, Q0, M0 = _problem(n, p["seed"])
@@ -171,7 +197,7 @@ def _stage_costs(n: int, p: dict[str, Any], mods: dict[str, Any]) -> dict[str, A
             missing.append(kind)
             continue
         makes[kind] = partial(_run_of, flow, Q0, M0, lam)
-    got = marginal_costs(makes, p)
+    got = marginal_costs(makes, p, _compiled_from(n, makes))
     out: dict[str, Any] = {"n": n, "h": _H, "unavailable": missing, "methods": {},
                            "mv_flow_method": how}  # fmt: skip
     base = got.get("mv_flow", {}).get("per_step")
