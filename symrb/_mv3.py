@@ -288,12 +288,13 @@ def _one_body(Q0: Any, M0: Any, lam: Any) -> tuple[Array, Array, tuple[float, ..
     if not (1e-140 <= l1 <= MAGNITUDE and 1e-140 <= l2 <= MAGNITUDE and 1e-140 <= l3 <= MAGNITUDE):
         return None  # (lam_i >= 1e-140: the pairwise sums >= 1/MAGNITUDE)
     m = M0.ravel().tolist()
-    if not sum(map(abs, m)) <= MAGNITUDE:  # finite (a NaN fails), each entry bounded
+    am = list(map(abs, m))
+    if not sum(am) <= MAGNITUDE:  # finite (a NaN fails), each entry bounded
         return None
     m11, m12, m13, m21, m22, m23, m31, m32, m33 = m
     d = max(2.0 * abs(m11), 2.0 * abs(m22), 2.0 * abs(m33))
     dev = max(d, abs(m12 + m21), abs(m13 + m31), abs(m23 + m32))  # max |M0 + M0^T|
-    if not dev <= 1e-10 * max(max(map(abs, m)), 1.0):
+    if not dev <= 1e-10 * max(max(am), 1.0):
         return None
     a, b, c, d, e, f, g, h, k = Q0.ravel().tolist()
     gram = max(
@@ -306,7 +307,8 @@ def _one_body(Q0: Any, M0: Any, lam: Any) -> tuple[Array, Array, tuple[float, ..
     )
     if not (gram <= 1e-9 and a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g) > 0.0):
         return None  # (a NaN or inf in Q0 fails too)
-    return Q0.copy(), 0.5 * (M0 - M0.T), lam_t
+    u, v, w = 0.5 * (m12 - m21), 0.5 * (m13 - m31), 0.5 * (m23 - m32)  # the skew part of M0
+    return Q0.copy(), np.array([[0.0, u, v], [-u, 0.0, w], [-v, -w, 0.0]]), lam_t
 
 
 # ---------------------------------------------------------------------------------------------

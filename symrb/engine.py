@@ -702,7 +702,7 @@ class _FlowRun:
         k = self.k
         # the saved states have one shape: np.array stacks them (a fifth of np.stack's cost)
         return DiscreteFlowSolution(
-            t=np.array(self.ks, dtype=np.float64) * h,
+            t=kk * h,
             k=kk,
             y=Trajectory(
                 {**({"Q": np.array(self.Qs)} if self.attitude else {}), "M": np.array(self.Ms)}
