@@ -162,10 +162,13 @@ def _method_entry(m: str, rows: list[dict[str, Any]], out: dict[str, Any]) -> di
     """A method's points with its fitted order (fixed step) or error-against-work slope."""
     entry: dict[str, Any] = {"available": True, "points": rows}
     if m in _STEP_ORDERS:
-        # fit where errors are well above rounding and the reference's own error
-        floor = 100 * max(out["reference_error_estimate"], EPS)
+        # fit where errors are well above the reference's own error and the rounding of the run:
+        # N = T/h steps leave about eps sqrt(N) (a random walk, Brouwer's law)
+        ref_err, T = out["reference_error_estimate"], out["T"]
+        fit = [r for r in rows if r["error"] > 100 * max(ref_err, EPS * math.sqrt(T / r["h"]))]
         entry["nominal_order"] = _STEP_ORDERS[m]
-        entry["order"] = fit_slope([r["h"] for r in rows], [r["error"] for r in rows], floor=floor)
+        entry["order"] = fit_slope([r["h"] for r in fit], [r["error"] for r in fit])
+        entry["order_fit_h"] = [r["h"] for r in fit]
     elif m != "exact":  # adaptive: error against work, err ~ cost^-slope
         entry["error_vs_cpu_slope"] = fit_slope(
             [r["cpu"]["median"] for r in rows], [r["error"] for r in rows], floor=1e-13
