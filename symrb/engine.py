@@ -702,7 +702,7 @@ class _FlowRun:
         k = self.k
         # the saved states have one shape: np.array stacks them (a fifth of np.stack's cost)
         return DiscreteFlowSolution(
-            t=kk * h,
+            t=np.multiply(kk, h, dtype=np.float64),
             k=kk,
             y=Trajectory(
                 {**({"Q": np.array(self.Qs)} if self.attitude else {}), "M": np.array(self.Ms)}
